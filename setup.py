@@ -1,0 +1,45 @@
+"""ament_python package; also installable with `pip install -e .` (see README)."""
+from glob import glob
+
+from setuptools import find_packages, setup
+
+package_name = "uav_insar_planner"
+
+setup(
+    name=package_name,
+    version="0.1.0",
+    packages=find_packages(exclude=["test", "benchmarks"]),
+    data_files=[
+        ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
+        ("share/" + package_name, ["package.xml"]),
+        ("share/" + package_name + "/config", glob("config/*.yaml")),
+    ],
+    package_data={package_name: ["data/*.yaml"]},
+    python_requires=">=3.10",
+    install_requires=[
+        "numpy>=1.24",
+        "scipy>=1.10",
+        "cvxpy>=1.4",
+        "clarabel>=0.6",
+        "pyyaml>=6",
+        "matplotlib>=3.6",
+        "tqdm>=4.60",
+        "cyclonedds==11.0.1",
+        "rosbags>=0.10",
+        "pymavlink>=2.4.40",
+    ],
+    extras_require={"test": ["pytest>=7", "pytest-timeout>=2", "ruff>=0.4"]},
+    zip_safe=True,
+    maintainer="uav_insar_planner developers",
+    maintainer_email="dev@example.invalid",
+    description="Three-UAV dual-baseline InSAR swarm planner (ROS 2 Jazzy node suite)",
+    license="Apache-2.0",
+    entry_points={
+        "console_scripts": [
+            "planner = uav_insar_planner.nodes.planner:main",
+            "agent = uav_insar_sim.agent_node:main",
+            "mavlink_bridge = uav_insar_planner.nodes.mavlink_bridge:main",
+            "uav-insar = uav_insar_planner.cli:main",
+        ],
+    },
+)

@@ -1,0 +1,390 @@
+"""Scenario parameters: the one place where dB, dBm, degrees and Mbit/s become SI.
+
+`PARAM_SPECS` is the single table of every parameter: name, type, default (Table I), allowed
+range, unit and description. The planner node declares its ROS parameters from it; the CLI
+and `load_params` validate against it. `Params` holds the values converted to SI.
+"""
+from __future__ import annotations
+
+import difflib
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import re
+
+import yaml
+
+SCHEMES = ("proposed", "single-baseline", "fixed-master", "static-power")
+OBJECTIVES = ("exact", "bound")
+SOLVERS = ("global", "paper-ao")
+
+SPEED_OF_LIGHT = 299_792_458.0
+BOLTZMANN = 1.380649e-23
+
+
+class _RosYamlLoader(yaml.SafeLoader):
+    """YAML 1.1 safe loader that also reads `1e9` and `1.0e9` as floats, as ROS 2's params
+    parser does (PyYAML's 1.1 resolver wants a signed exponent)."""
+
+
+_RosYamlLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)$"),
+    list("-+0123456789."),
+)
+
+
+def yaml_load(text: str) -> Any:
+    """Parse YAML the way ROS 2 params files are read (see _RosYamlLoader)."""
+    return yaml.load(text, Loader=_RosYamlLoader)  # noqa: S506 - a SafeLoader subclass
+
+
+def db_to_linear(db: float) -> float:
+    return 10.0 ** (db / 10.0)
+
+
+def dbm_to_watt(dbm: float) -> float:
+    return 10.0 ** ((dbm - 30.0) / 10.0)
+
+
+def linear_to_db(value: float) -> float:
+    return 10.0 * math.log10(value)
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """One user-facing parameter. `length` > 0 means a list of that many numbers."""
+
+    name: str
+    kind: type  # int, float or str
+    default: Any
+    description: str
+    lo: float | None = None
+    hi: float | None = None
+    lo_open: bool = False
+    length: int = 0
+    choices: tuple[str, ...] = ()
+
+    def allowed(self) -> str:
+        if self.choices:
+            return "one of " + ", ".join(self.choices)
+        what = {int: "an integer", float: "a finite number", str: "a string"}[self.kind]
+        if self.length:
+            what = f"a list of {self.length} finite numbers"
+        if self.lo is not None and self.hi is not None:
+            rng = f"{'(' if self.lo_open else '['}{self.lo:g}, {self.hi:g}]"
+            return f"{what} in {rng}"
+        if self.lo is not None:
+            return f"{what} {'>' if self.lo_open else '>='} {self.lo:g}"
+        return what
+
+
+def _f(name, default, desc, lo=None, hi=None, lo_open=False, length=0):
+    return ParamSpec(name, float, default, desc, lo, hi, lo_open, length)
+
+
+PARAM_SPECS: tuple[ParamSpec, ...] = (
+    ParamSpec("num_slots", int, 80, "N, number of time slots", 1, 100000),
+    _f("slot_duration_s", 1.0, "delta_t, slot duration [s]", 0.0, None, True),
+    _f("z_min_m", 1.0, "z_min, lowest flying altitude [m] (C1)", 0.0, None),
+    _f("z_max_m", 100.0, "z_max, highest flying altitude [m] (C1)", 0.0, None, True),
+    _f("h_amb_min_m", 1.2, "h_amb^min, minimum height of ambiguity [m] (C8)", 0.0, None, True),
+    _f("target_x_m", 20.0, "x_t, across-track position of the target line [m]"),
+    _f("ground_station_m", [70.0, 149.37, 25.0], "g = (g_x, g_y, g_z), ground station [m]",
+       length=3),
+    _f("d_min_m", 1.5, "d_min, minimum distance between UAVs [m] (C4)", 0.0, None),
+    _f("swath_min_m", 55.0, "S_min, minimum swath width [m] (C5)", 0.0, None),
+    _f("speed_mps", 4.3, "v_y, along-track speed [m/s]", 0.0, None, True),
+    _f("p_com_max_db", 10.1, "P_com^max, peak communication power [dBW] (C9)", -100.0, 60.0),
+    _f("e_com_max_j", 594.0, "E_com^max, communication energy budget per UAV [J] (C11)",
+       0.0, None, True),
+    _f("rate_min_mbps", [10.0, 16.95, 1.0], "R_min,k, minimum data rate of U0, U1, U2 "
+       "[Mbit/s] (C10)", 0.0, None, length=3),
+    _f("comm_bandwidth_hz", 1.0e9, "B_c, FDMA bandwidth per UAV [Hz]", 0.0, None, True),
+    _f("ref_snr_db", 18.69, "beta_c, channel gain at 1 m over noise power [dB]", -200.0, 200.0),
+    _f("coherence_rg_min", 0.8, "gamma_Rg^min, minimum baseline coherence (C7)", 0.0, 1.0, True),
+    _f("coherence_snr_min", 0.8, "gamma_SNR^min, minimum SNR coherence (C6)", 0.0, 1.0, True),
+    _f("coherence_other", 0.6, "gamma_other, other decorrelation sources", 0.0, 1.0, True),
+    _f("sigma0_db", -10.0, "sigma_0, normalised backscatter [dB]", -100.0, 50.0),
+    _f("radar_power_dbm", 26.02, "P_t, radar transmit power [dBm]", -100.0, 100.0),
+    _f("gain_tx_dbi", 5.0, "G_t, radar transmit antenna gain [dBi]", -50.0, 80.0),
+    _f("gain_rx_dbi", 5.0, "G_r, radar receive antenna gain [dBi]", -50.0, 80.0),
+    _f("wavelength_m", 0.12, "lambda, radar wavelength [m]", 0.0, None, True),
+    _f("duty_cycle", 1.0e-4, "tau_p x PRF, radar duty cycle", 0.0, 1.0, True),
+    _f("look_angle_deg", 45.0, "theta_0, master look angle from vertical [deg] (C2)",
+       0.0, 90.0, True),
+    _f("system_temperature_k", 400.0, "T_sys, receiver temperature [K]", 0.0, None, True),
+    _f("radar_bandwidth_hz", 3.0e9, "B_Rg, radar pulse bandwidth [Hz]", 0.0, None, True),
+    _f("noise_figure_db", 5.0, "F, receiver noise figure [dB]", 0.0, 100.0),
+    _f("losses_db", 6.0, "L, total radar losses [dB]", 0.0, 100.0),
+    _f("center_frequency_hz", 2.5e9, "f_0, radar centre frequency [Hz]", 0.0, None, True),
+    _f("beamwidth_deg", 33.44, "Theta_3dB, elevation beamwidth [deg] (C5)", 0.0, 180.0, True),
+    _f("slave_look_angle_min_deg", 37.24, "theta_min, slave look angle lower limit [deg] (C3)",
+       0.0, 90.0),
+    _f("slave_look_angle_max_deg", 48.7, "theta_max, slave look angle upper limit [deg] (C3)",
+       0.0, 90.0),
+    ParamSpec("looks", int, 4, "n_L, number of independent looks", 1, 1_000_000),
+    _f("tolerance", 1.0e-2, "eps_0 = eps_1 = eps_2, AO/SCA relative stopping tolerance",
+       0.0, 1.0, True),
+    _f("master_fixed_xz_m", [-54.0, 74.0], "q0_fixed = (x_0, z_0) for the fixed-master scheme "
+       "[m]", length=2),
+    ParamSpec("scheme", str, "proposed", "which scheme to solve", choices=SCHEMES),
+    ParamSpec("objective", str, "exact", "exact: minimise sigma_h; bound: Proposition 1",
+              choices=OBJECTIVES),
+    ParamSpec("solver", str, "global", "global (certified) or paper-ao (Algorithm 2)",
+              choices=SOLVERS),
+)
+SPEC_BY_NAME: dict[str, ParamSpec] = {s.name: s for s in PARAM_SPECS}
+
+
+class ParamError(ValueError):
+    """Invalid parameters. `problems` holds one line per bad value; str() joins them."""
+
+    def __init__(self, problems: list[str]):
+        self.problems = list(problems)
+        super().__init__("\n".join(self.problems))
+
+
+@dataclass(frozen=True)
+class Params:
+    """Validated scenario in SI units (metres, seconds, watts, bit/s, radians, linear ratios)."""
+
+    raw: Mapping[str, Any] = field(repr=False)
+    num_slots: int
+    slot_duration_s: float
+    z_min: float
+    z_max: float
+    h_amb_min: float
+    x_t: float
+    ground_station: tuple[float, float, float]
+    d_min: float
+    swath_min: float
+    speed: float
+    p_max_w: float
+    e_max_j: float
+    rate_min_bps: tuple[float, float, float]
+    comm_bandwidth_hz: float
+    beta_c: float
+    coherence_rg_min: float
+    coherence_snr_min: float
+    coherence_other: float
+    sigma0: float
+    radar_power_w: float
+    gain_tx: float
+    gain_rx: float
+    wavelength: float
+    duty_cycle: float
+    theta0: float
+    system_temperature_k: float
+    radar_bandwidth_hz: float
+    noise_figure: float
+    losses: float
+    center_frequency_hz: float
+    beamwidth: float
+    theta_min: float
+    theta_max: float
+    looks: int
+    tolerance: float
+    master_fixed: tuple[float, float]
+    scheme: str
+    objective: str
+    solver: str
+
+    def replace(self, **user_values: Any) -> Params:
+        """A copy with some user-facing (file-unit) parameters changed, validated again."""
+        merged = dict(self.raw)
+        merged.update(user_values)
+        return params_from_mapping(merged)
+
+    @property
+    def y_track(self):
+        """y[n] = (n - 1) v_y delta_t for n = 1..N (equation (1)), as a numpy array."""
+        import numpy as np
+
+        return np.arange(self.num_slots) * self.speed * self.slot_duration_s
+
+
+def _check_value(spec: ParamSpec, value: Any) -> tuple[Any, str | None]:
+    """Coerce one value to the spec's type; return (value, problem or None)."""
+    shown = repr(value)
+    bad = f"{spec.name}: value {shown} is not allowed; expected {spec.allowed()}"
+    if spec.kind is str:
+        if not isinstance(value, str) or (spec.choices and value not in spec.choices):
+            return value, bad
+        return value, None
+    if spec.length:
+        if not isinstance(value, (list, tuple)) or len(value) != spec.length:
+            return value, bad
+        items = []
+        for item in value:
+            if isinstance(item, bool) or not isinstance(item, (int, float)):
+                return value, bad
+            if not math.isfinite(float(item)) or not _in_range(spec, float(item)):
+                return value, bad
+            items.append(float(item))
+        return tuple(items), None
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return value, bad
+    if spec.kind is int:
+        if isinstance(value, float) and not value.is_integer():
+            return value, bad
+        value = int(value)
+    else:
+        value = float(value)
+    if not math.isfinite(value) or not _in_range(spec, value):
+        return value, bad
+    return value, None
+
+
+def _in_range(spec: ParamSpec, v: float) -> bool:
+    if spec.lo is not None and (v <= spec.lo if spec.lo_open else v < spec.lo):
+        return False
+    return not (spec.hi is not None and v > spec.hi)
+
+
+def validate(values: Mapping[str, Any]) -> tuple[dict[str, Any], list[str]]:
+    """Check every value against PARAM_SPECS and the cross-field rules; collect all problems."""
+    problems: list[str] = []
+    clean: dict[str, Any] = {}
+    for name in values:
+        if name not in SPEC_BY_NAME:
+            near = difflib.get_close_matches(name, SPEC_BY_NAME, n=1)
+            hint = f" (did you mean {near[0]}?)" if near else ""
+            problems.append(f"{name}: unknown parameter{hint}; allowed: the names in "
+                            "config/params.yaml")
+    bad: set[str] = set()
+    for spec in PARAM_SPECS:
+        value, problem = _check_value(spec, values.get(spec.name, spec.default))
+        clean[spec.name] = value
+        if problem:
+            problems.append(problem)
+            bad.add(spec.name)
+    if bad & {"z_min_m", "z_max_m", "slave_look_angle_min_deg", "slave_look_angle_max_deg",
+              "radar_bandwidth_hz", "center_frequency_hz"}:
+        return clean, problems
+    if clean["z_min_m"] >= clean["z_max_m"]:
+        problems.append(f"z_min_m: value {clean['z_min_m']!r} is not allowed; expected less "
+                        f"than z_max_m ({clean['z_max_m']!r})")
+    if clean["slave_look_angle_min_deg"] >= clean["slave_look_angle_max_deg"]:
+        problems.append(
+            f"slave_look_angle_min_deg: value {clean['slave_look_angle_min_deg']!r} is not "
+            f"allowed; expected less than slave_look_angle_max_deg "
+            f"({clean['slave_look_angle_max_deg']!r})")
+    if clean["radar_bandwidth_hz"] >= 2.0 * clean["center_frequency_hz"]:
+        problems.append(
+            f"radar_bandwidth_hz: value {clean['radar_bandwidth_hz']!r} is not allowed; "
+            "expected a fractional bandwidth B_Rg/f_0 below 2")
+    return clean, problems
+
+
+def params_from_mapping(values: Mapping[str, Any]) -> Params:
+    """Validate user-facing values (file units) and convert them to SI. Raises ParamError."""
+    v, problems = validate(values)
+    if problems:
+        raise ParamError(problems)
+    deg = math.radians
+    return Params(
+        raw=dict(v),
+        num_slots=v["num_slots"],
+        slot_duration_s=v["slot_duration_s"],
+        z_min=v["z_min_m"],
+        z_max=v["z_max_m"],
+        h_amb_min=v["h_amb_min_m"],
+        x_t=v["target_x_m"],
+        ground_station=v["ground_station_m"],
+        d_min=v["d_min_m"],
+        swath_min=v["swath_min_m"],
+        speed=v["speed_mps"],
+        p_max_w=db_to_linear(v["p_com_max_db"]),
+        e_max_j=v["e_com_max_j"],
+        rate_min_bps=tuple(r * 1e6 for r in v["rate_min_mbps"]),
+        comm_bandwidth_hz=v["comm_bandwidth_hz"],
+        beta_c=db_to_linear(v["ref_snr_db"]),
+        coherence_rg_min=v["coherence_rg_min"],
+        coherence_snr_min=v["coherence_snr_min"],
+        coherence_other=v["coherence_other"],
+        sigma0=db_to_linear(v["sigma0_db"]),
+        radar_power_w=dbm_to_watt(v["radar_power_dbm"]),
+        gain_tx=db_to_linear(v["gain_tx_dbi"]),
+        gain_rx=db_to_linear(v["gain_rx_dbi"]),
+        wavelength=v["wavelength_m"],
+        duty_cycle=v["duty_cycle"],
+        theta0=deg(v["look_angle_deg"]),
+        system_temperature_k=v["system_temperature_k"],
+        radar_bandwidth_hz=v["radar_bandwidth_hz"],
+        noise_figure=db_to_linear(v["noise_figure_db"]),
+        losses=db_to_linear(v["losses_db"]),
+        center_frequency_hz=v["center_frequency_hz"],
+        beamwidth=deg(v["beamwidth_deg"]),
+        theta_min=deg(v["slave_look_angle_min_deg"]),
+        theta_max=deg(v["slave_look_angle_max_deg"]),
+        looks=v["looks"],
+        tolerance=v["tolerance"],
+        master_fixed=v["master_fixed_xz_m"],
+        scheme=v["scheme"],
+        objective=v["objective"],
+        solver=v["solver"],
+    )
+
+
+def read_params_file(path: str | Path, node_name: str = "planner") -> dict[str, Any]:
+    """Read a ROS 2 params file: the "/**" section, then the node's own section on top.
+
+    Node sections may be keyed by the node name with or without a leading slash or namespace
+    (rclpy matches the fully qualified name; we accept `planner`, `/planner`, `/ns/planner`).
+    Raises ParamError with one line when the file is unreadable or not in that format.
+    """
+    path = Path(path)
+    try:
+        doc = yaml_load(path.read_text())
+    except OSError as exc:
+        raise ParamError([f"params file: {str(path)!r} cannot be read ({exc.strerror})"]) from None
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}" if mark else ""
+        raise ParamError([f"params file: {str(path)!r} is not valid YAML{where}"]) from None
+    if not isinstance(doc, dict):
+        raise ParamError([f"params file: {str(path)!r} must map node names to "
+                          "{ros__parameters: {...}}"])
+    values: dict[str, Any] = {}
+    sections = [k for k in doc if k == "/**"] + [
+        k for k in doc if isinstance(k, str) and k != "/**"
+        and k.lstrip("/").split("/")[-1] == node_name]
+    for key in sections:
+        body = doc[key]
+        if not isinstance(body, dict) or not isinstance(body.get("ros__parameters"), dict):
+            raise ParamError([f"params file: section {key!r} in {str(path)!r} must hold a "
+                              "'ros__parameters' mapping"])
+        values.update(body["ros__parameters"])
+    return values
+
+
+def parse_override(text: str) -> tuple[str, Any]:
+    """`NAME=VALUE` (CLI --set) or `NAME:=VALUE` (ROS -p), VALUE parsed as YAML."""
+    sep = ":=" if ":=" in text else "="
+    name, eq, raw = text.partition(sep)
+    if not eq or not name.strip():
+        raise ParamError([f"--set: value {text!r} is not allowed; expected NAME=VALUE"])
+    try:
+        value = yaml_load(raw)
+    except yaml.YAMLError:
+        value = raw
+    return name.strip(), value
+
+
+def load_params(path: str | Path | None = None, overrides: Mapping[str, Any] | None = None,
+                node_name: str = "planner") -> Params:
+    """Load a params file (none: Table I defaults, as in config/params.yaml), apply overrides,
+    validate everything at once and convert to SI. Raises ParamError listing every problem."""
+    values = read_params_file(path, node_name) if path is not None else {}
+    if overrides:
+        values.update(overrides)
+    return params_from_mapping(values)
+
+
+def default_params() -> Params:
+    """Table I defaults, straight from PARAM_SPECS (no file needed)."""
+    return params_from_mapping({})

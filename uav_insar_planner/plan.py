@@ -1,0 +1,105 @@
+"""The planner's answer: formation, power schedules, metrics and the constraint report.
+
+A Plan is plain data (numpy arrays and floats, SI units). `to_dict()` gives the JSON shape the
+CLI prints and the README documents.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+UAV_NAMES = ("uav0", "uav1", "uav2")
+
+
+@dataclass
+class ConstraintStatus:
+    """One constraint family C1..C11: satisfied or not, and its worst slack (>= 0 when met).
+
+    Slack is in the constraint's own SI unit (metres, radians, watts, bit/s, joules or a
+    dimensionless coherence), taken over every UAV / pair / slot the constraint covers.
+    """
+
+    ok: bool
+    slack: float
+    detail: str = ""
+
+
+@dataclass
+class Plan:
+    """A solved (or infeasible) instance of problem (P).
+
+    formation: (3, 2) array of (x_k, z_k) in metres, row k = U_k; a row is NaN when the scheme
+      does not fly that UAV (single-baseline has no U_2).
+    p_com_w: (3, N) communication power in watts, P_com[k][n]; zeros for a UAV not flown.
+    """
+
+    feasible: bool
+    scheme: str
+    objective: str
+    solver: str
+    formation: np.ndarray
+    p_com_w: np.ndarray
+    sigma_h_m: float
+    sigma_h_bound_m: float
+    iterations: int
+    solve_time_s: float
+    constraints: dict[str, ConstraintStatus]
+    metrics: dict[str, Any] = field(default_factory=dict)
+    blocking_constraints: list[str] = field(default_factory=list)
+    lower_bound_m: float = float("nan")
+    optimality_gap: float = float("nan")
+    certificate: str = ""
+    message: str = ""
+
+    @property
+    def active_uavs(self) -> list[int]:
+        return [k for k in range(3) if np.all(np.isfinite(self.formation[k]))]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary (see README, 'uav-insar solve --json')."""
+
+        def num(v: float) -> float | None:
+            return None if v is None or not np.isfinite(v) else float(v)
+
+        formation = {}
+        for k, name in enumerate(UAV_NAMES):
+            x, z = self.formation[k]
+            formation[name] = None if not np.isfinite(x) else {"x_m": float(x), "z_m": float(z)}
+        return {
+            "feasible": bool(self.feasible),
+            "scheme": self.scheme,
+            "objective": self.objective,
+            "solver": self.solver,
+            "sigma_h_m": num(self.sigma_h_m),
+            "sigma_h_bound_m": num(self.sigma_h_bound_m),
+            "lower_bound_m": num(self.lower_bound_m),
+            "optimality_gap": num(self.optimality_gap),
+            "certificate": self.certificate,
+            "formation": formation,
+            "p_com_w": [[float(p) for p in row] for row in self.p_com_w],
+            "iterations": int(self.iterations),
+            "solve_time_s": float(self.solve_time_s),
+            "constraints": {
+                name: {"ok": bool(c.ok), "slack": num(c.slack), "detail": c.detail}
+                for name, c in self.constraints.items()
+            },
+            "blocking_constraints": list(self.blocking_constraints),
+            "metrics": _jsonable(self.metrics),
+            "message": self.message,
+        }
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {k: _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _jsonable(value.tolist())
+    if isinstance(value, (np.floating, float)):
+        return float(value) if np.isfinite(value) else None
+    if isinstance(value, np.integer):
+        return int(value)
+    return value
