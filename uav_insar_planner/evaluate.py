@@ -1,0 +1,145 @@
+"""Independent evaluation of a formation and power schedule: metrics and constraints C1..C11.
+
+Built only from `model` (the paper's equations), never from a solver's convex surrogates, so
+it can judge any plan. Which UAVs count depends on the scheme: single-baseline flies U0 and
+U1 only; static-power requires P_com,k[n] = E_max / (N delta_t) in every slot.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from uav_insar_planner import model
+from uav_insar_planner.params import Params
+from uav_insar_planner.plan import ConstraintStatus
+
+CONSTRAINT_NAMES = tuple(f"C{i}" for i in range(1, 12))
+# Relative feasibility tolerance: a constraint counts as met when its slack is at least
+# -FEAS_TOL times the constraint's own scale (numerical solvers stop at ~1e-8 accuracy).
+FEAS_TOL = 1e-6
+
+
+def active_uavs(scheme: str) -> tuple[int, ...]:
+    """The UAVs a scheme flies: benchmark 1 (single-baseline) has no U2."""
+    return (0, 1) if scheme == "single-baseline" else (0, 1, 2)
+
+
+def static_power_w(p: Params) -> float:
+    """Benchmark 3's constant power: the energy budget spread evenly, E_max / (N delta_t)."""
+    return p.e_max_j / (p.num_slots * p.slot_duration_s)
+
+
+@dataclass
+class Evaluation:
+    """Metrics of one plan and the status of each constraint family."""
+
+    sigma_h: float
+    sigma_h_bound: float
+    metrics: dict[str, Any]
+    constraints: dict[str, ConstraintStatus]
+
+    @property
+    def feasible(self) -> bool:
+        return all(c.ok for c in self.constraints.values())
+
+    @property
+    def violated(self) -> list[str]:
+        return [n for n, c in self.constraints.items() if not c.ok]
+
+
+def pair_metrics(p: Params, q0: np.ndarray, qk: np.ndarray) -> dict[str, float]:
+    """Interferometric metrics of the pair (U0, Uk) at formation rows q0 = (x0, z0), qk."""
+    gm = model.gamma_m(p)
+    r0 = float(model.slant_range(q0[0], q0[1], p.x_t))
+    rk = float(model.slant_range(qk[0], qk[1], p.x_t))
+    theta_k = float(model.look_angle(qk[0], qk[1], p.x_t))
+    b_perp = float(model.perpendicular_baseline(q0[0], q0[1], qk[0], qk[1], p.theta0))
+    snr0 = float(model.snr_monostatic(r0, gm))
+    snrk = float(model.snr_bistatic(r0, rk, gm))
+    g_snr = float(model.coherence_snr(snr0, snrk))
+    bp = p.radar_bandwidth_hz / p.center_frequency_hz
+    g_rg = float(model.coherence_baseline(model.chi(p.theta0, theta_k), bp))
+    g = float(model.coherence_total(g_rg, g_snr, p.coherence_other))
+    h_amb = float(model.height_of_ambiguity(p.wavelength, r0, p.theta0, b_perp))
+    sigma_phi = float(model.phase_error_crb(g, p.looks))
+    return {
+        "b_m": float(model.baseline(q0[0], q0[1], qk[0], qk[1])),
+        "b_perp_m": b_perp,
+        "h_amb_m": h_amb,
+        "coherence_baseline": g_rg,
+        "coherence_snr": g_snr,
+        "coherence_total": g,
+        "snr_master": snr0,
+        "snr_slave": snrk,
+        "phase_error_rad": sigma_phi,
+        "sigma_h_m": float(model.height_error(h_amb, sigma_phi)),
+    }
+
+
+def evaluate(p: Params, formation: np.ndarray, p_com: np.ndarray, scheme: str) -> Evaluation:
+    """Metrics and C1..C11 for `formation` ((3, 2) rows (x_k, z_k), NaN rows for UAVs the
+    scheme does not fly) and `p_com` ((3, N) watts)."""
+    q = np.asarray(formation, dtype=float)
+    power = np.asarray(p_com, dtype=float)
+    uavs = active_uavs(scheme)
+    slaves = [k for k in uavs if k > 0]
+    pairs = {k: pair_metrics(p, q[0], q[k]) for k in slaves}
+
+    sig = [pairs[k]["sigma_h_m"] for k in slaves]
+    sigma_h = float(model.fused_height_error(*sig)) if len(sig) == 2 else sig[0]
+    r0 = float(model.slant_range(q[0, 0], q[0, 1], p.x_t))
+    bsq = sum(pairs[k]["b_perp_m"] ** 2 for k in slaves)
+    bound = float(model.height_error_bound(p.wavelength, r0, p.theta0, bsq,
+                                           model.worst_case_coherence(p), p.looks))
+
+    ranges = {k: float(model.slant_range(q[k, 0], q[k, 1], p.x_t)) for k in uavs}
+    looks = {k: (p.theta0 if k == 0 else float(model.look_angle(q[k, 0], q[k, 1], p.x_t)))
+             for k in uavs}
+    swaths = {k: float(model.swath_width(ranges[k], looks[k], p.beamwidth)) for k in uavs}
+    y = p.y_track
+    rates = {k: model.fdma_rate(power[k], model.distance_to_station(q[k, 0], y, q[k, 1],
+                                                                    p.ground_station),
+                                p.comm_bandwidth_hz, p.beta_c) for k in uavs}
+
+    def status(slacks: dict[str, float], scale: float) -> ConstraintStatus:
+        name, worst = min(slacks.items(), key=lambda kv: kv[1])
+        return ConstraintStatus(bool(worst >= -FEAS_TOL * scale), float(worst), name)
+
+    c: dict[str, ConstraintStatus] = {}
+    c["C1"] = status({f"z{k}": min(q[k, 1] - p.z_min, p.z_max - q[k, 1]) for k in uavs}, p.z_max)
+    c["C2"] = status({"x0": -abs(q[0, 0] - float(model.master_x(q[0, 1], p.x_t, p.theta0)))},
+                     1.0)
+    c["C3"] = status({f"theta{k}": min(looks[k] - p.theta_min, p.theta_max - looks[k])
+                      for k in slaves}, 1.0)
+    c["C4"] = status({f"d{i}{j}": float(np.hypot(*(q[i] - q[j]))) - p.d_min
+                      for i in uavs for j in uavs if i < j}, max(p.d_min, 1.0))
+    c["C5"] = status({f"S{k}": swaths[k] - p.swath_min for k in uavs}, max(p.swath_min, 1.0))
+    c["C6"] = status({f"gamma_snr{k}": pairs[k]["coherence_snr"] - p.coherence_snr_min
+                      for k in slaves}, 1.0)
+    c["C7"] = status({f"gamma_rg{k}": pairs[k]["coherence_baseline"] - p.coherence_rg_min
+                      for k in slaves}, 1.0)
+    c["C8"] = status({f"h_amb{k}": pairs[k]["h_amb_m"] - p.h_amb_min for k in slaves},
+                     p.h_amb_min)
+    c["C9"] = status({f"P{k}": float(min(power[k].min(), p.p_max_w - power[k].max()))
+                      for k in uavs}, max(p.p_max_w, 1e-9))
+    c["C10"] = status({f"R{k}": float((rates[k] - p.rate_min_bps[k]).min()) for k in uavs},
+                      max(max(p.rate_min_bps), 1.0))
+    c["C11"] = status({f"E{k}": p.e_max_j - float(power[k].sum() * p.slot_duration_s)
+                       for k in uavs}, p.e_max_j)
+    if scheme == "static-power":
+        dev = max(float(np.abs(power[k] - static_power_w(p)).max()) for k in uavs)
+        c["C9"].detail += f"; static schedule deviation {dev:.3g} W"
+        if dev > FEAS_TOL * max(static_power_w(p), 1e-9):
+            c["C9"] = ConstraintStatus(False, -dev, "static schedule")
+
+    metrics = {
+        "pairs": {f"uav{k}": pairs[k] for k in slaves},
+        "slant_range_m": {f"uav{k}": ranges[k] for k in uavs},
+        "look_angle_deg": {f"uav{k}": float(np.degrees(looks[k])) for k in uavs},
+        "swath_m": {f"uav{k}": swaths[k] for k in uavs},
+        "min_rate_mbps": {f"uav{k}": float(rates[k].min() / 1e6) for k in uavs},
+        "energy_j": {f"uav{k}": float(power[k].sum() * p.slot_duration_s) for k in uavs},
+    }
+    return Evaluation(sigma_h, bound, metrics, c)

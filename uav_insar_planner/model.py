@@ -1,0 +1,173 @@
+"""The paper's system model, one equation per function (SI units, angles in radians).
+
+Equation numbers refer to Lahmeri et al., "Sensing Accuracy Optimization for
+Communication-assisted Dual-baseline UAV-InSAR" (section II and Proposition 1). Positions in the
+across-track plane are q = (x, z); the target line passes through (x_t, 0). Functions accept
+numpy arrays and broadcast.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from uav_insar_planner.params import BOLTZMANN, SPEED_OF_LIGHT, Params
+
+ArrayLike = np.ndarray | float
+
+
+def slant_range(x: ArrayLike, z: ArrayLike, x_t: float) -> ArrayLike:
+    """r_k = sqrt((x_k - x_t)^2 + z_k^2)  (slant range to p_t, eq. 4)."""
+    return np.hypot(np.subtract(x, x_t), z)
+
+
+def look_angle(x: ArrayLike, z: ArrayLike, x_t: float) -> ArrayLike:
+    """theta_k = arctan((x_t - x_k) / z_k), the beam-centring look angle (section II-A-1)."""
+    return np.arctan2(np.subtract(x_t, x), z)
+
+
+def master_x(z0: ArrayLike, x_t: float, theta0: float) -> ArrayLike:
+    """C2: x_0 = x_t - z_0 tan(theta_0), the master on its fixed-look-angle line."""
+    return x_t - np.multiply(z0, np.tan(theta0))
+
+
+def swath_width(r: ArrayLike, theta: ArrayLike, beamwidth: float) -> ArrayLike:
+    """S_k = Theta_3dB r_k / cos(theta_k)  (eq. 5)."""
+    return beamwidth * np.asarray(r) / np.cos(theta)
+
+
+def baseline(x0: ArrayLike, z0: ArrayLike, xk: ArrayLike, zk: ArrayLike) -> ArrayLike:
+    """b_k = ||q_k - q_0||_2  (eq. 2)."""
+    return np.hypot(np.subtract(xk, x0), np.subtract(zk, z0))
+
+
+def perpendicular_baseline(x0: ArrayLike, z0: ArrayLike, xk: ArrayLike, zk: ArrayLike,
+                           theta0: float) -> ArrayLike:
+    """b_perp,k = b_k |cos(theta_0 - alpha_k)|  (eq. 3), alpha_k the baseline's elevation.
+
+    Equivalently |dx cos(theta_0) + dz sin(theta_0)|, the baseline projected on the normal to
+    the master's line of sight (sin theta_0, -cos theta_0).
+    """
+    dx, dz = np.subtract(xk, x0), np.subtract(zk, z0)
+    alpha = np.arctan2(dz, dx)
+    return np.hypot(dx, dz) * np.abs(np.cos(theta0 - alpha))
+
+
+def perpendicular_baseline_fixed_look(xk: ArrayLike, zk: ArrayLike, x_t: float,
+                                      theta0: float) -> ArrayLike:
+    """b_perp,k = |(x_t - x_k) - tan(theta_0) z_k| / sqrt(tan^2(theta_0) + 1)  (eq. 16),
+    valid when the master satisfies C2."""
+    t = np.tan(theta0)
+    return np.abs(np.subtract(x_t, xk) - t * np.asarray(zk)) / np.sqrt(t * t + 1.0)
+
+
+def gamma_m(p: Params) -> float:
+    """gamma_m = sigma_0 P_t G_t G_r lambda^3 c tau_p PRF /
+    (4^4 pi^3 v_y sin(theta_0) k_b T_sys B_Rg F L)  (after eq. 8)."""
+    num = (p.sigma0 * p.radar_power_w * p.gain_tx * p.gain_rx * p.wavelength**3
+           * SPEED_OF_LIGHT * p.duty_cycle)
+    den = (4.0**4 * np.pi**3 * p.speed * np.sin(p.theta0) * BOLTZMANN
+           * p.system_temperature_k * p.radar_bandwidth_hz * p.noise_figure * p.losses)
+    return float(num / den)
+
+
+def snr_monostatic(r0: ArrayLike, gm: float) -> ArrayLike:
+    """SNR_0 = gamma_m / r_0^3  (eq. 8)."""
+    return gm / np.power(r0, 3)
+
+
+def snr_bistatic(r0: ArrayLike, rk: ArrayLike, gm: float) -> ArrayLike:
+    """SNR_k ~ gamma_m / (r_0^2 r_k)  (eq. 9, small bistatic angle)."""
+    return gm / (np.power(r0, 2) * np.asarray(rk))
+
+
+def coherence_snr(snr0: ArrayLike, snrk: ArrayLike) -> ArrayLike:
+    """gamma_SNR,k = 1/sqrt(1 + 1/SNR_0) * 1/sqrt(1 + 1/SNR_k)  (eq. 7)."""
+    return 1.0 / np.sqrt((1.0 + 1.0 / np.asarray(snr0)) * (1.0 + 1.0 / np.asarray(snrk)))
+
+
+def chi(theta0: float, thetak: ArrayLike) -> ArrayLike:
+    """X = 2 (sin th0 1{th0 > thk} + sin thk 1{th0 <= thk}) / (sin th0 + sin thk)  (eq. 11)."""
+    s0, sk = np.sin(theta0), np.sin(thetak)
+    return 2.0 * np.where(theta0 > np.asarray(thetak), s0, sk) / (s0 + sk)
+
+
+def coherence_baseline(x: ArrayLike, fractional_bandwidth: float) -> ArrayLike:
+    """gamma_Rg,k = (1/B_p) [(2 + B_p)/(1 + X) - (2 - B_p)/(1 + 1/X)]  (eq. 10)."""
+    bp = fractional_bandwidth
+    x = np.asarray(x, dtype=float)
+    return ((2.0 + bp) / (1.0 + x) - (2.0 - bp) * x / (x + 1.0)) / bp
+
+
+def coherence_baseline_inverse(gamma: float, fractional_bandwidth: float) -> float:
+    """h(gamma) = (gamma B_p - 2 - B_p) / (B_p - 2 - gamma B_p), the X at which gamma_Rg = gamma
+    (Proposition 2's proof)."""
+    bp = fractional_bandwidth
+    return (gamma * bp - 2.0 - bp) / (bp - 2.0 - gamma * bp)
+
+
+def coherence_total(g_rg: ArrayLike, g_snr: ArrayLike, g_other: float) -> ArrayLike:
+    """gamma_k = gamma_Rg,k gamma_SNR,k gamma_other  (eq. 6)."""
+    return np.asarray(g_rg) * np.asarray(g_snr) * g_other
+
+
+def height_of_ambiguity(wavelength: float, r0: ArrayLike, theta0: float,
+                        b_perp: ArrayLike) -> ArrayLike:
+    """h_amb,k = lambda r_0 sin(theta_0) / b_perp,k  (eq. 12)."""
+    with np.errstate(divide="ignore"):
+        return wavelength * np.asarray(r0) * np.sin(theta0) / np.asarray(b_perp)
+
+
+def phase_error_crb(gamma: ArrayLike, looks: int) -> ArrayLike:
+    """sigma_Phi,k = (1/gamma_k) sqrt((1 - gamma_k^2) / (2 n_L))  (eq. 14, Cramer-Rao bound)."""
+    g = np.asarray(gamma, dtype=float)
+    return np.sqrt((1.0 - g * g) / (2.0 * looks)) / g
+
+
+def height_error(h_amb: ArrayLike, sigma_phi: ArrayLike) -> ArrayLike:
+    """sigma_h,k = h_amb,k sigma_Phi,k / (2 pi)  (eq. 13)."""
+    return np.asarray(h_amb) * np.asarray(sigma_phi) / (2.0 * np.pi)
+
+
+def fused_height_error(sigma_h1: ArrayLike, sigma_h2: ArrayLike) -> ArrayLike:
+    """sigma_h = sqrt(sum w_k^2 sigma_hk^2 / (sum w_k)^2) with w_k = 1/sigma_hk^2  (eq. 15),
+    which simplifies to (1/sigma_h1^2 + 1/sigma_h2^2)^(-1/2)."""
+    s1, s2 = np.asarray(sigma_h1, dtype=float), np.asarray(sigma_h2, dtype=float)
+    w1, w2 = 1.0 / s1**2, 1.0 / s2**2
+    return np.sqrt((w1**2 * s1**2 + w2**2 * s2**2) / (w1 + w2) ** 2)
+
+
+def worst_case_coherence(p: Params) -> float:
+    """A = gamma_Rg^min gamma_SNR^min gamma_other  (Proposition 1)."""
+    return p.coherence_rg_min * p.coherence_snr_min * p.coherence_other
+
+
+def height_error_bound(wavelength: float, r0: ArrayLike, theta0: float, b_perp_sq_sum: ArrayLike,
+                       worst_coherence: float, looks: int) -> ArrayLike:
+    """Proposition 1: sigma_h <= sqrt(lambda^2 r_0^2 sin^2(theta_0) (1 - A^2) /
+    (8 pi^2 A^2 n_L (b_perp,1^2 + b_perp,2^2))).
+
+    Single-baseline (benchmark 1) is the same expression with b_perp,2 = 0, i.e. the bound on
+    sigma_h1 (eq. 27 of the appendix).
+    """
+    a = worst_coherence
+    with np.errstate(divide="ignore"):
+        return np.sqrt(wavelength**2 * np.asarray(r0) ** 2 * np.sin(theta0) ** 2 * (1.0 - a * a)
+                       / (8.0 * np.pi**2 * a * a * looks * np.asarray(b_perp_sq_sum)))
+
+
+def distance_to_station(x: ArrayLike, y: ArrayLike, z: ArrayLike,
+                        station: tuple[float, float, float]) -> ArrayLike:
+    """d_k,n = ||q_k[n] - g||_2 with q_k[n] = (x_k, y[n], z_k)  (section II-B)."""
+    gx, gy, gz = station
+    return np.sqrt((np.asarray(x) - gx) ** 2 + (np.asarray(y) - gy) ** 2
+                   + (np.asarray(z) - gz) ** 2)
+
+
+def fdma_rate(p_w: ArrayLike, d_m: ArrayLike, bandwidth_hz: float, beta_c: float) -> ArrayLike:
+    """R_k,n = B_c log2(1 + P_com,k[n] beta_c / d_k,n^2)  (eq. 17, free-space FDMA)."""
+    return bandwidth_hz * np.log2(1.0 + np.asarray(p_w) * beta_c / np.asarray(d_m) ** 2)
+
+
+def power_for_rate(rate_bps: float, d_m: ArrayLike, bandwidth_hz: float,
+                   beta_c: float) -> ArrayLike:
+    """The least P_com meeting R_k,n >= rate: (2^(rate/B_c) - 1) d^2 / beta_c (C10 tight)."""
+    return np.expm1(rate_bps / bandwidth_hz * np.log(2.0)) * np.asarray(d_m) ** 2 / beta_c

@@ -1,0 +1,57 @@
+"""Communication power: the cheapest schedule for a position, and the distance limits it implies.
+
+For a fixed position the least power meeting C10 in slot n is
+P_k[n] = c_k d_k,n^2 with c_k = (2^(R_min,k / B_c) - 1) / beta_c. With
+d_k,n^2 = rho_k^2 + (y[n] - g_y)^2 (rho_k the x-z distance to the station), C9 and C11 hold
+for that schedule iff rho_k^2 <= station_radius_sq(k); any other feasible schedule uses at least
+as much power in every slot, so this disk is exact, not a relaxation. For the static-power scheme
+P = E_max/(N delta_t) is fixed and C10 alone gives the disk.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from uav_insar_planner import model
+from uav_insar_planner.evaluate import static_power_w
+from uav_insar_planner.params import Params
+
+
+def rate_cost(p: Params, k: int) -> float:
+    """c_k = (2^(R_min,k/B_c) - 1) / beta_c, watts per square metre of distance."""
+    return float(model.power_for_rate(p.rate_min_bps[k], 1.0, p.comm_bandwidth_hz, p.beta_c))
+
+
+def station_radius_sq(p: Params, k: int, scheme: str) -> float:
+    """Largest rho_k^2 (x-z distance to the station, squared) for which C9-C11 can hold;
+    -inf when no position can (e.g. static power above P_max)."""
+    dy2 = (p.y_track - p.ground_station[1]) ** 2
+    c = rate_cost(p, k)
+    if scheme == "static-power":
+        power = static_power_w(p)
+        if power > p.p_max_w:
+            return -np.inf
+        return np.inf if c == 0 else power / c - float(dy2.max())
+    if c == 0:
+        return np.inf
+    peak = p.p_max_w / c - float(dy2.max())
+    energy = p.e_max_j / (p.slot_duration_s * p.num_slots * c) - float(dy2.mean())
+    return min(peak, energy)
+
+
+def power_schedule(p: Params, k: int, x: float, z: float, scheme: str) -> np.ndarray:
+    """P_com,k[n] for UAV k at (x, z): the cheapest schedule meeting C10 with equality, or the
+    constant E_max/(N delta_t) of the static-power scheme."""
+    if scheme == "static-power":
+        return np.full(p.num_slots, static_power_w(p))
+    d = model.distance_to_station(x, p.y_track, z, p.ground_station)
+    return model.power_for_rate(p.rate_min_bps[k], d, p.comm_bandwidth_hz, p.beta_c)
+
+
+def schedules(p: Params, formation: np.ndarray, scheme: str) -> np.ndarray:
+    """(3, N) schedules for a formation; zero rows for UAVs not flown (NaN rows)."""
+    out = np.zeros((3, p.num_slots))
+    for k in range(3):
+        x, z = formation[k]
+        if np.isfinite(x):
+            out[k] = power_schedule(p, k, x, z, scheme)
+    return out
