@@ -8,12 +8,11 @@ from __future__ import annotations
 
 import difflib
 import math
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
-
-import re
 
 import yaml
 
@@ -349,16 +348,16 @@ def read_params_file(path: str | Path, node_name: str = "planner") -> dict[str, 
     if not isinstance(doc, dict):
         raise ParamError([f"params file: {str(path)!r} must map node names to "
                           "{ros__parameters: {...}}"])
+    for key, body in doc.items():
+        if not isinstance(body, dict) or not isinstance(body.get("ros__parameters"), dict):
+            raise ParamError([f"params file: section {key!r} in {str(path)!r} must hold a "
+                              "'ros__parameters' mapping"])
     values: dict[str, Any] = {}
     sections = [k for k in doc if k == "/**"] + [
         k for k in doc if isinstance(k, str) and k != "/**"
         and k.lstrip("/").split("/")[-1] == node_name]
     for key in sections:
-        body = doc[key]
-        if not isinstance(body, dict) or not isinstance(body.get("ros__parameters"), dict):
-            raise ParamError([f"params file: section {key!r} in {str(path)!r} must hold a "
-                              "'ros__parameters' mapping"])
-        values.update(body["ros__parameters"])
+        values.update(doc[key]["ros__parameters"])
     return values
 
 

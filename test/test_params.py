@@ -1,0 +1,100 @@
+"""Parameter files: Table I defaults, SI conversion in one place, and one clear line per error."""
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from uav_insar_planner.params import (
+    PARAM_SPECS,
+    ParamError,
+    default_params,
+    load_params,
+    read_params_file,
+)
+
+ROOT = Path(__file__).resolve().parent.parent
+CONFIG = ROOT / "config" / "params.yaml"
+
+
+def test_config_file_holds_table_one_defaults():
+    values = read_params_file(CONFIG)
+    assert set(values) == {s.name for s in PARAM_SPECS}
+    for spec in PARAM_SPECS:
+        assert values[spec.name] == spec.default, spec.name
+    assert load_params(CONFIG) == default_params()
+
+
+def test_si_conversion():
+    p = default_params()
+    assert p.p_max_w == pytest.approx(10 ** 1.01)          # 10.1 dBW
+    assert p.radar_power_w == pytest.approx(0.39994, rel=1e-4)  # 26.02 dBm
+    assert p.beta_c == pytest.approx(10 ** 1.869)          # 18.69 dB
+    assert p.rate_min_bps == (10e6, 16.95e6, 1e6)
+    assert p.theta0 == pytest.approx(math.pi / 4)
+    assert p.beamwidth == pytest.approx(math.radians(33.44))
+    assert p.losses == pytest.approx(10 ** 0.6)
+
+
+def test_node_section_overrides_global_section(tmp_path):
+    f = tmp_path / "p.yaml"
+    f.write_text('"/**":\n  ros__parameters:\n    looks: 4\n    d_min_m: 2.0\n'
+                 "/planner:\n  ros__parameters:\n    looks: 8\n"
+                 "agent:\n  ros__parameters:\n    looks: 16\n")
+    p = load_params(f)
+    assert (p.looks, p.d_min) == (8, 2.0)
+
+
+def test_scientific_notation_reads_as_float(tmp_path):
+    f = tmp_path / "p.yaml"
+    f.write_text('"/**":\n  ros__parameters:\n    comm_bandwidth_hz: 2e9\n')
+    assert load_params(f).comm_bandwidth_hz == 2e9
+
+
+def test_all_problems_reported_at_once():
+    with pytest.raises(ParamError) as err:
+        load_params(None, {"looks": 2.5, "rate_min_mbps": [1, 2], "foo": 1,
+                           "scheme": "best"})
+    names = sorted(line.split(":")[0] for line in err.value.problems)
+    assert names == ["foo", "looks", "rate_min_mbps", "scheme"]
+
+
+BAD_FILES = {
+    "unknown": ('"/**":\n  ros__parameters:\n    looks_n: 4\n', "looks_n: unknown parameter"),
+    "type": ('"/**":\n  ros__parameters:\n    z_max_m: high\n', "z_max_m: value 'high'"),
+    "range": ('"/**":\n  ros__parameters:\n    coherence_rg_min: 1.5\n',
+              "coherence_rg_min: value 1.5 is not allowed; expected a finite number in (0, 1]"),
+    "not finite": ('"/**":\n  ros__parameters:\n    d_min_m: .nan\n', "d_min_m: value nan"),
+    "length": ('"/**":\n  ros__parameters:\n    ground_station_m: [1, 2]\n',
+               "ground_station_m: value [1, 2] is not allowed; expected a list of 3"),
+    "order": ('"/**":\n  ros__parameters:\n    z_min_m: 120.0\n',
+              "z_min_m: value 120.0 is not allowed; expected less than z_max_m (100.0)"),
+    "yaml": ('"/**":\n  ros__parameters: [\n', "is not valid YAML"),
+    "layout": ("looks: 4\n", "must hold a 'ros__parameters' mapping"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_FILES))
+def test_bad_params_file_cli(tmp_path, case):
+    text, expected = BAD_FILES[case]
+    f = tmp_path / "bad.yaml"
+    f.write_text(text)
+    proc = subprocess.run([sys.executable, "-m", "uav_insar_planner.cli", "solve", "--params",
+                           str(f)], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 2
+    assert proc.stdout == ""
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1, proc.stderr
+    assert expected in lines[0]
+    assert "Traceback" not in proc.stderr
+
+
+def test_missing_file_and_bad_set(tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "uav_insar_planner.cli", "solve", "--params",
+                           str(tmp_path / "nope.yaml")], capture_output=True, text=True,
+                          timeout=60)
+    assert proc.returncode == 2 and "cannot be read" in proc.stderr
+    proc = subprocess.run([sys.executable, "-m", "uav_insar_planner.cli", "solve", "--set",
+                           "looks"], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 2 and "expected NAME=VALUE" in proc.stderr

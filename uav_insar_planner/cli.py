@@ -1,0 +1,165 @@
+"""`uav-insar`: solve, sweep and plot the planning problem; echo topics; run a MAVLink vehicle.
+
+Exit codes: 0 solved, 3 infeasible (solve), 2 bad input (one line per problem, no traceback).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+
+import numpy as np
+
+from uav_insar_planner.params import (
+    OBJECTIVES,
+    SCHEMES,
+    SOLVERS,
+    ParamError,
+    Params,
+    load_params,
+    parse_override,
+)
+
+EXIT_OK, EXIT_BAD_INPUT, EXIT_INFEASIBLE = 0, 2, 3
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # one line, exit 2, as for bad parameters
+        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")
+
+
+def _add_scenario_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--params", metavar="FILE", help="ROS 2 params file (default: Table I)")
+    p.add_argument("--set", metavar="NAME=VALUE", action="append", default=[],
+                   help="override a parameter (repeatable), e.g. --set h_amb_min_m=0.9")
+    p.add_argument("--objective", choices=OBJECTIVES, help="exact sigma_h or Prop. 1 bound")
+    p.add_argument("--solver", choices=SOLVERS, help="global (certified) or paper-ao")
+
+
+def _build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="uav-insar", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    s = sub.add_parser("solve", help="solve problem (P) and print the plan")
+    _add_scenario_args(s)
+    s.add_argument("--scheme", choices=SCHEMES, help="proposed or benchmark 1-3")
+    s.add_argument("--json", action="store_true", help="print one JSON object")
+
+    w = sub.add_parser("sweep", help="solve along one parameter for several schemes")
+    w.add_argument("name", help="parameter, e.g. h_amb_min_m or rate_min_mbps[1]")
+    w.add_argument("start", type=float)
+    w.add_argument("stop", type=float)
+    w.add_argument("count", type=int)
+    _add_scenario_args(w)
+    w.add_argument("--schemes", nargs="+", choices=SCHEMES, default=list(SCHEMES))
+    w.add_argument("--band", action="store_true",
+                   help="also compute sigma_h's range over the bound's minimisers")
+    w.add_argument("--csv", metavar="FILE")
+    w.add_argument("--plot", metavar="FILE.png")
+    w.add_argument("--no-progress", action="store_true")
+
+    f = sub.add_parser("plot-formation", help="draw the across-track plane")
+    _add_scenario_args(f)
+    f.add_argument("--scheme", choices=SCHEMES)
+    f.add_argument("--out", default="formation.png", metavar="FILE.png")
+
+    sub.add_parser("echo", help="print a topic like `ros2 topic echo` (see --help)",
+                   add_help=False)
+    sub.add_parser("vehicle", help="run a SITL-style MAVLink vehicle (see --help)",
+                   add_help=False)
+    return parser
+
+
+def _scenario(args: argparse.Namespace) -> Params:
+    overrides = dict(parse_override(item) for item in args.set)
+    if args.objective:
+        overrides["objective"] = args.objective
+    if args.solver:
+        overrides["solver"] = args.solver
+    if getattr(args, "scheme", None):
+        overrides["scheme"] = args.scheme
+    return load_params(args.params, overrides)
+
+
+def _cmd_solve(args: argparse.Namespace) -> int:
+    from uav_insar_planner.report import format_plan
+    from uav_insar_planner.solver import solve
+
+    plan = solve(_scenario(args))
+    print(json.dumps(plan.to_dict(), indent=2) if args.json else format_plan(plan))
+    return EXIT_OK if plan.feasible else EXIT_INFEASIBLE
+
+
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    from tqdm import tqdm
+
+    from uav_insar_planner.sweep import gains, parse_sweep_name, run_sweep, write_csv
+
+    params = _scenario(args)
+    parse_sweep_name(args.name)
+    if args.count < 1:
+        raise ParamError([f"sweep COUNT: value {args.count} is not allowed; expected >= 1"])
+    values = np.linspace(args.start, args.stop, args.count)
+    bar = tqdm(total=len(values) * len(args.schemes), unit="solve", file=sys.stderr,
+               disable=args.no_progress)
+    rows = run_sweep(params, args.name, values, args.schemes, band=args.band,
+                     progress=bar.update)
+    bar.close()
+    print(f"{'value':>10}  {'scheme':<16} {'sigma_h_m':>10} {'bound_m':>10}  blocking")
+    for r in rows:
+        sh = f"{r.sigma_h_m:10.5f}" if r.feasible else f"{'infeas.':>10}"
+        bd = f"{r.sigma_h_bound_m:10.5f}" if r.feasible else f"{'':>10}"
+        print(f"{r.value:10.4g}  {r.scheme:<16} {sh} {bd}  {r.blocking}")
+    if "proposed" in args.schemes and len(args.schemes) > 1:
+        for scheme, g in sorted(gains(rows).items()):
+            print(f"least gain of proposed over {scheme}: {100 * g:.1f}% "
+                  "(1 - sigma_h(proposed)/sigma_h(scheme), where both are feasible)")
+    if args.csv:
+        write_csv(rows, args.csv, args.name)
+        print(f"wrote {args.csv}")
+    if args.plot:
+        from uav_insar_planner.plotting import plot_sweep
+
+        plot_sweep(rows, args.name, args.plot)
+        print(f"wrote {args.plot}")
+    return EXIT_OK
+
+
+def _cmd_plot_formation(args: argparse.Namespace) -> int:
+    from uav_insar_planner.plotting import plot_formation
+    from uav_insar_planner.solver import solve
+
+    params = _scenario(args)
+    plan = solve(params)
+    if not plan.feasible:
+        print("infeasible, blocked by: " + ", ".join(plan.blocking_constraints),
+              file=sys.stderr)
+        return EXIT_INFEASIBLE
+    plot_formation(params, plan, args.out)
+    print(f"wrote {args.out}")
+    return EXIT_OK
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if argv and argv[0] == "echo":
+        from uav_insar_planner.echo import main as echo_main
+
+        return echo_main(argv[1:])
+    if argv and argv[0] == "vehicle":
+        from uav_insar_sim.vehicle import main as vehicle_main
+
+        return vehicle_main(argv[1:])
+    args = _build_parser().parse_args(argv)
+    commands = {"solve": _cmd_solve, "sweep": _cmd_sweep, "plot-formation": _cmd_plot_formation}
+    try:
+        return commands[args.command](args)
+    except ParamError as exc:
+        for line in exc.problems:
+            print(f"uav-insar: error: {line}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

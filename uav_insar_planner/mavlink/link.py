@@ -1,0 +1,177 @@
+"""One MAVLink endpoint: a pymavlink transport plus our own tolerant MAVLink 2 parser.
+
+pymavlink's `mavutil.mavlink_connection` opens the transport (UDP in/out, TCP, serial, ...);
+we keep its socket handling but parse and send with a private MAVLink 2 codec, because
+mavutil switches the protocol version through a process-wide environment variable and a
+module global, which two endpoints in one process must not share.
+
+Malformed input never raises: bad CRC, garbage and bad lengths are counted as `bad_data`,
+unknown message ids as `unknown_msgid`; on datagram transports (UDP) a datagram that ends
+inside a frame is counted as `truncated` and its tail dropped, so it cannot swallow the next,
+valid datagram (MAVLink over UDP carries whole frames per datagram).
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+from pymavlink import mavutil
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+#: The MAVLink 2 dialect module (message classes, MAV_* constants) every user of this link
+#: shares, so constants and codecs always come from one place.
+MAV = mavlink2
+
+_LIVE_PREFIXES = ("udpin:", "udpout:", "udpbcast:", "udp:", "tcp:", "tcpin:", "mcast:",
+                  "uds:", "unix:")
+_READ_CHUNK = 4096
+_MAX_READS_PER_POLL = 256  # bounds one poll, so a flooded link cannot starve the others
+
+
+def parse_address(address: str) -> tuple[str, int]:
+    """Split a connection string into (device, baud) and reject what is not a live link.
+
+    Accepted: pymavlink's `udpin:HOST:PORT`, `udpout:HOST:PORT`, `udpbcast:`, `udp:`, `tcp:`,
+    `tcpin:`, `mcast:`, `uds:`, and serial devices as `DEVICE` or `DEVICE,BAUD` (MAVProxy
+    style, default 57600). Log files and CSV readers are refused. Raises ValueError.
+    """
+    text = address.strip()
+    if not text:
+        raise ValueError("empty connection string")
+    if text.startswith(_LIVE_PREFIXES):
+        rest = text.split(":", 1)[1]
+        if text.startswith(("udp", "tcp")):
+            host, sep, port = rest.rpartition(":")
+            if not sep or not port.isdigit() or int(port) > 65535:
+                raise ValueError(f"{address!r} needs HOST:PORT after the scheme")
+        return text, 57600
+    lowered = text.lower()
+    if lowered.startswith("csv:") or lowered.endswith((".tlog", ".bin", ".log", ".px4log",
+                                                       ".mavlink", ".raw")):
+        raise ValueError(f"{address!r} is a log file, not a live MAVLink link")
+    device, sep, baud = text.partition(",")
+    if sep and not baud.isdigit():
+        raise ValueError(f"{address!r}: baud after ',' must be an integer")
+    if ":" in device or os.path.isfile(device):
+        raise ValueError(f"{address!r} is not a known connection string (udpin:HOST:PORT, "
+                         "udpout:HOST:PORT, tcp:HOST:PORT, tcpin:HOST:PORT or a serial device)")
+    return device, int(baud) if sep else 57600
+
+
+@dataclass
+class LinkStats:
+    """Counters of one link. `foreign` is kept by the owner (traffic from unknown sysids)."""
+
+    rx_bytes: int = 0
+    rx_messages: int = 0
+    bad_data: int = 0
+    truncated: int = 0
+    unknown_msgid: int = 0
+    foreign: int = 0
+    io_errors: int = 0
+    tx_messages: int = 0
+
+    @property
+    def malformed(self) -> int:
+        """Everything dropped as not decodable: bad data, truncated frames, unknown ids."""
+        return self.bad_data + self.truncated + self.unknown_msgid
+
+
+class Link:
+    """A MAVLink endpoint that sends as (source_system, source_component).
+
+    Not thread-safe: one thread polls and sends. `fileno()` is for select(); `poll()` reads
+    everything waiting now and returns the decoded messages, never raising on bad input.
+    """
+
+    def __init__(self, address: str, source_system: int, source_component: int):
+        device, baud = parse_address(address)
+        self.address = address
+        self.source_system = source_system
+        self.source_component = source_component
+        try:
+            self.conn = mavutil.mavlink_connection(
+                device, baud=baud, source_system=source_system,
+                source_component=source_component, autoreconnect=True)
+        except Exception as exc:  # pymavlink raises OSError, ValueError, SerialException...
+            raise ValueError(f"cannot open {address!r}: {exc}") from None
+        self._datagrams = isinstance(self.conn, (mavutil.mavudp, mavutil.mavmcast))
+        self._tx = MAV.MAVLink(self.conn, srcSystem=source_system, srcComponent=source_component)
+        self._rx = self._new_parser()
+        self.stats = LinkStats()
+
+    def _new_parser(self) -> MAV.MAVLink:
+        parser = MAV.MAVLink(None, srcSystem=self.source_system,
+                             srcComponent=self.source_component)
+        parser.robust_parsing = True
+        return parser
+
+    @property
+    def mav(self) -> MAV.MAVLink:
+        """The encoder; use `send(link.mav.xxx_encode(...))`."""
+        return self._tx
+
+    def local_port(self) -> int | None:
+        """The bound local UDP/TCP port (tests bind port 0 and ask), or None."""
+        sock = getattr(self.conn, "port", None)
+        try:
+            return sock.getsockname()[1]
+        except (AttributeError, OSError, IndexError, TypeError):
+            return None
+
+    def fileno(self) -> int | None:
+        fd = getattr(self.conn, "fd", None)
+        return fd if isinstance(fd, int) and fd >= 0 else None
+
+    def send(self, msg: MAV.MAVLink_message) -> None:
+        """Encode and write one message; a transport error is counted, never raised."""
+        try:
+            self._tx.send(msg)
+            self.stats.tx_messages += 1
+        except (OSError, ValueError):
+            self.stats.io_errors += 1
+
+    def send_raw(self, data: bytes) -> None:
+        """Write bytes as they are (tests use it to inject malformed frames)."""
+        try:
+            self.conn.write(data)
+        except (OSError, ValueError):
+            self.stats.io_errors += 1
+
+    def poll(self) -> list[MAV.MAVLink_message]:
+        """Read what is waiting now; return the valid messages in arrival order."""
+        out: list[MAV.MAVLink_message] = []
+        for _ in range(_MAX_READS_PER_POLL):
+            try:
+                data = self.conn.recv(_READ_CHUNK)
+            except (OSError, ValueError):
+                self.stats.io_errors += 1
+                break
+            if not data:
+                break
+            self.stats.rx_bytes += len(data)
+            self._feed(bytes(data) if not isinstance(data, str) else data.encode("latin-1"),
+                       out)
+        return out
+
+    def _feed(self, data: bytes, out: list[MAV.MAVLink_message]) -> None:
+        msg = self._rx.parse_char(data)
+        while msg is not None:
+            kind = msg.get_type()
+            if kind == "BAD_DATA":
+                self.stats.bad_data += 1
+            elif kind.startswith("UNKNOWN_"):
+                self.stats.unknown_msgid += 1
+            else:
+                self.stats.rx_messages += 1
+                out.append(msg)
+            msg = self._rx.parse_char(b"")
+        if self._datagrams and self._rx.buf_len() > 0:
+            self.stats.truncated += 1
+            self._rx = self._new_parser()
+
+    def close(self) -> None:
+        try:
+            self.conn.close()
+        except (OSError, ValueError):
+            pass

@@ -1,0 +1,143 @@
+"""Pure content of the planner's messages: Plan -> /formation, /formation/power, /diagnostics.
+
+Nothing here imports ROS; the planner node copies these plain values into messages. Units are
+SI throughout (metres, watts, bit/s, seconds).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from uav_insar_planner.evaluate import FEAS_TOL
+from uav_insar_planner.plan import UAV_NAMES, Plan
+
+# diagnostic_msgs/DiagnosticStatus levels.
+OK, WARN, ERROR, STALE = 0, 1, 2, 3
+LEVEL_NAMES = {OK: "OK", WARN: "WARN", ERROR: "ERROR", STALE: "STALE"}
+
+FRAME_ID = "insar_track"
+HARDWARE_ID = "uav_insar_planner"
+PLAN_STATUS_NAME = "planner: plan"
+
+
+@dataclass
+class Status:
+    """One diagnostic_msgs/DiagnosticStatus, as plain values."""
+
+    level: int
+    name: str
+    message: str
+    values: list[tuple[str, str]] = field(default_factory=list)
+    hardware_id: str = HARDWARE_ID
+
+
+def fmt(value: float) -> str:
+    """A number as a diagnostics value string: 6 significant digits, 'nan' when not finite."""
+    return f"{value:.6g}" if math.isfinite(value) else "nan"
+
+
+def formation_points(plan: Plan) -> list[tuple[float, float, float]]:
+    """poses[k] = (x_k, y_start = 0, z_k) for k = 0 (master), 1, 2.
+
+    A UAV the scheme does not fly (single-baseline's U2) keeps NaN x and z, so poses[k]
+    always means U_k.
+    """
+    return [(float(x), 0.0, float(z)) for x, z in plan.formation]
+
+
+def power_rows(plan: Plan) -> tuple[int, int, list[float]]:
+    """(3, N, P_com[k][n] row-major in watts) for a Float64MultiArray with dims [uav, slot]."""
+    p = np.asarray(plan.p_com_w, dtype=float)
+    return int(p.shape[0]), int(p.shape[1]), [float(v) for v in p.ravel()]
+
+
+def plan_status(plan: Plan) -> Status:
+    """The plan's diagnostics: OK when feasible, ERROR (naming the blocking constraints) if not."""
+    values = [
+        ("scheme", plan.scheme),
+        ("objective", plan.objective),
+        ("solver", plan.solver),
+        ("feasible", str(plan.feasible).lower()),
+        ("sigma_h_m", fmt(plan.sigma_h_m)),
+        ("sigma_h_bound_m", fmt(plan.sigma_h_bound_m)),
+    ]
+    for name, pair in sorted(plan.metrics.get("pairs", {}).items()):
+        values += [
+            (f"b_perp_m.{name}", fmt(pair["b_perp_m"])),
+            (f"h_amb_m.{name}", fmt(pair["h_amb_m"])),
+            (f"coherence.{name}", fmt(pair["coherence_total"])),
+        ]
+    for k, (x, _, z) in enumerate(formation_points(plan)):
+        values += [(f"x_m.{UAV_NAMES[k]}", fmt(x)), (f"z_m.{UAV_NAMES[k]}", fmt(z))]
+    values += [
+        ("solve_time_s", fmt(plan.solve_time_s)),
+        ("iterations", str(plan.iterations)),
+        ("blocking_constraints", ",".join(plan.blocking_constraints)),
+    ]
+    if plan.feasible:
+        message = (f"{plan.scheme} plan: sigma_h {plan.sigma_h_m:.4g} m "
+                   f"(bound {plan.sigma_h_bound_m:.4g} m), solved in {plan.solve_time_s:.3g} s")
+        return Status(OK, PLAN_STATUS_NAME, message, values)
+    blocking = ", ".join(plan.blocking_constraints) or "unknown"
+    message = f"{plan.scheme}: infeasible, blocked by {blocking}; not published"
+    if plan.message:
+        message += f" ({plan.message})"
+    return Status(ERROR, PLAN_STATUS_NAME, message, values)
+
+
+def failure_status(scheme: str, error: str) -> Status:
+    """ERROR status for a solve that raised instead of returning a plan."""
+    return Status(ERROR, PLAN_STATUS_NAME, f"{scheme}: solve failed: {error}",
+                  [("scheme", scheme), ("feasible", "false")])
+
+
+@dataclass
+class UavReport:
+    """What the planner last heard from one agent (None until heard)."""
+
+    position: tuple[float, float, float] | None = None
+    rate_bps: float | None = None
+    rate_count: int = 0
+    min_margin_bps: float = math.inf
+
+    def record_rate(self, rate_bps: float, rate_min_bps: float) -> None:
+        """Keep the latest rate and the worst margin seen since the last plan."""
+        self.rate_bps = rate_bps
+        self.rate_count += 1
+        self.min_margin_bps = min(self.min_margin_bps, rate_bps - rate_min_bps)
+
+
+def rate_tolerance_bps(rate_min_bps: tuple[float, ...]) -> float:
+    """Shortfall still counted as meeting R_min: the constraint checker's C10 tolerance."""
+    return FEAS_TOL * max(max(rate_min_bps), 1.0)
+
+
+def uav_status(k: int, target_xz: tuple[float, float], rate_min_bps: tuple[float, ...],
+               report: UavReport) -> Status:
+    """Per-UAV diagnostics: rate margin (achieved - R_min,k) and across-track position error.
+
+    WARN when the last achieved rate misses R_min,k by more than the checker's tolerance;
+    STALE until the agent has reported both a pose and a rate.
+    """
+    name = f"planner: {UAV_NAMES[k]}"
+    values = [("rate_min_bps", fmt(rate_min_bps[k])),
+              ("target_x_m", fmt(target_xz[0])), ("target_z_m", fmt(target_xz[1]))]
+    if report.position is None or report.rate_bps is None:
+        return Status(STALE, name, "no pose and rate reported yet", values)
+    x, y, z = report.position
+    error = math.hypot(x - target_xz[0], z - target_xz[1])
+    margin = report.rate_bps - rate_min_bps[k]
+    values += [
+        ("achieved_rate_bps", fmt(report.rate_bps)),
+        ("rate_margin_bps", fmt(margin)),
+        ("min_rate_margin_bps", fmt(report.min_margin_bps)),
+        ("slots_reported", str(report.rate_count)),
+        ("position_error_m", fmt(error)),
+        ("y_m", fmt(y)),
+    ]
+    text = (f"rate margin {margin / 1e6:+.4g} Mbit/s, position error {error:.3g} m")
+    if margin < -rate_tolerance_bps(rate_min_bps):
+        return Status(WARN, name, "rate target missed: " + text, values)
+    return Status(OK, name, text, values)

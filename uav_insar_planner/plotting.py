@@ -1,0 +1,140 @@
+"""Figures: sweeps in the style of the paper's Figures 3 and 4, and the across-track formation.
+
+Only this module imports matplotlib (with the Agg back end, so it works without a screen).
+"""
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from uav_insar_planner import model  # noqa: E402
+from uav_insar_planner.params import Params  # noqa: E402
+from uav_insar_planner.plan import Plan  # noqa: E402
+from uav_insar_planner.solver.power import station_radius_sq  # noqa: E402
+from uav_insar_planner.sweep import SweepRow  # noqa: E402
+
+SCHEME_STYLE = {
+    "proposed": ("tab:blue", "o", "Proposed"),
+    "single-baseline": ("tab:orange", "s", "Benchmark 1 (single-baseline)"),
+    "fixed-master": ("tab:green", "^", "Benchmark 2 (fixed master)"),
+    "static-power": ("tab:purple", "v", "Benchmark 3 (static power)"),
+}
+
+
+def plot_sweep(rows: Sequence[SweepRow], name: str, path: str | Path) -> None:
+    """sigma_h per scheme against the swept value; the bound for the proposed scheme dashed;
+    the band of sigma_h over the bound's minimisers shaded when present; values where a scheme
+    is infeasible shaded red, as the paper's red region."""
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    schemes = list(dict.fromkeys(r.scheme for r in rows))
+    values = sorted({r.value for r in rows})
+    step = (values[1] - values[0]) / 2 if len(values) > 1 else 0.5
+    for scheme in schemes:
+        color, marker, label = SCHEME_STYLE.get(scheme, ("k", ".", scheme))
+        pts = [r for r in rows if r.scheme == scheme]
+        ok = [r for r in pts if r.feasible]
+        ax.plot([r.value for r in ok], [r.sigma_h_m for r in ok], marker=marker, color=color,
+                label=label + r": $\sigma_h$")
+        if scheme == "proposed":
+            ax.plot([r.value for r in ok], [r.sigma_h_bound_m for r in ok], "--", color=color,
+                    label=label + r": bound $\overline{\sigma_h}$")
+        band = [r for r in ok if np.isfinite(r.band_lo_m)]
+        if band:
+            ax.fill_between([r.value for r in band], [r.band_lo_m for r in band],
+                            [r.band_hi_m for r in band], color=color, alpha=0.15,
+                            label=label + ": bound minimisers' $\\sigma_h$")
+        for r in pts:
+            if not r.feasible:
+                ax.axvspan(r.value - step, r.value + step, color="red", alpha=0.08, lw=0)
+                ax.plot([r.value], [ax.get_ylim()[0]], "x", color=color, ms=8)
+    ax.set_xlabel(name)
+    ax.set_ylabel("height error [m]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title("Height error of the fused DEM (red: a scheme is infeasible)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def _slave_region(p: Params, plan: Plan, k: int, xs: np.ndarray, zs: np.ndarray) -> np.ndarray:
+    """Mask of the x-z grid where slave k alone meets C1, C3-C11 with the master at its plan."""
+    x, z = np.meshgrid(xs, zs)
+    x0, z0 = plan.formation[0]
+    r0 = float(model.slant_range(x0, z0, p.x_t))
+    r = model.slant_range(x, z, p.x_t)
+    th = model.look_angle(x, z, p.x_t)
+    gm = model.gamma_m(p)
+    bp = p.radar_bandwidth_hz / p.center_frequency_hz
+    b_perp = model.perpendicular_baseline(x0, z0, x, z, p.theta0)
+    gx, _, gz = p.ground_station
+    ok = (z >= p.z_min) & (z <= p.z_max) & (th >= p.theta_min) & (th <= p.theta_max)
+    ok &= np.hypot(x - x0, z - z0) >= p.d_min
+    ok &= model.swath_width(r, th, p.beamwidth) >= p.swath_min
+    ok &= model.coherence_snr(model.snr_monostatic(r0, gm),
+                              model.snr_bistatic(r0, r, gm)) >= p.coherence_snr_min
+    ok &= model.coherence_baseline(model.chi(p.theta0, th), bp) >= p.coherence_rg_min
+    with np.errstate(divide="ignore"):
+        ok &= model.height_of_ambiguity(p.wavelength, r0, p.theta0, b_perp) >= p.h_amb_min
+    ok &= (x - gx) ** 2 + (z - gz) ** 2 <= station_radius_sq(p, k, plan.scheme)
+    return ok
+
+
+def plot_formation(p: Params, plan: Plan, path: str | Path) -> None:
+    """The across-track plane: target line, the UAVs with their beams and swaths, the ground
+    station with each UAV's communication disk (C9-C11), the master's C2 line and each slave's
+    feasible region with the others at the plan."""
+    fig, ax = plt.subplots(figsize=(8, 6))
+    flown = [k for k in range(3) if np.isfinite(plan.formation[k, 0])]
+    gx, _, gz = p.ground_station
+    xs_all = [plan.formation[k, 0] for k in flown] + [p.x_t, gx]
+    xlo, xhi = min(xs_all) - 40, max(xs_all) + 40
+    zhi = max(max(plan.formation[k, 1] for k in flown), gz) + 30
+    xs, zs = np.linspace(xlo, xhi, 400), np.linspace(0, zhi, 300)
+    colors = ["tab:red", "tab:blue", "tab:green"]
+    for k in flown:
+        if k > 0:
+            mask = _slave_region(p, plan, k, xs, zs)
+            if mask.any():
+                ax.contourf(xs, zs, mask.astype(float), levels=[0.5, 1.5], colors=[colors[k]],
+                            alpha=0.15)
+                ax.contour(xs, zs, mask.astype(float), levels=[0.5], colors=[colors[k]],
+                           linewidths=0.8)
+        rho2 = station_radius_sq(p, k, plan.scheme)
+        if np.isfinite(rho2) and rho2 > 0:
+            ax.add_patch(plt.Circle((gx, gz), np.sqrt(rho2), fill=False, ls=":",
+                                    color=colors[k], lw=1))
+    z_line = np.linspace(0, zhi, 2)
+    ax.plot(model.master_x(z_line, p.x_t, p.theta0), z_line, "--", color=colors[0], lw=0.8,
+            label=r"master line (C2, $\theta_0$)")
+    for k in flown:
+        x, z = plan.formation[k]
+        th = p.theta0 if k == 0 else float(model.look_angle(x, z, p.x_t))
+        edges = []
+        for sign in (-1, 1):
+            a = th + sign * p.beamwidth / 2
+            edges.append(x + z * np.tan(a))
+            ax.plot([x, edges[-1]], [z, 0], color=colors[k], lw=0.6, alpha=0.6)
+        ax.plot(edges, [0, 0], color=colors[k], lw=4, alpha=0.35)
+        ax.plot([x], [z], "o", color=colors[k], ms=8,
+                label=f"U{k} {'master' if k == 0 else 'slave'} ({x:.1f}, {z:.1f}) m")
+    ax.plot([p.x_t], [0], "k*", ms=12, label=f"target line x_t = {p.x_t:g} m")
+    ax.plot([gx], [gz], "ks", ms=8, label="ground station (x-z projection)")
+    ax.set_xlim(xlo, xhi)
+    ax.set_ylim(0, zhi)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (range / across-track) [m]")
+    ax.set_ylabel("z (altitude) [m]")
+    ax.set_title(f"{plan.scheme}: sigma_h = {plan.sigma_h_m:.4f} m  (shaded: slave feasible "
+                 "regions; dotted: C9-C11 disks; thick: swaths)", fontsize=9)
+    ax.legend(fontsize=7, loc="upper right")
+    ax.grid(True, alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

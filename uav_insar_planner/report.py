@@ -1,0 +1,68 @@
+"""Human-readable rendering of a Plan for the terminal (`uav-insar solve`)."""
+from __future__ import annotations
+
+import numpy as np
+
+from uav_insar_planner.plan import UAV_NAMES, Plan
+
+CONSTRAINT_TEXT = {
+    "C1": "altitude z_min <= z_k <= z_max",
+    "C2": "master on its look-angle line",
+    "C3": "slave look angle in [theta_min, theta_max]",
+    "C4": "UAV separation >= d_min",
+    "C5": "swath >= S_min",
+    "C6": "SNR coherence >= gamma_SNR^min",
+    "C7": "baseline coherence >= gamma_Rg^min",
+    "C8": "height of ambiguity >= h_amb^min",
+    "C9": "0 <= P_com <= P_max",
+    "C10": "rate >= R_min in every slot",
+    "C11": "energy <= E_max",
+}
+
+
+def format_plan(plan: Plan) -> str:
+    """Multi-line summary: formation, schedules, accuracy, per-pair metrics, constraints."""
+    lines = [f"scheme {plan.scheme}, objective {plan.objective}, solver {plan.solver}: "
+             + ("FEASIBLE" if plan.feasible else "INFEASIBLE")
+             + f"  ({plan.iterations} iterations, {plan.solve_time_s * 1e3:.1f} ms)"]
+    if plan.message:
+        lines.append(f"note: {plan.message}")
+    if not plan.feasible and plan.blocking_constraints:
+        lines.append("blocked by: " + ", ".join(
+            f"{c} ({CONSTRAINT_TEXT.get(c, c)})" for c in plan.blocking_constraints))
+    if not plan.constraints:
+        return "\n".join(lines)
+    m = plan.metrics
+    lines += ["", "formation (across-track plane, metres; target line at x_t, z = 0):",
+              "  uav    role      x_m       z_m   range_m  look_deg  swath_m  "
+              "P_com min/mean/max W   energy_J"]
+    for k, name in enumerate(UAV_NAMES):
+        x, z = plan.formation[k]
+        if not np.isfinite(x):
+            lines.append(f"  {name}  (not flown by this scheme)")
+            continue
+        pk = plan.p_com_w[k]
+        lines.append(
+            f"  {name}  {'master' if k == 0 else 'slave '}  {x:8.3f}  {z:8.3f}  "
+            f"{m['slant_range_m'][name]:7.2f}  {m['look_angle_deg'][name]:8.3f}  "
+            f"{m['swath_m'][name]:7.2f}  {pk.min():6.3f}/{pk.mean():6.3f}/{pk.max():6.3f}"
+            f"   {m['energy_j'][name]:8.2f}")
+    lines += ["", f"fused height error sigma_h      = {plan.sigma_h_m:.6f} m",
+              f"Proposition-1 bound             = {plan.sigma_h_bound_m:.6f} m"]
+    if np.isfinite(plan.lower_bound_m):
+        lines.append(f"certified lower bound           = {plan.lower_bound_m:.6f} m "
+                     f"(gap {plan.optimality_gap:.2e}; {plan.certificate})")
+    lines += ["", "interferometric pairs:",
+              "  pair       b_m  b_perp_m  h_amb_m  coh_Rg  coh_SNR  coh_tot  SNR_0  SNR_k  "
+              "sigma_hk_m"]
+    for name, pm in m["pairs"].items():
+        lines.append(
+            f"  U0-{name[-1]}  {pm['b_m']:8.3f}  {pm['b_perp_m']:8.3f}  {pm['h_amb_m']:7.3f}  "
+            f"{pm['coherence_baseline']:6.4f}  {pm['coherence_snr']:7.4f}  "
+            f"{pm['coherence_total']:7.4f}  {pm['snr_master']:5.2f}  {pm['snr_slave']:5.2f}  "
+            f"{pm['sigma_h_m']:.6f}")
+    lines += ["", "constraints (slack >= 0 when met; SI units):"]
+    for name, c in plan.constraints.items():
+        lines.append(f"  {name:<4} {'ok  ' if c.ok else 'FAIL'}  slack {c.slack:12.6g}  "
+                     f"[{c.detail}]  {CONSTRAINT_TEXT[name]}")
+    return "\n".join(lines)

@@ -1,0 +1,104 @@
+"""Solve along one parameter for several schemes (the paper's Figures 3 and 4)."""
+from __future__ import annotations
+
+import csv
+import re
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from uav_insar_planner.params import SPEC_BY_NAME, ParamError, Params
+from uav_insar_planner.solver import solve
+
+_INDEXED = re.compile(r"^(?P<name>[a-z_0-9]+)(?:\[(?P<index>\d+)\])?$")
+
+
+@dataclass
+class SweepRow:
+    """One (value, scheme) point. band_lo/hi: sigma_h over the bound's minimisers (NaN when
+    not computed)."""
+
+    value: float
+    scheme: str
+    feasible: bool
+    sigma_h_m: float
+    sigma_h_bound_m: float
+    band_lo_m: float
+    band_hi_m: float
+    optimality_gap: float
+    solve_time_s: float
+    blocking: str
+
+
+def parse_sweep_name(text: str) -> tuple[str, int | None]:
+    """`h_amb_min_m` or an element of a list parameter, `rate_min_mbps[1]`."""
+    m = _INDEXED.match(text)
+    spec = SPEC_BY_NAME.get(m.group("name")) if m else None
+    if spec is None or spec.kind is str:
+        raise ParamError([f"sweep NAME: value {text!r} is not allowed; expected a numeric "
+                          "parameter of config/params.yaml, e.g. h_amb_min_m or "
+                          "rate_min_mbps[1]"])
+    index = m.group("index")
+    if (index is None) != (spec.length == 0) or (index is not None and
+                                                 int(index) >= spec.length):
+        raise ParamError([f"sweep NAME: value {text!r} is not allowed; {spec.name} "
+                          + (f"needs an index 0..{spec.length - 1}" if spec.length
+                             else "takes no index")])
+    return spec.name, None if index is None else int(index)
+
+
+def with_value(params: Params, name: str, index: int | None, value: float) -> Params:
+    """params with one (file-unit) parameter, or one element of a list parameter, set."""
+    if index is None:
+        return params.replace(**{name: value})
+    items = list(params.raw[name])
+    items[index] = value
+    return params.replace(**{name: items})
+
+
+def run_sweep(params: Params, name: str, values: Iterable[float], schemes: Sequence[str],
+              objective: str | None = None, solver: str | None = None, band: bool = False,
+              progress: Callable[[], None] | None = None) -> list[SweepRow]:
+    """Solve every (value, scheme); `progress` is called once per solve."""
+    base, index = parse_sweep_name(name)
+    rows = []
+    for value in values:
+        p = with_value(params, base, index, float(value))
+        for scheme in schemes:
+            plan = solve(p, scheme=scheme, objective=objective, solver=solver)
+            lo = hi = float("nan")
+            if band and plan.feasible:
+                from uav_insar_planner.solver.global_opt import bound_minimizer_band
+
+                lo, hi = bound_minimizer_band(p, scheme)
+            rows.append(SweepRow(float(value), scheme, plan.feasible, plan.sigma_h_m,
+                                 plan.sigma_h_bound_m, lo, hi, plan.optimality_gap,
+                                 plan.solve_time_s, " ".join(plan.blocking_constraints)))
+            if progress:
+                progress()
+    return rows
+
+
+def write_csv(rows: Sequence[SweepRow], path: str | Path, name: str) -> None:
+    with open(path, "w", newline="") as fh:
+        fields = list(asdict(rows[0]).keys()) if rows else ["value"]
+        writer = csv.DictWriter(fh, fieldnames=fields)
+        fh.write(f"# sweep of {name}\n")
+        writer.writeheader()
+        for row in rows:
+            writer.writerow(asdict(row))
+
+
+def gains(rows: Sequence[SweepRow], reference: str = "proposed") -> dict[str, float]:
+    """Least gain of `reference` over each other scheme along the sweep, gain being
+    1 - sigma_h(reference) / sigma_h(other), over the points where both are feasible."""
+    by = {(r.value, r.scheme): r for r in rows}
+    out: dict[str, float] = {}
+    for scheme in {r.scheme for r in rows} - {reference}:
+        g = [1.0 - by[(v, reference)].sigma_h_m / r.sigma_h_m
+             for (v, s), r in by.items() if s == scheme and r.feasible
+             and (v, reference) in by and by[(v, reference)].feasible]
+        out[scheme] = float(np.min(g)) if g else float("nan")
+    return out
