@@ -26,8 +26,11 @@ def step_toward(state: PointMass, target: np.ndarray, dt: float, max_speed: floa
                 max_accel: float, target_velocity: np.ndarray | None = None) -> PointMass:
     """Advance `state` by `dt` toward `target` with |v| <= max_speed and |a| <= max_accel.
 
-    When the target can be reached within this step (and the velocity matched), the state
-    lands exactly on it: a settled vehicle then holds its target with no numerical jitter.
+    `target` is where the target is now; it moves at `target_velocity` (default at rest).
+
+    When the target is within one step at speed max_accel * dt (and the velocity nearly
+    matched), the state lands exactly on it: a settled vehicle then holds its target with no
+    numerical jitter.
     """
     target = np.asarray(target, dtype=float)
     v_t = np.zeros_like(target) if target_velocity is None else np.asarray(target_velocity,
@@ -35,10 +38,11 @@ def step_toward(state: PointMass, target: np.ndarray, dt: float, max_speed: floa
     error = target - state.position
     dist = float(np.linalg.norm(error))
     dv_max = max_accel * dt
-    if dist <= 0.5 * dv_max * dt and float(np.linalg.norm(state.velocity - v_t)) <= dv_max:
-        return PointMass(target.copy(), v_t.copy())
-    # Approach speed that can still be braked to zero relative speed at the target.
-    approach = min(max_speed, float(np.sqrt(2.0 * max_accel * dist)))
+    if dist <= dv_max * dt and float(np.linalg.norm(state.velocity - v_t)) <= dv_max:
+        return PointMass(target + v_t * dt, v_t.copy())
+    # Highest approach speed that can still brake to zero relative speed at the target in
+    # whole steps of dt (the discrete form of sqrt(2 a d); it avoids creeping in at the end).
+    approach = min(max_speed, dv_max * (np.sqrt(2.0 * dist / (dv_max * dt) + 0.25) - 0.5))
     desired = v_t + (error / dist * approach if dist > 0.0 else 0.0)
     speed = float(np.linalg.norm(desired))
     if speed > max_speed:
@@ -48,7 +52,8 @@ def step_toward(state: PointMass, target: np.ndarray, dt: float, max_speed: floa
     if dv_norm > dv_max:
         dv *= dv_max / dv_norm
     velocity = state.velocity + dv
-    position = state.position + 0.5 * (state.velocity + velocity) * dt
+    # Semi-implicit Euler: the braking law above is exact for this update.
+    position = state.position + velocity * dt
     return PointMass(position, velocity)
 
 

@@ -52,9 +52,16 @@ def parse_address(address: str) -> tuple[str, int]:
     device, sep, baud = text.partition(",")
     if sep and not baud.isdigit():
         raise ValueError(f"{address!r}: baud after ',' must be an integer")
-    if ":" in device or os.path.isfile(device):
+    serial_like = device.startswith(("/dev/", "COM", "\\\\.\\"))
+    if not serial_like or ":" in device or os.path.isfile(device):
         raise ValueError(f"{address!r} is not a known connection string (udpin:HOST:PORT, "
-                         "udpout:HOST:PORT, tcp:HOST:PORT, tcpin:HOST:PORT or a serial device)")
+                         "udpout:HOST:PORT, tcp:HOST:PORT, tcpin:HOST:PORT or a serial device "
+                         "such as /dev/ttyUSB0,57600)")
+    try:
+        import serial  # noqa: F401 - pymavlink's serial transport needs pyserial
+    except ImportError:
+        raise ValueError(f"{address!r}: serial links need pyserial (pip install "
+                         "pyserial)") from None
     return device, int(baud) if sep else 57600
 
 

@@ -62,10 +62,34 @@ def declare_specs(node: Node, specs: Iterable[ParamSpec]) -> list[str]:
         try:
             node.declare_parameter(spec.name, spec.default, descriptor_for(spec))
         except Exception as exc:  # rclpy's InvalidParameter*Exception have no common base
-            reason = " ".join(str(exc).split())
-            problems.append(f"{spec.name}: {reason}; expected {spec.allowed()}")
+            if hasattr(exc, "value"):  # a value outside the range: say it as params.py does
+                problems.append(f"{spec.name}: value {exc.value!r} is not allowed; expected "
+                                f"{spec.allowed()}")
+            else:  # wrong type (e.g. 4 for a double): the runtime's own words name it
+                reason = " ".join(str(exc).split())
+                problems.append(f"{spec.name}: {reason}; expected {spec.allowed()}")
             node.declare_parameter(spec.name, spec.default, descriptor_for(spec),
                                    ignore_override=True)
+    return problems
+
+
+def check_scalars(values: Mapping[str, Any], specs: Iterable[ParamSpec]) -> list[str]:
+    """Problem lines for scalar numeric specs outside their (possibly open) bounds.
+
+    For a node's own parameters that are not in PARAM_SPECS (params_from_mapping checks those).
+    """
+    problems = []
+    for spec in specs:
+        value = values[spec.name]
+        ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(
+            value) and (spec.kind is not int or float(value).is_integer())
+        if ok and spec.lo is not None:
+            ok = value > spec.lo if spec.lo_open else value >= spec.lo
+        if ok and spec.hi is not None:
+            ok = value <= spec.hi
+        if not ok:
+            problems.append(f"{spec.name}: value {value!r} is not allowed; expected "
+                            f"{spec.allowed()}")
     return problems
 
 

@@ -56,7 +56,7 @@ def cyclone_config(env: dict[str, str] | None = None) -> str | None:
     return ("<CycloneDDS><Domain Id=\"any\">" + general + "<Discovery>"
             + (f"<Peers>{peer_xml}</Peers>" if peer_xml else "")
             + "<ParticipantIndex>auto</ParticipantIndex>"
-            "<MaxAutoParticipantIndex>100</MaxAutoParticipantIndex>"
+            "<MaxAutoParticipantIndex>32</MaxAutoParticipantIndex>"
             "</Discovery></Domain></CycloneDDS>")
 
 

@@ -1,0 +1,138 @@
+"""End to end through ROS and MAVLink: planner node -> /formation -> mavlink_bridge node ->
+MAVLink over UDP -> three SITL-style vehicles -> /uavK/mavlink/pose and /diagnostics.
+The nodes run as separate processes (our runtime over Cyclone DDS, or rclpy when sourced),
+the vehicles in this process; each test gets its own ROS_DOMAIN_ID (conftest `ros_domain`)."""
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from uav_insar_sim.vehicle import SimVehicle
+
+pytestmark = pytest.mark.timeout(90)
+SYSIDS = (2, 3, 4)
+PY = sys.executable
+
+
+def ros_env() -> dict:
+    """The environment `ros_domain` prepared (private domain, our runtime), for children."""
+    return dict(os.environ, PYTHONUNBUFFERED="1")
+
+
+def start(module: str, env: dict, *ros_args: str) -> subprocess.Popen:
+    cmd = [PY, "-m", module]
+    if ros_args:
+        cmd += ["--ros-args", *[a for p in ros_args for a in ("-p", p)]]
+    return subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                            text=True, start_new_session=True)
+
+
+def finish(proc: subprocess.Popen) -> str:
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGINT)
+        try:
+            proc.wait(timeout=8)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(timeout=5)
+    return proc.stdout.read()
+
+
+@pytest.mark.parametrize("param", ["setpoint_rate_hz:=1.0", "autopilot:=inav",
+                                   "target_sysids:=[2, 2, 3]", "connections:=['nowhere']"])
+def test_bad_parameter_exits_2_with_one_line(param, ros_domain):
+    proc = start("uav_insar_planner.nodes.mavlink_bridge", ros_env(), param)
+    try:
+        assert proc.wait(timeout=30) == 2
+    finally:
+        out = finish(proc)
+    errors = [line for line in out.splitlines() if "ERROR" in line]
+    assert len(errors) == 1, out
+    assert param.split(":=")[0].split("_")[0] in errors[0] or "connections" in errors[0]
+
+
+def test_planner_bridge_vehicles_end_to_end(ros_domain):
+    env = ros_env()
+    from uav_insar_planner.seam import (
+        DurabilityPolicy,
+        HistoryPolicy,
+        Node,
+        QoSProfile,
+        ReliabilityPolicy,
+        msg_type,
+        rclpy,
+    )
+
+    vehicles = [SimVehicle(s, "udpin:127.0.0.1:0", "ardupilot", start_ned=(0.0, 3.0 * k, -40.0),
+                           max_speed=20.0, max_accel=10.0, airborne=True)
+                for k, s in enumerate(SYSIDS)]
+    for v in vehicles:
+        v.start()
+    ports = ", ".join(f"'udpout:127.0.0.1:{v.port}'" for v in vehicles)
+    bridge = start("uav_insar_planner.nodes.mavlink_bridge", env, f"connections:=[{ports}]",
+                   "target_sysids:=[2, 3, 4]", "speed_mps:=2.0", "velocity_feedforward:=true")
+    planner = start("uav_insar_planner.nodes.planner", env)
+    rclpy.init()
+    node = Node("mavlink_e2e_probe")
+    latched = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
+                         reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    formation, poses, diags = [], {0: [], 1: [], 2: []}, []
+    node.create_subscription(msg_type("geometry_msgs/msg/PoseArray"), "/formation",
+                             lambda m: formation.append([(p.position.x, p.position.y,
+                                                          p.position.z) for p in m.poses]),
+                             latched)
+    for k in range(3):
+        node.create_subscription(msg_type("geometry_msgs/msg/PoseStamped"),
+                                 f"/uav{k}/mavlink/pose",
+                                 lambda m, k=k: poses[k].append(m), 10)
+    node.create_subscription(msg_type("diagnostic_msgs/msg/DiagnosticArray"), "/diagnostics",
+                             lambda m: diags.append(m), 10)
+
+    def spin_until(predicate, timeout):
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline and not predicate():
+            rclpy.spin_once(node, timeout_sec=0.1)
+        return predicate()
+
+    def in_formation():
+        if not formation:
+            return False
+        for k, v in enumerate(vehicles):
+            n, e, d = v.position_ned  # bearing 0, origin 0: (x, y, z) = (E, N, -D)
+            x, _, z = formation[-1][k]
+            if math.hypot(e - x, -d - z) > 0.5:
+                return False
+        return True
+
+    try:
+        assert spin_until(lambda: formation, 40.0), "no /formation from the planner"
+        assert spin_until(in_formation, 30.0), [v.position_ned for v in vehicles]
+        y0 = [v.position_ned[0] for v in vehicles]
+        spin_until(lambda: False, 2.0)
+        assert in_formation()
+        flown = [v.position_ned[0] - a for v, a in zip(vehicles, y0, strict=True)]
+        assert all(2.0 < f < 6.0 for f in flown), flown  # along the track at ~2 m/s
+        for k, v in enumerate(vehicles):
+            assert poses[k], f"no /uav{k}/mavlink/pose"
+            last = poses[k][-1]
+            assert last.header.frame_id == "insar_track"
+            p = last.pose.position
+            n, e, d = v.position_ned
+            assert math.dist((p.x, p.y, p.z), (e, n, -d)) < 1.0
+        ours = [s for m in diags for s in m.status if s.name.startswith("mavlink_bridge")]
+        assert {s.name for s in ours} == {f"mavlink_bridge: uav{k}" for k in range(3)}
+        last = {s.name: s for s in ours}
+        assert all(s.message.startswith("linked") for s in last.values())
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+        bridge_out = finish(bridge)
+        finish(planner)
+        for v in vehicles:
+            v.stop()
+    assert "formation established" in bridge_out, bridge_out

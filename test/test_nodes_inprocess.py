@@ -1,0 +1,186 @@
+"""Launch-free bring-up in one process: planner and three agents on one executor (our runtime
+on Cyclone DDS, real topics), watched by a test node."""
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import pytest
+
+from uav_insar_planner import load_params, model, rt, solve
+from uav_insar_planner.nodes.planner import LATCHED, PlannerNode
+from uav_insar_planner.nodes.planner_report import rate_tolerance_bps
+from uav_insar_planner.rt.messages import msg_type
+from uav_insar_sim.agent_node import AgentNode
+
+N = 6
+TIME_SCALE = 40.0
+SCENARIO = {"num_slots": N}
+Parameter = rt.parameter.Parameter
+
+
+class Bringup:
+    """Planner + agents + a watcher node on one executor in `ctx`."""
+
+    def __init__(self, ctx, noise_std: float = 0.0, agents: bool = True,
+                 scenario: dict | None = None):
+        overrides = [Parameter(k, value=v) for k, v in (scenario or SCENARIO).items()]
+        self.planner = PlannerNode(context=ctx, parameter_overrides=overrides)
+        self.agents = [AgentNode(f"agent{k}", context=ctx, parameter_overrides=overrides + [
+            Parameter("uav_id", value=k), Parameter("time_scale", value=TIME_SCALE),
+            Parameter("position_noise_std_m", value=noise_std),
+            Parameter("noise_seed", value=3)]) for k in range(3)] if agents else []
+        self.watcher = rt.Node("watcher", context=ctx)
+        self.formations, self.powers, self.diagnostics = [], [], []
+        self.rates = {k: [] for k in range(3)}
+        w = self.watcher
+        w.create_subscription(msg_type("geometry_msgs/msg/PoseArray"), "/formation",
+                              self.formations.append, LATCHED)
+        w.create_subscription(msg_type("std_msgs/msg/Float64MultiArray"), "/formation/power",
+                              self.powers.append, LATCHED)
+        w.create_subscription(msg_type("diagnostic_msgs/msg/DiagnosticArray"), "/diagnostics",
+                              self.diagnostics.append, 50)
+        for k in range(3):
+            w.create_subscription(msg_type("std_msgs/msg/Float64"), f"/uav{k}/achieved_rate",
+                                  lambda m, k=k: self.rates[k].append(m.data), 100)
+        self.executor = rt.SingleThreadedExecutor(context=ctx)
+        for node in [self.planner, *self.agents, w]:
+            self.executor.add_node(node)
+
+    def spin_until(self, done, timeout: float) -> bool:
+        end = time.monotonic() + timeout
+        while not done():
+            if time.monotonic() > end:
+                return False
+            self.executor.spin_once(timeout_sec=0.05)
+        return True
+
+    def close(self) -> None:
+        self.planner.stop()
+        for node in [self.planner, *self.agents, self.watcher]:
+            node.destroy_node()
+
+
+@pytest.fixture
+def bringup(rt_context):
+    made = []
+
+    def make(**kw):
+        made.append(Bringup(rt_context, **kw))
+        return made[-1]
+
+    yield make
+    for b in made:
+        b.close()
+
+
+def planned_rates(plan, params):
+    """R_k,n at the planned q_k[n] with the planned P_com[k][n] (what a perfect agent gets)."""
+    x, z = plan.formation[:, :1], plan.formation[:, 1:]
+    d = model.distance_to_station(x, params.y_track[None, :], z, params.ground_station)
+    return model.fdma_rate(plan.p_com_w, d, params.comm_bandwidth_hz, params.beta_c)
+
+
+def statuses(diag_array):
+    return {s.name: s for s in diag_array.status}
+
+
+def test_planner_and_agents_fly_the_solved_plan(bringup):
+    params = load_params(overrides=SCENARIO)
+    plan = solve(params)
+    b = bringup()
+    assert b.spin_until(lambda: b.formations and b.powers, 30.0), "no /formation"
+    msg = b.formations[0]
+    assert msg.header.frame_id == "insar_track"
+    got = np.array([[p.position.x, p.position.y, p.position.z] for p in msg.poses])
+    assert np.allclose(got[:, [0, 2]], plan.formation, rtol=1e-6, atol=1e-6)
+    assert not got[:, 1].any() and all(p.orientation.w == 1.0 for p in msg.poses)
+    power = b.powers[0]
+    assert [(d.label, d.size) for d in power.layout.dim] == [("uav", 3), ("slot", N)]
+    assert np.allclose(np.reshape(power.data, (3, N)), plan.p_com_w, rtol=1e-6)
+
+    assert b.spin_until(lambda: all(len(r) >= N for r in b.rates.values()), 30.0), b.rates
+    b.spin_until(lambda: False, 0.3)  # nothing beyond the last slot
+    expected = planned_rates(plan, params)
+    tol = rate_tolerance_bps(params.rate_min_bps)
+    for k in range(3):
+        assert len(b.rates[k]) == N
+        # Noise off: the agent sits on its planned position, so it gets the planned rate,
+        # which the plan sizes to meet R_min (within the checker's C10 tolerance).
+        assert np.allclose(b.rates[k], expected[k], rtol=1e-9)
+        assert min(b.rates[k]) >= params.rate_min_bps[k] - tol
+
+    b.spin_until(lambda: False, 1.2)  # one more diagnostics period after the mission
+    last = statuses(b.diagnostics[-1])
+    assert last["planner: plan"].level == 0
+    keys = {kv.key for kv in last["planner: plan"].values}
+    assert {"sigma_h_m", "sigma_h_bound_m", "b_perp_m.uav1", "h_amb_m.uav2", "coherence.uav1",
+            "solve_time_s", "iterations", "scheme"} <= keys
+    for k in range(3):
+        uav = last[f"planner: uav{k}"]
+        values = {kv.key: kv.value for kv in uav.values}
+        assert uav.level == 0, uav.message
+        assert float(values["position_error_m"]) < 1e-9
+        assert values["slots_reported"] == str(N)
+
+
+def test_position_noise_shrinks_the_margin_and_warns(bringup):
+    params = load_params(overrides=SCENARIO)
+    expected = planned_rates(solve(params), params)
+    b = bringup(noise_std=3.0)
+    assert b.spin_until(lambda: all(len(r) >= N for r in b.rates.values()), 40.0), b.rates
+    # The plan's rates are tight (R_min exactly at the planned position), so a disturbed
+    # position misses R_min in roughly every other slot: the worst margin drops well below the
+    # noise-free one, which the first test pins at >= -tolerance.
+    margins = np.concatenate([np.array(b.rates[k]) - params.rate_min_bps[k] for k in range(3)])
+    assert margins.min() < -1e4
+    assert not np.allclose(np.concatenate([b.rates[k] for k in range(3)]), expected.ravel())
+    assert b.spin_until(lambda: any(s.level == 1 for d in b.diagnostics for s in d.status),
+                        5.0), "no WARN for a UAV missing R_min"
+    errors = [float(kv.value) for d in b.diagnostics for s in d.status for kv in s.values
+              if kv.key == "position_error_m"]
+    assert max(errors) > 0.1
+
+
+def test_runtime_parameter_set_replans_or_is_refused(bringup):
+    b = bringup(agents=False)
+    assert b.spin_until(lambda: b.formations, 30.0)
+    planner = b.planner
+    refused = planner.set_parameters([Parameter("scheme", value="nope")])[0]
+    assert not refused.successful and "scheme" in refused.reason
+    refused = planner.set_parameters([Parameter("z_min_m", value=150.0)])[0]
+    assert not refused.successful and "z_min_m" in refused.reason
+    assert planner.get_parameter("scheme").value == "proposed"
+
+    assert planner.set_parameters([Parameter("scheme", value="single-baseline")])[0].successful
+    assert b.spin_until(lambda: len(b.formations) >= 2 and len(b.powers) >= 2, 30.0), \
+        "no replan after the set"
+    u2 = b.formations[-1].poses[2].position
+    assert math.isnan(u2.x) and math.isnan(u2.z)
+    assert not any(np.reshape(b.powers[-1].data, (3, N))[2])
+    assert statuses(b.diagnostics[-1])["planner: plan"].level == 0
+
+
+def test_replan_service_answers_at_once_and_republishes(bringup):
+    b = bringup(agents=False)
+    assert b.spin_until(lambda: b.formations, 30.0)
+    trigger = msg_type("std_srvs/srv/Trigger")
+    client = b.watcher.create_client(trigger, "/planner/replan")
+    assert client.wait_for_service(timeout_sec=5.0)
+    future = client.call_async(trigger.Request())
+    assert b.spin_until(future.done, 10.0)
+    assert future.result().success and "solving" in future.result().message
+    assert b.spin_until(lambda: len(b.formations) >= 2, 30.0)
+    assert b.formations[-1].header.stamp != b.formations[0].header.stamp
+
+
+def test_infeasible_plan_is_an_error_and_not_published(bringup):
+    # 5 Gbit/s on a 1 GHz channel needs far more than P_com^max at any distance (C10).
+    b = bringup(agents=False, scenario={**SCENARIO, "rate_min_mbps": [5000.0, 16.95, 1.0]})
+    assert b.spin_until(lambda: b.diagnostics, 30.0)
+    plan_status = statuses(b.diagnostics[0])["planner: plan"]
+    assert plan_status.level == 2 and "not published" in plan_status.message
+    assert "blocked by C10" in plan_status.message
+    b.spin_until(lambda: False, 0.5)
+    assert b.formations == [] and b.powers == []

@@ -1,0 +1,129 @@
+"""Launch-free bring-up with real processes: the installed `planner` and `agent` executables
+started as `ros2 run` would, watched from this process over Cyclone DDS."""
+from __future__ import annotations
+
+import os
+import signal
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from uav_insar_planner import load_params, model, rt, solve
+from uav_insar_planner.demo import start_node, stop_node
+from uav_insar_planner.nodes.planner import LATCHED
+from uav_insar_planner.nodes.planner_report import rate_tolerance_bps
+from uav_insar_planner.rt.messages import msg_type
+
+CONFIG = str(Path(__file__).resolve().parents[1] / "config" / "params.yaml")
+N = 30
+TIME_SCALE = 6.0  # 30 slots of 1 s take 5 s of wall time: room to kill and restart the planner
+
+
+class Watcher:
+    """Records what the nodes publish, on its own node in `ctx`."""
+
+    def __init__(self, ctx):
+        self.node = rt.Node("watcher", context=ctx)
+        self.formations, self.powers, self.diagnostics = [], [], []
+        self.rates = {k: [] for k in range(3)}
+        n = self.node
+        n.create_subscription(msg_type("geometry_msgs/msg/PoseArray"), "/formation",
+                              self.formations.append, LATCHED)
+        n.create_subscription(msg_type("std_msgs/msg/Float64MultiArray"), "/formation/power",
+                              self.powers.append, LATCHED)
+        n.create_subscription(msg_type("diagnostic_msgs/msg/DiagnosticArray"), "/diagnostics",
+                              self.diagnostics.append, 50)
+        for k in range(3):
+            n.create_subscription(msg_type("std_msgs/msg/Float64"), f"/uav{k}/achieved_rate",
+                                  lambda m, k=k: self.rates[k].append(m.data), 100)
+        self.executor = rt.SingleThreadedExecutor(context=ctx)
+        self.executor.add_node(n)
+
+    def spin_until(self, done, timeout: float) -> bool:
+        end = time.monotonic() + timeout
+        while not done():
+            if time.monotonic() > end:
+                return False
+            self.executor.spin_once(timeout_sec=0.05)
+        return True
+
+
+@pytest.fixture
+def procs(ros_domain):
+    started = []
+
+    def start(name, *ros_args):
+        started.append(start_node(name, ros_args, dict(os.environ)))
+        return started[-1]
+
+    yield start
+    for proc in started:
+        if proc.poll() is None:
+            proc.kill()
+        proc.communicate(timeout=10)
+
+
+def test_planner_and_three_agent_processes_survive_a_planner_restart(rt_context, procs):
+    params = load_params(CONFIG, {"num_slots": N})
+    plan = solve(params)
+    w = Watcher(rt_context)
+    common = ["--params-file", CONFIG, "-p", f"num_slots:={N}"]
+    planner = procs("planner", *common)
+    agents = [procs("agent", *common, "-p", f"uav_id:={k}", "-p", f"time_scale:={TIME_SCALE}",
+                    "-r", f"__node:=agent{k}") for k in range(3)]
+
+    assert w.spin_until(lambda: w.formations and w.powers, 30.0), "no /formation"
+    poses = np.array([[p.position.x, p.position.z] for p in w.formations[0].poses])
+    assert np.allclose(poses, plan.formation, rtol=1e-6, atol=1e-6)
+    assert np.allclose(np.reshape(w.powers[0].data, (3, N)), plan.p_com_w, rtol=1e-6)
+
+    # The planner dies mid-mission; the agents fly on, and keep flying after its restart.
+    assert w.spin_until(lambda: all(len(r) >= 3 for r in w.rates.values()), 30.0), w.rates
+    planner.send_signal(signal.SIGKILL)
+    planner.wait(10)
+    at_kill = {k: len(r) for k, r in w.rates.items()}
+    assert w.spin_until(lambda: all(len(w.rates[k]) > at_kill[k] + 1 for k in range(3)), 10.0)
+    planner = procs("planner", *common)
+    assert w.spin_until(lambda: len(w.formations) >= 2, 30.0), "restarted planner is silent"
+    again = np.array([[p.position.x, p.position.z] for p in w.formations[-1].poses])
+    assert np.allclose(again, poses)
+
+    assert w.spin_until(lambda: all(len(r) >= N for r in w.rates.values()), 30.0), w.rates
+    w.spin_until(lambda: False, 0.5)
+    tol = rate_tolerance_bps(params.rate_min_bps)
+    d = model.distance_to_station(plan.formation[:, :1], params.y_track[None, :],
+                                  plan.formation[:, 1:], params.ground_station)
+    expected = model.fdma_rate(plan.p_com_w, d, params.comm_bandwidth_hz, params.beta_c)
+    for k in range(3):
+        assert len(w.rates[k]) == N  # one rate per slot: the slot clock never restarted
+        assert np.allclose(w.rates[k], expected[k], rtol=1e-9)
+        assert min(w.rates[k]) >= params.rate_min_bps[k] - tol
+    assert [stop_node(p) for p in (planner, *agents)] == [0, 0, 0, 0]
+
+
+def test_bad_params_file_stops_the_planner_with_code_2_and_publishes_nothing(
+        rt_context, procs, tmp_path):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text('"/**":\n  ros__parameters:\n    num_slots: 0\n    scheme: nope\n'
+                   "    z_min_m: 150.0\n")
+    w = Watcher(rt_context)
+    planner = procs("planner", "--params-file", str(bad))
+    out, _ = planner.communicate(timeout=30)
+    assert planner.returncode == 2, out
+    errors = [line for line in out.splitlines() if "[ERROR]" in line]
+    assert len(errors) == 3, out
+    for name in ("num_slots", "scheme", "z_min_m"):
+        assert any(f"]: {name}: " in line for line in errors), out
+    w.spin_until(lambda: False, 1.0)
+    assert (w.formations, w.powers, w.diagnostics) == ([], [], [])
+
+
+@pytest.mark.parametrize("args,name", [(["-p", "uav_id:=5"], "uav_id"),
+                                       (["-p", "max_speed_mps:=2.0"], "max_speed_mps")])
+def test_bad_agent_parameter_exits_2(procs, args, name):
+    agent = procs("agent", *args)
+    out, _ = agent.communicate(timeout=30)
+    assert agent.returncode == 2, out
+    assert f"]: {name}: " in out

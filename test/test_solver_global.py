@@ -1,0 +1,274 @@
+"""Certified global solver (issue 5): certificate, cross-check, symmetry, feasibility edges."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.optimize import minimize
+
+from uav_insar_planner import model
+from uav_insar_planner.evaluate import evaluate, static_power_w
+from uav_insar_planner.params import SCHEMES, default_params
+from uav_insar_planner.solver import blocking, pairs, power, rays, solve
+from uav_insar_planner.solver.global_opt import bound_minimizer_band, solve_global
+
+FIG3 = {"master_fixed_xz_m": [-54.0, 74.0], "p_com_max_db": 10.1}
+FIG4 = {"master_fixed_xz_m": [-41.0, 61.0], "p_com_max_db": 9.0}
+
+
+def with_rate(p, k, mbps):
+    rates = list(p.raw["rate_min_mbps"])
+    rates[k] = mbps
+    return p.replace(rate_min_mbps=rates)
+
+
+def sweep_points():
+    p3, p4 = default_params().replace(**FIG3), default_params().replace(**FIG4)
+    for h in np.linspace(0.5, 2.0, 16):
+        yield p3.replace(h_amb_min_m=float(h))
+    for r in np.linspace(10.0, 20.0, 21):
+        yield with_rate(p4, 1, float(r))
+
+
+# --- structural claims the solver relies on --------------------------------------------------
+
+def test_station_disk_is_exact():
+    """C9-C11 with the cheapest schedule hold exactly inside power.station_radius_sq."""
+    p = default_params()
+    gx, _, gz = p.ground_station
+    for scheme in ("proposed", "static-power"):
+        for k in range(3):
+            rad = math.sqrt(power.station_radius_sq(p, k, scheme))
+            for scale, ok in ((1 - 1e-6, True), (1 + 1e-4, False)):
+                x, z = gx - rad * scale * 0.6, gz + rad * scale * 0.8
+                sched = power.power_schedule(p, k, x, z, scheme)
+                d = model.distance_to_station(x, p.y_track, z, p.ground_station)
+                rate = model.fdma_rate(sched, d, p.comm_bandwidth_hz, p.beta_c)
+                met = (sched.max() <= p.p_max_w and sched.sum() * p.slot_duration_s
+                       <= p.e_max_j * (1 + 1e-12) and rate.min() >= p.rate_min_bps[k] * (1 - 1e-9))
+                assert met == ok
+
+
+def test_c7_interval_and_ray_model():
+    p = default_params()
+    sc = rays.make_scenario(p, "proposed", "exact", frozenset({"C3"}))
+    a, b = rays.c7_interval(sc)
+    th = np.linspace(-1.5, 1.5, 30001)
+    ok = rays.coherence_rg(sc, th) >= p.coherence_rg_min - 1e-12
+    assert th[ok].min() == pytest.approx(a, abs=2e-4) and th[ok].max() <= b + 1e-4
+    # polar b_perp equals eq. 3 for a master on its ray
+    r0, r, t = 70.0, 80.0, 0.7
+    x0, z0 = rays.position(sc, r0, p.theta0)
+    x1, z1 = rays.position(sc, r, t)
+    assert model.perpendicular_baseline(x0, z0, x1, z1, p.theta0) == pytest.approx(
+        r * abs(math.sin(t - p.theta0)), rel=1e-12)
+
+
+def test_weight_increases_with_slave_range():
+    p = default_params()
+    sc = rays.make_scenario(p, "proposed", "exact")
+    r = np.linspace(5.0, 400.0, 2000)
+    for r0 in (60.0, 90.0, 130.0):
+        for t in (0.66, 0.75, 0.84):
+            w = pairs._slave_weight(sc, r0, t, r)
+            assert np.all(np.diff(w) > 0)
+
+
+# --- certificate ------------------------------------------------------------------------------
+
+def test_certificate_on_sweep_points():
+    for p in sweep_points():
+        for scheme in SCHEMES:
+            plan = solve(p, scheme=scheme, objective="exact", solver="global")
+            if not plan.feasible:
+                assert plan.blocking_constraints
+                continue
+            assert plan.lower_bound_m <= plan.sigma_h_m * (1 + 1e-12)
+            assert 0.0 <= plan.optimality_gap <= 1e-4
+
+
+@pytest.mark.parametrize("scheme", SCHEMES)
+@pytest.mark.parametrize("objective", ["exact", "bound"])
+def test_global_plans_pass_checker_at_defaults(scheme, objective):
+    p = default_params()
+    res = solve_global(p, scheme, objective)
+    ev = evaluate(p, res.formation, res.p_com, scheme)
+    assert res.feasible and ev.feasible, ev.violated
+    value = ev.sigma_h if objective == "exact" else ev.sigma_h_bound
+    assert res.lower_bound <= value * (1 + 1e-12)
+    assert (value - res.lower_bound) / value <= 1e-4
+    if scheme == "single-baseline":
+        assert np.all(np.isnan(res.formation[2])) and not res.p_com[2].any()
+    if scheme == "static-power":
+        assert np.allclose(res.p_com[[0, 1, 2]], static_power_w(p))
+
+
+def test_exact_beats_every_bound_minimiser():
+    p = default_params()
+    for scheme in SCHEMES:
+        exact = solve(p, scheme=scheme, objective="exact").sigma_h_m
+        bound_plan = solve(p, scheme=scheme, objective="bound")
+        lo, hi = bound_minimizer_band(p, scheme)
+        assert exact <= bound_plan.sigma_h_m * (1 + 1e-9)
+        assert exact <= lo * (1 + 1e-9) and lo <= bound_plan.sigma_h_m * (1 + 1e-3) <= hi * 1.002
+
+
+def test_slave_swap_symmetry():
+    """Swapping U1's and U2's rate requirements swaps their roles: same optimum."""
+    for p in (default_params(), default_params().replace(h_amb_min_m=2.0),
+              with_rate(default_params().replace(**FIG4), 1, 17.5)):
+        q = p.replace(rate_min_mbps=[p.raw["rate_min_mbps"][0], p.raw["rate_min_mbps"][2],
+                                     p.raw["rate_min_mbps"][1]])
+        for scheme in ("proposed", "fixed-master", "static-power"):
+            a, b = solve_global(p, scheme, "exact"), solve_global(q, scheme, "exact")
+            assert a.feasible == b.feasible
+            if a.feasible:
+                sa = evaluate(p, a.formation, a.p_com, scheme).sigma_h
+                sb = evaluate(q, b.formation, b.p_com, scheme).sigma_h
+                assert sa == pytest.approx(sb, rel=1e-7)
+
+
+def test_feasibility_edge_in_rate():
+    """Raise R_min,1 until infeasible: the edge is sharp and the blocking set is right."""
+    base = default_params().replace(**FIG4)
+    for scheme in ("proposed", "static-power"):
+        lo, hi = 10.0, 40.0
+        assert solve_global(with_rate(base, 1, lo), scheme, "exact").feasible
+        assert not solve_global(with_rate(base, 1, hi), scheme, "exact").feasible
+        while hi - lo > 1e-3:
+            mid = 0.5 * (lo + hi)
+            if solve_global(with_rate(base, 1, mid), scheme, "exact").feasible:
+                lo = mid
+            else:
+                hi = mid
+        below = solve(with_rate(base, 1, lo), scheme=scheme)
+        assert below.feasible  # and the independent checker agrees
+        p_hi = with_rate(base, 1, hi)
+        above = solve_global(p_hi, scheme, "exact")
+        assert not above.feasible and above.blocking
+        assert blocking.feasible_without(p_hi, scheme, frozenset(above.blocking))
+        for family in above.blocking:  # minimal: every named family is needed
+            rest = frozenset(above.blocking) - {family}
+            assert not rest or not blocking.feasible_without(p_hi, scheme, rest)
+        # a local search on the original variables finds no feasible point above the edge
+        assert _multistart(p_hi, scheme, 30, seed=3)[0] == math.inf
+
+
+def test_infeasible_static_power_names_c9():
+    p = default_params().replace(p_com_max_db=5.0)  # 3.2 W < E_max / N = 7.4 W
+    res = solve_global(p, "static-power", "exact")
+    assert not res.feasible and res.blocking == ["C9"]
+
+
+# --- independent multi-start local search on the original variables ------------------------
+
+def _fused_sigma(p, q, slaves):
+    gm = model.gamma_m(p)
+    bp = p.radar_bandwidth_hz / p.center_frequency_hz
+    r0 = model.slant_range(q[0, 0], q[0, 1], p.x_t)
+    inv = 0.0
+    for k in slaves:
+        rk = model.slant_range(q[k, 0], q[k, 1], p.x_t)
+        g = model.coherence_total(
+            model.coherence_baseline(model.chi(p.theta0, model.look_angle(q[k, 0], q[k, 1],
+                                                                           p.x_t)), bp),
+            model.coherence_snr(model.snr_monostatic(r0, gm), model.snr_bistatic(r0, rk, gm)),
+            p.coherence_other)
+        b = model.perpendicular_baseline(q[0, 0], q[0, 1], q[k, 0], q[k, 1], p.theta0)
+        s = model.height_error(model.height_of_ambiguity(p.wavelength, r0, p.theta0, b),
+                               model.phase_error_crb(g, p.looks))
+        inv += 1.0 / max(s, 1e-12) ** 2
+    return inv ** -0.5 if np.isfinite(inv) else 1e6
+
+
+def _constraints(p, q, scheme, slaves):
+    """C1..C11 as g(x) >= 0 from the model functions (C9-C11 via the cheapest schedule)."""
+    gm = model.gamma_m(p)
+    bp = p.radar_bandwidth_hz / p.center_frequency_hz
+    uavs = (0, *slaves)
+    out = []
+    r0 = model.slant_range(q[0, 0], q[0, 1], p.x_t)
+    for k in uavs:
+        z = q[k, 1]
+        out += [(z - p.z_min) / 10, (p.z_max - z) / 10]
+        r = model.slant_range(q[k, 0], z, p.x_t)
+        th = p.theta0 if k == 0 else model.look_angle(q[k, 0], z, p.x_t)
+        out.append((model.swath_width(r, th, p.beamwidth) - p.swath_min) / 10)
+        d = model.distance_to_station(q[k, 0], p.y_track, z, p.ground_station)
+        if scheme == "static-power":
+            rate = model.fdma_rate(static_power_w(p), d, p.comm_bandwidth_hz, p.beta_c)
+            out.append(rate.min() / p.rate_min_bps[k] - 1.0)
+            out.append(1.0 - static_power_w(p) / p.p_max_w)
+        else:
+            sched = model.power_for_rate(p.rate_min_bps[k], d, p.comm_bandwidth_hz, p.beta_c)
+            out += [1.0 - sched.max() / p.p_max_w,
+                    1.0 - sched.sum() * p.slot_duration_s / p.e_max_j]
+        if k:
+            out += [th - p.theta_min, p.theta_max - th]
+            snrk = model.snr_bistatic(r0, r, gm)
+            out.append(model.coherence_snr(model.snr_monostatic(r0, gm), snrk)
+                       - p.coherence_snr_min)
+            out.append(model.coherence_baseline(model.chi(p.theta0, th), bp)
+                       - p.coherence_rg_min)
+            b = model.perpendicular_baseline(q[0, 0], q[0, 1], q[k, 0], q[k, 1], p.theta0)
+            out.append(p.wavelength * r0 * math.sin(p.theta0) - p.h_amb_min * b)
+    for i in uavs:
+        for j in uavs:
+            if i < j:
+                out.append(float(np.sum((q[i] - q[j]) ** 2)) - p.d_min**2)
+    return np.array(out, dtype=float)
+
+
+def _multistart(p, scheme, starts, seed=0):
+    """Best exact sigma_h over SLSQP runs from random starts on (x0, z0, x1, z1[, x2, z2]);
+    +inf when no run ends at a point the independent checker accepts."""
+    rng = np.random.default_rng(seed)
+    slaves = (1,) if scheme == "single-baseline" else (1, 2)
+    fixed = scheme == "fixed-master"
+
+    def unpack(v):
+        q = np.full((3, 2), np.nan)
+        q[0] = p.master_fixed if fixed else v[:2]
+        rest = v if fixed else v[2:]
+        for i, k in enumerate(slaves):
+            q[k] = rest[2 * i:2 * i + 2]
+        return q
+
+    cons = [{"type": "ineq", "fun": lambda v: _constraints(p, unpack(v), scheme, slaves)}]
+    if not fixed:
+        cons.append({"type": "eq", "fun": lambda v: v[0] - model.master_x(v[1], p.x_t,
+                                                                          p.theta0)})
+    best = math.inf
+    for _ in range(starts):
+        v0 = []
+        if not fixed:
+            z0 = rng.uniform(20, 100)
+            v0 += [float(model.master_x(z0, p.x_t, p.theta0)), z0]
+        for _k in slaves:
+            v0 += [rng.uniform(-80, 0), rng.uniform(20, 100)]
+        with np.errstate(invalid="ignore", divide="ignore"):  # SLSQP probes wild points
+            res = minimize(lambda v: _fused_sigma(p, unpack(v), slaves) * 100.0, np.array(v0),
+                           method="SLSQP", constraints=cons,
+                           options={"maxiter": 200, "ftol": 1e-13})
+        q = unpack(res.x)
+        ev = evaluate(p, q, power.schedules(p, q, scheme), scheme)
+        if ev.feasible and ev.sigma_h < best:
+            best = ev.sigma_h
+    return best, None
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("scheme,params", [
+    ("proposed", default_params()),
+    ("single-baseline", default_params()),
+    ("fixed-master", default_params().replace(**FIG3)),
+    ("static-power", with_rate(default_params().replace(**FIG4), 1, 17.0)),
+    ("proposed", default_params().replace(h_amb_min_m=2.0)),
+])
+def test_agrees_with_multistart_slsqp(scheme, params):
+    res = solve_global(params, scheme, "exact")
+    ours = evaluate(params, res.formation, res.p_com, scheme).sigma_h
+    theirs, _ = _multistart(params, scheme, 100)
+    assert ours <= theirs * (1 + 1e-6)  # never beaten by a local search
+    assert theirs <= ours * (1 + 1e-6)  # and the local search reaches it

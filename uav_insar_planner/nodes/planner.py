@@ -1,0 +1,217 @@
+"""The planner node (`ros2 run uav_insar_planner planner`): solve, publish, watch the agents.
+
+Parameters: every entry of `params.PARAM_SPECS` (config/params.yaml), validated as a whole by
+`params_from_mapping` before anything is published. A bad value at start logs one line per
+problem and exits with code 2; a bad value set at run time is refused with the same lines.
+
+Publishes (names relative to the node's namespace, except /diagnostics):
+  formation         geometry_msgs/PoseArray, reliable + transient_local, depth 1
+  formation/power   std_msgs/Float64MultiArray, reliable + transient_local, depth 1
+  /diagnostics      diagnostic_msgs/DiagnosticArray: the plan (OK / ERROR) and, once a second,
+                    each UAV's rate margin and position error (WARN when it misses R_min)
+Subscribes uav{K}/pose (PoseStamped) and uav{K}/achieved_rate (Float64, bit/s).
+Service ~/replan (std_srvs/Trigger): solve again with the current parameters.
+Solves run on a worker thread (solve_worker), so the node keeps serving while one runs.
+"""
+from __future__ import annotations
+
+import sys
+import threading
+
+from uav_insar_planner.nodes import planner_report as report
+from uav_insar_planner.nodes.ros_params import declare_specs, spec_values
+from uav_insar_planner.nodes.solve_worker import SolveWorker
+from uav_insar_planner.params import (
+    PARAM_SPECS,
+    SPEC_BY_NAME,
+    ParamError,
+    Params,
+    params_from_mapping,
+)
+from uav_insar_planner.plan import Plan
+from uav_insar_planner.seam import (
+    DurabilityPolicy,
+    ExternalShutdownException,
+    HistoryPolicy,
+    Node,
+    QoSProfile,
+    ReliabilityPolicy,
+    SetParametersResult,
+    msg_type,
+    rclpy,
+)
+from uav_insar_planner.solver import solve
+
+PoseArray = msg_type("geometry_msgs/msg/PoseArray")
+Pose = msg_type("geometry_msgs/msg/Pose")
+Point = msg_type("geometry_msgs/msg/Point")
+Quaternion = msg_type("geometry_msgs/msg/Quaternion")
+PoseStamped = msg_type("geometry_msgs/msg/PoseStamped")
+Float64 = msg_type("std_msgs/msg/Float64")
+Float64MultiArray = msg_type("std_msgs/msg/Float64MultiArray")
+MultiArrayDimension = msg_type("std_msgs/msg/MultiArrayDimension")
+DiagnosticArray = msg_type("diagnostic_msgs/msg/DiagnosticArray")
+DiagnosticStatus = msg_type("diagnostic_msgs/msg/DiagnosticStatus")
+KeyValue = msg_type("diagnostic_msgs/msg/KeyValue")
+Trigger = msg_type("std_srvs/srv/Trigger")
+
+LATCHED = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
+                     reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+DIAGNOSTICS_PERIOD_S = 1.0
+EXIT_BAD_PARAMS = 2
+
+
+class PlannerNode(Node):
+    """See the module docstring. `problems` is non-empty (and nothing was created) when the
+    start-up parameters are invalid."""
+
+    def __init__(self, node_name: str = "planner", **kwargs):
+        super().__init__(node_name, **kwargs)
+        self.problems = declare_specs(self, PARAM_SPECS)
+        params = None
+        try:
+            params = params_from_mapping(spec_values(self, PARAM_SPECS))
+        except ParamError as exc:
+            self.problems += exc.problems
+        if self.problems:
+            return
+        self._state_lock = threading.Lock()
+        self._plan: Plan | None = None  # the last published (feasible) plan
+        self._plan_status: report.Status | None = None
+        self._scenario: Params = params
+        self._reports = [report.UavReport() for _ in range(3)]
+
+        self._formation_pub = self.create_publisher(PoseArray, "formation", LATCHED)
+        self._power_pub = self.create_publisher(Float64MultiArray, "formation/power", LATCHED)
+        self._diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
+        for k in range(3):
+            self.create_subscription(PoseStamped, f"uav{k}/pose",
+                                     lambda msg, k=k: self._on_pose(k, msg), 10)
+            self.create_subscription(Float64, f"uav{k}/achieved_rate",
+                                     lambda msg, k=k: self._on_rate(k, msg), 10)
+        self.create_service(Trigger, "~/replan", self._on_replan)
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+        self.create_timer(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)
+        self._worker = SolveWorker(solve, self._on_solved)
+        self._worker.request(params, "start")
+
+    def stop(self) -> None:
+        """Stop the solve worker (call before destroy_node)."""
+        if not self.problems:
+            self._worker.stop()
+
+    # --- parameters and replanning -------------------------------------------------------
+    def _on_set_parameters(self, parameters: list) -> SetParametersResult:
+        changes = {p.name: p.value for p in parameters if p.name in SPEC_BY_NAME}
+        if not changes:
+            return SetParametersResult(successful=True)
+        try:
+            params = params_from_mapping(spec_values(self, PARAM_SPECS, changes))
+        except ParamError as exc:
+            reason = "; ".join(exc.problems)
+            self.get_logger().warning(f"parameter set refused: {reason}")
+            return SetParametersResult(successful=False, reason=reason)
+        with self._state_lock:
+            self._scenario = params
+        self._worker.request(params, "parameters set: " + ", ".join(sorted(changes)))
+        return SetParametersResult(successful=True)
+
+    def _on_replan(self, request, response):
+        with self._state_lock:
+            params = self._scenario
+        started = self._worker.request(params, "replan service")
+        response.success = True
+        response.message = (f"solving {params.scheme} now" if started else
+                            "a solve is running; another follows with the current parameters")
+        response.message += "; the result follows on formation and /diagnostics"
+        return response
+
+    def _on_solved(self, params: Params, plan: Plan | None, error: str | None,
+                   reason: str) -> None:
+        if not rclpy.ok(context=self.context):
+            return
+        if plan is None:
+            status = report.failure_status(params.scheme, error or "unknown error")
+            self.get_logger().error(status.message)
+        else:
+            status = report.plan_status(plan)
+            log = self.get_logger().info if plan.feasible else self.get_logger().error
+            log(f"{reason}: {status.message}")
+        with self._state_lock:
+            self._plan_status = status
+            if plan is not None and plan.feasible:
+                self._plan = plan
+                self._reports = [report.UavReport() for _ in range(3)]
+        if plan is not None and plan.feasible:
+            self._publish_plan(plan)
+        self._publish_diagnostics()
+
+    # --- publishing ----------------------------------------------------------------------
+    def _publish_plan(self, plan: Plan) -> None:
+        stamp = self.get_clock().now().to_msg()
+        msg = PoseArray()
+        msg.header.stamp = stamp
+        msg.header.frame_id = report.FRAME_ID
+        msg.poses = [Pose(position=Point(x=x, y=y, z=z), orientation=Quaternion(w=1.0))
+                     for x, y, z in report.formation_points(plan)]
+        rows, cols, data = report.power_rows(plan)
+        power = Float64MultiArray(data=data)
+        power.layout.dim = [MultiArrayDimension(label="uav", size=rows, stride=rows * cols),
+                            MultiArrayDimension(label="slot", size=cols, stride=cols)]
+        self._formation_pub.publish(msg)
+        self._power_pub.publish(power)
+
+    def _publish_diagnostics(self) -> None:
+        with self._state_lock:
+            statuses = [self._plan_status] if self._plan_status else []
+            if self._plan is not None:
+                rate_min = self._scenario.rate_min_bps
+                for k in self._plan.active_uavs:
+                    target = tuple(float(v) for v in self._plan.formation[k])
+                    statuses.append(report.uav_status(k, target, rate_min, self._reports[k]))
+        if not statuses:
+            return
+        msg = DiagnosticArray()
+        msg.header.stamp = self.get_clock().now().to_msg()
+        msg.status = [
+            DiagnosticStatus(level=getattr(DiagnosticStatus, report.LEVEL_NAMES[s.level]),
+                             name=s.name, message=s.message, hardware_id=s.hardware_id,
+                             values=[KeyValue(key=key, value=v) for key, v in s.values])
+            for s in statuses]
+        self._diag_pub.publish(msg)
+
+    # --- agent reports -------------------------------------------------------------------
+    def _on_pose(self, k: int, msg) -> None:
+        p = msg.pose.position
+        with self._state_lock:
+            self._reports[k].position = (p.x, p.y, p.z)
+
+    def _on_rate(self, k: int, msg) -> None:
+        with self._state_lock:
+            self._reports[k].record_rate(msg.data, self._scenario.rate_min_bps[k])
+
+
+def main(args: list[str] | None = None) -> int:
+    """Run the planner until Ctrl-C / SIGTERM; exit code 2 when the parameters are invalid."""
+    rclpy.init(args=args)
+    node = PlannerNode()
+    code = 0
+    try:
+        if node.problems:
+            for line in node.problems:
+                node.get_logger().error(line)
+            code = EXIT_BAD_PARAMS
+        else:
+            rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        node.stop()
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return code
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,80 @@
+"""Closed-form pieces shared by the paper-faithful AO sub-problems (SI units, radians).
+
+- Proposition 1's bound and its constant,
+- Proposition 2's C7a/C7b slopes alpha_a, alpha_b (None when the side is unconstrained),
+- C6 rewritten as range limits (exact: gamma_SNR is monotone in each slant range),
+- the C4 surrogate (eq. 18) as a number, for tests and diagnostics.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from uav_insar_planner import model
+from uav_insar_planner.params import Params
+
+
+def bound_constant(p: Params) -> float:
+    """K with sigma_h_bar = K r_0 / sqrt(b_perp,1^2 + b_perp,2^2)  (Proposition 1, eq. 19)."""
+    a = model.worst_case_coherence(p)
+    return math.sqrt(p.wavelength**2 * math.sin(p.theta0) ** 2 * (1.0 - a * a)
+                     / (8.0 * math.pi**2 * a * a * p.looks))
+
+
+def bound_value(p: Params, r0: float, b_perp_sq_sum: float) -> float:
+    """Proposition 1's bound; +inf when both perpendicular baselines vanish."""
+    if b_perp_sq_sum <= 0.0:
+        return math.inf
+    return bound_constant(p) * r0 / math.sqrt(b_perp_sq_sum)
+
+
+def c7_slopes(p: Params) -> tuple[float | None, float | None]:
+    """(alpha_a, alpha_b) of Proposition 2: C7 <=> tan(theta_k) >= alpha_a on I_a and
+    tan(theta_k) <= alpha_b on I_b, with h = the inverse of gamma_Rg(X) at gamma_Rg^min.
+
+    A side whose arcsin argument leaves (0, 1) puts no restriction on 0 <= theta_k < pi/2
+    (every look angle on that side meets C7) and gets None.
+    """
+    bp = p.radar_bandwidth_hz / p.center_frequency_hz
+    h = model.coherence_baseline_inverse(p.coherence_rg_min, bp)
+    s0 = math.sin(p.theta0)
+    arg_a = (2.0 - h) / h * s0
+    arg_b = h / (2.0 - h) * s0
+    alpha_a = math.tan(math.asin(arg_a)) if 0.0 < arg_a < 1.0 else None
+    alpha_b = math.tan(math.asin(arg_b)) if 0.0 < arg_b < 1.0 else None
+    return alpha_a, alpha_b
+
+
+def slave_range_max(p: Params, r0: float) -> float:
+    """Largest r_k meeting C6 for master slant range r_0:
+    (1 + r_0^3/g_m)(1 + r_0^2 r_k/g_m) <= 1/gamma_SNR^min^2 solved for r_k (eqs. 7-9).
+    Negative when the master alone is too far."""
+    gm = model.gamma_m(p)
+    return gm / r0**2 * (1.0 / (p.coherence_snr_min**2 * (1.0 + r0**3 / gm)) - 1.0)
+
+
+def master_range_max(p: Params, slave_ranges: list[float]) -> float:
+    """Largest r_0 meeting C6 for every given slave range (the left side of C6 increases in
+    r_0, so the limit is the root of (1 + r^3/g_m)(1 + r^2 r_k/g_m) = 1/gamma_SNR^min^2)."""
+    gm = model.gamma_m(p)
+    target = 1.0 / p.coherence_snr_min**2
+    best = math.inf
+    for rk in slave_ranges:
+        # (r^3 + g)(g + r^2 rk) = target g^2  ->  rk r^5 + g r^3 + g rk r^2 + g^2 (1 - target)
+        roots = np.roots([rk, 0.0, gm, gm * rk, 0.0, gm * gm * (1.0 - target)])
+        real = [float(z.real) for z in roots if abs(z.imag) < 1e-9 * max(1.0, abs(z)) and
+                z.real > 0.0]
+        best = min(best, max(real) if real else 0.0)
+    return best
+
+
+def c4_surrogate(q: np.ndarray, q_ref: np.ndarray, q_other: np.ndarray) -> float:
+    """Eq. (18): 2 q^T (q_ref - q_other) - ||q_ref||^2 + ||q_other||^2, the tangent plane of
+    ||q - q_other||^2 at q = q_ref; never above ||q - q_other||^2 (convexity), equal at q_ref.
+
+    We compare it with d_min^2 (the paper prints d_min; a bound on the squared distance needs
+    the squared threshold for the surrogate to imply C4).
+    """
+    q, q_ref, q_other = (np.asarray(v, dtype=float) for v in (q, q_ref, q_other))
+    return float(2.0 * q @ (q_ref - q_other) - q_ref @ q_ref + q_other @ q_other)

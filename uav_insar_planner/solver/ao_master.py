@@ -1,0 +1,123 @@
+"""(P.0) and Algorithm 1: the master's position and power for fixed slaves, by SCA.
+
+Convex approximation (P.0~) around q_0^(i), built once per AO run with CVXPY Parameters (DPP),
+so each SCA step only updates numbers:
+
+  min  K r_0 / sqrt(b_perp,1^2 + b_perp,2^2)     (Proposition 1; b_perp,k fixed by the slaves,
+                                                  eq. 16, so the objective is linear in z_0)
+  s.t. C1   z_min <= z_0 <= z_max
+       C2   x_0 = x_t - z_0 tan(theta_0)
+       C4~  2 q_0^T (q_0^(i) - q_k) - ||q_0^(i)||^2 + ||q_k||^2 >= d_min^2   (eq. 18)
+       C5   Theta_3dB r_0 / cos(theta_0) >= S_min   (linear on the C2 line)
+       C6   r_0 <= r_0,max(r_k)   (gamma_SNR,k decreases in r_0: exact, see ao_common)
+       C8   lambda r_0 sin(theta_0) >= h_amb^min b_perp,k
+       C9-C11 with P_com,0 a variable (ao_comm).
+With r_0 = z_0 / cos(theta_0) on the C2 line. Benchmark 2 pins z_0 (and x_0) to q0_fixed and
+uses the same programme only to allocate P_com,0.
+"""
+from __future__ import annotations
+
+import math
+import warnings
+
+import cvxpy as cp
+import numpy as np
+
+from uav_insar_planner.params import Params
+from uav_insar_planner.solver.ao_comm import comm_constraints
+from uav_insar_planner.solver.ao_common import bound_constant, bound_value, master_range_max
+
+SOLVER_OPTS = {"solver": cp.CLARABEL}
+MAX_INNER = 50
+
+
+INACCURATE_MAX_VIOLATION = 1e-7  # SI units of each constraint; far below the checker's margin
+
+
+def solve_convex(problem: cp.Problem) -> bool:
+    """Solve with Clarabel; True when the point may be taken as an SCA step: a certified optimum,
+    or an "inaccurate" one whose constraints all hold to INACCURATE_MAX_VIOLATION. Otherwise the
+    caller keeps its last feasible point (so cvxpy's "may be inaccurate" warning is not shown)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        try:
+            problem.solve(**SOLVER_OPTS)
+        except cp.SolverError:
+            return False
+    if problem.status == cp.OPTIMAL:
+        return True
+    return problem.status == cp.OPTIMAL_INACCURATE and all(
+        float(np.max(c.violation())) <= INACCURATE_MAX_VIOLATION for c in problem.constraints)
+
+
+class MasterProblem:
+    """(P.0~) for the slaves in `slaves` (1 or 2 of them), rebuilt only by Parameter updates."""
+
+    def __init__(self, p: Params, scheme: str, slaves: list[int]):
+        self.p, self.slaves = p, slaves
+        self.q = cp.Variable(2, name="q0")
+        x0, z0 = self.q[0], self.q[1]
+        cos0 = math.cos(p.theta0)
+        r0 = z0 / cos0
+        self.scale = cp.Parameter(nonneg=True, name="K_over_sqrt_bperp_sq")
+        self.r0_max = cp.Parameter(nonneg=True, name="r0_max")
+        self.r0_min = cp.Parameter(nonneg=True, name="r0_min_c8")
+        self.c4_lin = {k: cp.Parameter(2, name=f"c4_lin_{k}") for k in slaves}
+        self.c4_const = {k: cp.Parameter(name=f"c4_const_{k}") for k in slaves}
+        self.pin = cp.Parameter(2, name="q0_fixed")
+        cons = [z0 >= p.z_min, z0 <= p.z_max,                                          # C1
+                x0 == p.x_t - math.tan(p.theta0) * z0,                                 # C2
+                p.beamwidth * r0 / cos0 >= p.swath_min,                                # C5
+                r0 <= self.r0_max,                                                     # C6
+                r0 >= self.r0_min]                                                     # C8
+        cons += [self.c4_lin[k] @ self.q + self.c4_const[k] >= p.d_min**2              # C4~
+                 for k in slaves]
+        if scheme == "fixed-master":
+            cons.append(self.q == self.pin)
+        self.power, comm = comm_constraints(p, 0, self.q, scheme)
+        self.problem = cp.Problem(cp.Minimize(self.scale * r0), cons + comm)
+
+    def _set(self, q0_ref: np.ndarray, formation: np.ndarray) -> None:
+        p = self.p
+        b = [_b_perp(p, formation[k]) for k in self.slaves]
+        self.scale.value = bound_constant(p) / math.sqrt(max(sum(v * v for v in b), 1e-300))
+        ranges = [float(np.hypot(formation[k, 0] - p.x_t, formation[k, 1])) for k in self.slaves]
+        self.r0_max.value = master_range_max(p, ranges)
+        self.r0_min.value = p.h_amb_min * max(b) / (p.wavelength * math.sin(p.theta0))
+        for k in self.slaves:
+            qk = formation[k]
+            self.c4_lin[k].value = 2.0 * (q0_ref - qk)
+            self.c4_const[k].value = float(qk @ qk - q0_ref @ q0_ref)
+        self.pin.value = formation[0]
+
+    def run(self, formation: np.ndarray) -> tuple[np.ndarray, np.ndarray | None, int, str]:
+        """Algorithm 1 from the formation's master: (q_0, P_com,0, SCA steps, status).
+
+        Stops when the bound's relative change is below eps_0 = params.tolerance. A failed
+        convex solve keeps the last feasible point and says so in the status."""
+        p = self.p
+        q = formation[0].copy()
+        power = None
+        prev = _bound(p, q, formation, self.slaves)
+        for step in range(1, MAX_INNER + 1):
+            self._set(q, formation)
+            if not solve_convex(self.problem):
+                return q, power, step, str(self.problem.status)
+            q = np.asarray(self.q.value, dtype=float)
+            power = np.asarray(self.power.value, dtype=float)
+            cur = _bound(p, q, formation, self.slaves)
+            if abs(cur - prev) <= p.tolerance * cur:
+                return q, power, step, "converged"
+            prev = cur
+        return q, power, MAX_INNER, "step limit"
+
+
+def _b_perp(p: Params, qk: np.ndarray) -> float:
+    """Eq. (16), master on its C2 line."""
+    t = math.tan(p.theta0)
+    return abs((p.x_t - qk[0]) - t * qk[1]) / math.sqrt(t * t + 1.0)
+
+
+def _bound(p: Params, q0: np.ndarray, formation: np.ndarray, slaves: list[int]) -> float:
+    r0 = float(np.hypot(q0[0] - p.x_t, q0[1]))
+    return bound_value(p, r0, sum(_b_perp(p, formation[k]) ** 2 for k in slaves))

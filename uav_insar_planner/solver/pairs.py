@@ -1,0 +1,195 @@
+"""The slaves' best ranges for given look angles, and interval bounds over boxes of angles.
+
+Both objectives are sigma = lambda r0 sin(theta_0) / (2 pi sqrt(w_1 + w_2)) with
+w_k = b_perp,k^2 / sigma_Phi,k^2 (rays.weight). For fixed (r0, theta_k), w_k is increasing in
+the slave range r: b_perp = r |sin(theta - theta_0)| grows linearly, and for `exact`, with
+s = r0^2 r / gamma_m and gamma = K / sqrt(1 + s) (K < 1 collects gamma_Rg, the master's SNR
+factor and gamma_other), sigma_Phi^2 / r^2 is proportional to ((1 + s)/K^2 - 1) / s^2, whose
+derivative in s is (2 - (2 + s)/K^2) / s^3 < 0. So each slave wants the top of its feasible
+set on its ray, and the slaves interact only through C4 between themselves:
+||q_1 - q_2||^2 = r_1^2 + r_2^2 - 2 c r_1 r_2 with c = cos(theta_1 - theta_2), an ellipse E
+about the origin of the (r_1, r_2) plane that the pair must avoid.
+
+Pareto argument (used by both the exact inner solve and the box bound): on a box
+J_1 x J_2 of ranges, a feasible point P outside E stays outside E when scaled by t >= 1 (E is
+convex and centred at 0), so t P reaches the top edge or the right edge of the box while
+staying feasible and dominating P. On the right edge r_1 = top_1 the best r_2 is top_2 if
+(top_1, top_2) is outside E, else the lower crossing of E, y_lo(top_1). Hence the optimum over
+J_1 x J_2 is among (top_1, top_2), (top_1, y_lo(top_1)), (x_lo(top_2), top_2).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from uav_insar_planner.solver import rays
+from uav_insar_planner.solver.rays import Scenario
+
+
+def _slave_weight(sc: Scenario, r0, theta, r):
+    b = r * np.abs(np.sin(theta - sc.th0))
+    return rays.weight(sc, b, rays.coherence_rg(sc, theta), rays.snr_factor(sc, r0, r))
+
+
+def _components(sc: Scenario, k: int, r0, theta):
+    """Slave k's feasible ranges on the ray as two intervals (below / above the master hole);
+    an interval is empty when lo > top."""
+    lo, up = rays.ray_limits(sc, k, r0, theta)
+    h1, h2 = rays.master_hole(sc, r0, theta)
+    return ((lo, np.minimum(up, h1)), (np.maximum(lo, h2), up))
+
+
+def _lower_crossing(t, c, d2):
+    """y_lo(t): the smaller r_2 with (t, r_2) on the boundary of E; nan if the line misses E."""
+    disc = d2 - t * t * (1.0 - c * c)
+    with np.errstate(invalid="ignore"):
+        return np.where(disc > 0.0, t * c - np.sqrt(disc), np.nan)
+
+
+def best_ranges(sc: Scenario, r0, th1, th2=None):
+    """Exact optimum of the slave ranges for fixed (r0, theta_1[, theta_2]). With one slave
+    (sc.slaves == (k,)) theta_1 is that slave's angle.
+
+    Returns (objective, r1, r2): objective +inf and ranges nan where no ranges are feasible.
+    """
+    r0 = np.asarray(r0, dtype=float)
+    th1 = np.asarray(th1, dtype=float)
+    comps1 = _components(sc, sc.slaves[0], r0, th1)
+    if len(sc.slaves) == 1:
+        lo_b, top_b = comps1[1]
+        lo_a, top_a = comps1[0]
+        r1 = np.where(lo_b <= top_b, top_b, np.where(lo_a <= top_a, top_a, np.nan))
+        w = _slave_weight(sc, r0, th1, r1)
+        f = np.where(np.isfinite(r1) & (w > 0), rays.objective_from_weights(sc, r0, w), np.inf)
+        return f, r1, np.full_like(r1, np.nan)
+    th2 = np.asarray(th2, dtype=float)
+    comps2 = _components(sc, 2, r0, th2)
+    c = np.cos(th1 - th2)
+    d2 = sc.p.d_min**2 if sc.on("C4") else 0.0
+    best_w = np.full(np.broadcast(r0, th1, th2).shape, -np.inf)
+    best_r1 = np.full_like(best_w, np.nan)
+    best_r2 = np.full_like(best_w, np.nan)
+
+    def consider(ok, w, r1, r2):
+        nonlocal best_w, best_r1, best_r2
+        take = ok & (w > best_w)
+        best_w = np.where(take, w, best_w)
+        best_r1 = np.where(take, r1, best_r1)
+        best_r2 = np.where(take, r2, best_r2)
+
+    with np.errstate(invalid="ignore"):
+        tops1 = [(lo, t, _slave_weight(sc, r0, th1, t)) for lo, t in comps1]
+        tops2 = [(lo, t, _slave_weight(sc, r0, th2, t)) for lo, t in comps2]
+        for lo1, t1, w1 in tops1:
+            for lo2, t2, w2 in tops2:
+                valid = (lo1 <= t1) & (lo2 <= t2)
+                clear = t1 * t1 + t2 * t2 - 2.0 * c * t1 * t2 >= d2
+                consider(valid & clear, w1 + w2, t1, t2)
+                crowded = valid & ~clear
+                if not crowded.any():
+                    continue
+                y = _lower_crossing(t1, c, d2)
+                ok = crowded & (y >= lo2)
+                consider(ok, w1 + _slave_weight(sc, r0, th2, np.where(ok, y, t2)), t1, y)
+                x = _lower_crossing(t2, c, d2)
+                ok = crowded & (x >= lo1)
+                consider(ok, _slave_weight(sc, r0, th1, np.where(ok, x, t1)) + w2, x, t2)
+    f = np.where(best_w > 0, rays.objective_from_weights(sc, r0, np.maximum(best_w, 1e-300)),
+                 np.inf)
+    return f, best_r1, best_r2
+
+
+# --- interval bounds over boxes ------------------------------------------------------------
+
+def _nearest(v, a, b):
+    return np.clip(v, a, b)
+
+
+def _abs_sin_range(dlo, dhi):
+    """(min, max) of |sin(delta)| over [dlo, dhi] with |delta| < pi."""
+    s_lo, s_hi = np.abs(np.sin(dlo)), np.abs(np.sin(dhi))
+    smin = np.where((dlo <= 0.0) & (dhi >= 0.0), 0.0, np.minimum(s_lo, s_hi))
+    peak = ((dlo <= rays.HALF_PI) & (dhi >= rays.HALF_PI)) | (
+        (dlo <= -rays.HALF_PI) & (dhi >= -rays.HALF_PI))
+    smax = np.where(peak, 1.0, np.maximum(s_lo, s_hi))
+    return smin, smax
+
+
+def slave_box(sc: Scenario, k: int, r0a, r0b, ta, tb):
+    """Bounds for slave k over the box r0 in [r0a, r0b], theta in [ta, tb]: a lower bound on
+    its range's lower limit, an upper bound on its upper limit, and the pieces of the weight
+    bound (see weight_bound). Each limit is monotone in r0 and in |theta|, |theta - theta_0| or
+    the angle to the station (rays), so its extreme over the box sits at a known corner."""
+    p = sc.p
+    abs_lo = np.where((ta <= 0) & (tb >= 0), 0.0, np.minimum(np.abs(ta), np.abs(tb)))
+    abs_hi = np.maximum(np.abs(ta), np.abs(tb))
+    dist = np.abs(np.angle(np.exp(1j * (_nearest(sc.station_angle, ta, tb) - sc.station_angle))))
+    lo, up = np.zeros_like(ta), np.full_like(ta, math.inf)
+    if sc.disk_r2[k] != math.inf:
+        ra, rb = rays._disk_at_psi(sc, sc.disk_r2[k], dist)
+        lo, up = np.maximum(lo, ra), np.minimum(up, rb)
+    if sc.on("C1"):
+        lo = np.maximum(lo, p.z_min / np.cos(abs_lo))
+        up = np.minimum(up, p.z_max / np.cos(abs_hi))
+    if sc.on("C5"):
+        lo = np.maximum(lo, p.swath_min * np.cos(abs_hi) / p.beamwidth)
+    up = np.minimum(up, rays.snr_limit(sc, r0a))
+    smin, smax = _abs_sin_range(ta - sc.th0, tb - sc.th0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        up = np.minimum(up, np.where(smin > 0, rays.baseline_limit(sc, r0b) / smin, math.inf))
+    g_rg = rays.coherence_rg(sc, _nearest(sc.th0, ta, tb))
+    return lo, up, smax, g_rg
+
+
+def weight_bound(sc: Scenario, r0a, rho, smax, g_rg):
+    """Upper bound on w / r0^2 for any point of the box whose slave range is at most rho.
+
+    b_perp / r0 <= min(r smax / r0a, lambda sin(theta_0) / h_amb^min) (the second is C8, free
+    of r0) and sigma_Phi >= sigma_Phi(g_rg_max gamma_SNR(r0a, r)). Uncapped, the bound grows
+    with r (module docstring); capped, it falls with r. So its maximum over r <= rho is at
+    min(rho, r_cap): the result is non-decreasing in rho, as the Pareto argument needs."""
+    cap = sc.p.wavelength * sc.sin0 / sc.p.h_amb_min if sc.on("C8") else math.inf
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r = np.minimum(rho, np.where(smax > 0, cap * r0a / smax, math.inf))
+        bn = np.where(smax > 0, np.minimum(r * smax / r0a, cap), 0.0)
+        w = rays.weight(sc, bn, g_rg, rays.snr_factor(sc, r0a, r))
+    # An unbounded range (only with constraint families switched off) has unbounded weight.
+    return np.where(np.isnan(w), np.inf, w)
+
+
+def box_lower_bound(sc: Scenario, r0a, r0b, t1a, t1b, t2a=None, t2b=None):
+    """A lower bound on the objective over every feasible point of the boxes
+    (+inf: the box holds no feasible point). C4 between slave and master is relaxed away;
+    C4 between the slaves is kept through the ellipse with c_max = cos of the box's largest
+    angle difference, which contains the true exclusion ellipse of every angle pair in it."""
+    lo1, up1, s1, g1 = slave_box(sc, sc.slaves[0], r0a, r0b, t1a, t1b)
+    ok = lo1 <= up1
+    if len(sc.slaves) == 1:
+        w = weight_bound(sc, r0a, up1, s1, g1)
+        return np.where(ok, _from_normalised(sc, w), np.inf)
+    lo2, up2, s2, g2 = slave_box(sc, 2, r0a, r0b, t2a, t2b)
+    ok &= lo2 <= up2
+    w_top = weight_bound(sc, r0a, up1, s1, g1) + weight_bound(sc, r0a, up2, s2, g2)
+    if not sc.on("C4"):
+        wbest = np.where(ok, w_top, -np.inf)
+    else:
+        dmax = np.minimum(np.maximum(np.abs(t1b - t2a), np.abs(t2b - t1a)), math.pi)
+        c = np.cos(dmax)
+        d2 = sc.p.d_min**2
+        with np.errstate(invalid="ignore"):
+            inside = up1 * up1 + up2 * up2 - 2.0 * c * up1 * up2 < d2
+            y = _lower_crossing(up1, c, d2)
+            x = _lower_crossing(up2, c, d2)
+            wa = np.where(y >= lo2, weight_bound(sc, r0a, up1, s1, g1)
+                          + weight_bound(sc, r0a, np.maximum(y, 0.0), s2, g2), -np.inf)
+            wb = np.where(x >= lo1, weight_bound(sc, r0a, np.maximum(x, 0.0), s1, g1)
+                          + weight_bound(sc, r0a, up2, s2, g2), -np.inf)
+        wbest = np.where(ok, np.where(inside, np.maximum(wa, wb), w_top), -np.inf)
+    return np.where(wbest > -np.inf, _from_normalised(sc, wbest), np.inf)
+
+
+def _from_normalised(sc: Scenario, wn):
+    """The objective lambda r0 sin(theta_0) / (2 pi sqrt(w)) written with wn = w / r0^2."""
+    with np.errstate(divide="ignore"):
+        return sc.p.wavelength * sc.sin0 / (2.0 * math.pi * np.sqrt(np.maximum(wn, 0.0)))

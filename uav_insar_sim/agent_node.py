@@ -1,0 +1,180 @@
+"""The simulated UAV agent (`ros2 run uav_insar_planner agent --ros-args -p uav_id:=1`).
+
+Waits for the latched `formation` and `formation/power`, flies to its across-track target
+(x_k, z_k), then runs the stripmap track slot by slot (mission.Mission), applying P_com[k][n]
+in slot n and computing the rate it achieves from where it actually is. Publishes
+`uav{K}/pose` (PoseStamped, every tick and at each slot start) and `uav{K}/achieved_rate`
+(Float64, bit/s, one message per slot, at the slot start). A new plan re-targets the UAV
+without restarting the slot clock, so a planner restart (same latched plan) changes nothing.
+
+Parameters: uav_id, time_scale (mission seconds per wall second), position_noise_std_m,
+noise_seed, max_speed_mps, max_accel_mps2 (AGENT_SPECS) and the scenario parameters of
+SCENARIO_NAMES from params.PARAM_SPECS, so one params file serves every node. Invalid values
+log one line each and exit with code 2.
+"""
+from __future__ import annotations
+
+import sys
+import time
+
+from uav_insar_planner.nodes.planner_report import rate_tolerance_bps
+from uav_insar_planner.nodes.ros_params import check_scalars, declare_specs, spec_values
+from uav_insar_planner.params import SPEC_BY_NAME, ParamError, ParamSpec, params_from_mapping
+from uav_insar_planner.seam import (
+    DurabilityPolicy,
+    ExternalShutdownException,
+    HistoryPolicy,
+    Node,
+    QoSProfile,
+    ReliabilityPolicy,
+    msg_type,
+    rclpy,
+)
+from uav_insar_sim.mission import Mission
+
+PoseArray = msg_type("geometry_msgs/msg/PoseArray")
+PoseStamped = msg_type("geometry_msgs/msg/PoseStamped")
+Float64 = msg_type("std_msgs/msg/Float64")
+Float64MultiArray = msg_type("std_msgs/msg/Float64MultiArray")
+
+AGENT_SPECS = (
+    ParamSpec("uav_id", int, 0, "which UAV this agent flies: 0 master, 1, 2", 0, 2),
+    ParamSpec("time_scale", float, 1.0, "mission seconds per wall-clock second", 0.0, 1000.0,
+              True),
+    ParamSpec("position_noise_std_m", float, 0.0, "std of the position disturbance per axis "
+              "[m]", 0.0, 100.0),
+    ParamSpec("noise_seed", int, 0, "seed of the position disturbance", 0, 2**31 - 1),
+    ParamSpec("max_speed_mps", float, 10.0, "speed limit [m/s], at least speed_mps", 0.0,
+              100.0, True),
+    ParamSpec("max_accel_mps2", float, 3.0, "acceleration limit [m/s^2]", 0.0, 50.0, True),
+)
+SCENARIO_NAMES = ("num_slots", "slot_duration_s", "speed_mps", "ground_station_m",
+                  "comm_bandwidth_hz", "ref_snr_db", "rate_min_mbps")
+SCENARIO_SPECS = tuple(SPEC_BY_NAME[n] for n in SCENARIO_NAMES)
+LATCHED = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
+                     reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+TICK_PERIOD_S = 0.05  # wall clock; the mission clock advances time_scale times faster
+FRAME_ID = "insar_track"
+EXIT_BAD_PARAMS = 2
+
+
+class AgentNode(Node):
+    """See the module docstring. `problems` is non-empty (nothing created) on bad parameters."""
+
+    def __init__(self, node_name: str = "agent", **kwargs):
+        super().__init__(node_name, **kwargs)
+        self.problems = declare_specs(self, AGENT_SPECS + SCENARIO_SPECS)
+        own = spec_values(self, AGENT_SPECS)
+        self.problems += check_scalars(own, AGENT_SPECS)
+        try:
+            params = params_from_mapping(spec_values(self, SCENARIO_SPECS))
+        except ParamError as exc:
+            self.problems += exc.problems
+        if self.problems:
+            return
+        try:
+            self.mission = Mission(own["uav_id"], params, own["max_speed_mps"],
+                                   own["max_accel_mps2"], own["position_noise_std_m"],
+                                   own["noise_seed"])
+        except ValueError as exc:
+            self.problems.append(str(exc))
+            return
+        self.k = own["uav_id"]
+        self.time_scale = own["time_scale"]
+        self._formation = None
+        self._power = None
+        self._wall_t0: float | None = None
+        self._phase = self.mission.phase
+        self._pose_pub = self.create_publisher(PoseStamped, f"uav{self.k}/pose", 10)
+        self._rate_pub = self.create_publisher(Float64, f"uav{self.k}/achieved_rate", 10)
+        self.create_subscription(PoseArray, "formation", self._on_formation, LATCHED)
+        self.create_subscription(Float64MultiArray, "formation/power", self._on_power, LATCHED)
+        self.create_timer(TICK_PERIOD_S, self._tick)
+        self.get_logger().info(f"uav{self.k}: waiting for the formation")
+
+    # --- plan ----------------------------------------------------------------------------
+    def _on_formation(self, msg) -> None:
+        self._formation = msg
+        self._adopt_plan()
+
+    def _on_power(self, msg) -> None:
+        self._power = msg
+        self._adopt_plan()
+
+    def _adopt_plan(self) -> None:
+        if self._formation is None or self._power is None:
+            return
+        dims = self._power.layout.dim
+        if len(self._formation.poses) <= self.k or len(dims) != 2 or dims[0].size <= self.k:
+            self.get_logger().error(f"uav{self.k}: plan has no entry for this UAV; ignored")
+            return
+        n = dims[1].size
+        powers = list(self._power.data[self.k * n:(self.k + 1) * n])
+        p = self._formation.poses[self.k].position
+        if n != self.mission.params.num_slots:
+            self.get_logger().warning(f"uav{self.k}: plan has {n} slots, num_slots is "
+                                      f"{self.mission.params.num_slots}; flying the plan's {n}")
+        self.mission.set_plan((p.x, p.z), powers)
+        if self._wall_t0 is None and self.mission.phase == "transit":
+            self._wall_t0 = time.monotonic()
+            self.get_logger().info(f"uav{self.k}: plan received, flying to x={p.x:.3f} m, "
+                                   f"z={p.z:.3f} m for {n} slots")
+
+    # --- flight --------------------------------------------------------------------------
+    def _tick(self) -> None:
+        if self._wall_t0 is not None:
+            t = (time.monotonic() - self._wall_t0) * self.time_scale
+            for sample in self.mission.advance(t):
+                self._publish_pose(sample.position)
+                self._rate_pub.publish(Float64(data=sample.rate_bps))
+        self._publish_pose(self.mission.actual_position())
+        if self.mission.phase != self._phase:
+            self._phase = self.mission.phase
+            self._log_phase()
+
+    def _publish_pose(self, position: tuple[float, float, float]) -> None:
+        msg = PoseStamped()
+        msg.header.stamp = self.get_clock().now().to_msg()
+        msg.header.frame_id = FRAME_ID
+        msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = position
+        msg.pose.orientation.w = 1.0
+        self._pose_pub.publish(msg)
+
+    def _log_phase(self) -> None:
+        log = self.get_logger()
+        if self._phase == "track":
+            log.info(f"uav{self.k}: on the run-up, slot 0 starts at y = 0")
+        elif self._phase == "idle":
+            log.info(f"uav{self.k}: this scheme does not fly uav{self.k}; holding at home")
+        elif self._phase == "done":
+            samples = self.mission.samples
+            tol = rate_tolerance_bps(self.mission.params.rate_min_bps)
+            met = sum(s.margin_bps >= -tol for s in samples)
+            worst = min(s.margin_bps for s in samples) / 1e6 if samples else float("nan")
+            log.info(f"uav{self.k}: mission complete: {len(samples)} slots flown, rate met in "
+                     f"{met}, worst margin {worst:+.4g} Mbit/s")
+
+
+def main(args: list[str] | None = None) -> int:
+    """Run one agent until Ctrl-C / SIGTERM; exit code 2 when the parameters are invalid."""
+    rclpy.init(args=args)
+    node = AgentNode()
+    code = 0
+    try:
+        if node.problems:
+            for line in node.problems:
+                node.get_logger().error(line)
+            code = EXIT_BAD_PARAMS
+        else:
+            rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return code
+
+
+if __name__ == "__main__":
+    sys.exit(main())
