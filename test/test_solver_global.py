@@ -11,7 +11,9 @@ from uav_insar_planner import model
 from uav_insar_planner.evaluate import evaluate, static_power_w
 from uav_insar_planner.params import SCHEMES, default_params
 from uav_insar_planner.solver import blocking, pairs, power, rays, solve
+from uav_insar_planner.solver.ao_start import find_start
 from uav_insar_planner.solver.global_opt import bound_minimizer_band, solve_global
+from uav_insar_planner.solver.power import schedules
 
 FIG3 = {"master_fixed_xz_m": [-54.0, 74.0], "p_com_max_db": 10.1}
 FIG4 = {"master_fixed_xz_m": [-41.0, 61.0], "p_com_max_db": 9.0}
@@ -147,10 +149,22 @@ def test_feasibility_edge_in_rate():
         p_hi = with_rate(base, 1, hi)
         above = solve_global(p_hi, scheme, "exact")
         assert not above.feasible and above.blocking
-        assert blocking.feasible_without(p_hi, scheme, frozenset(above.blocking))
-        for family in above.blocking:  # minimal: every named family is needed
-            rest = frozenset(above.blocking) - {family}
-            assert not rest or not blocking.feasible_without(p_hi, scheme, rest)
+        # the blocking families cannot hold together, and each is needed for that (an
+        # irreducible infeasible set): without all the others no point is found, and
+        # dropping any one member as well gives a formation that the independent checker
+        # finds meets every remaining blocking family
+        others = frozenset(blocking.FAMILIES) - set(above.blocking)
+        assert not blocking.feasible_without(p_hi, scheme, others)
+        for family in above.blocking:
+            rest = set(above.blocking) - {family}
+            start = find_start(p_hi, scheme, rest | {"C2"}, first=True)
+            assert start is not None, family
+            q = start.formation
+            ev = evaluate(p_hi, q, schedules(p_hi, q, scheme), scheme)
+            assert all(ev.constraints[c].ok for c in rest if c not in ("C9", "C10", "C11"))
+        # the message names the single relaxations that would help, each proven
+        fixes, _ = blocking.blocking_sets(p_hi, scheme)
+        assert fixes and blocking.feasible_without(p_hi, scheme, frozenset(fixes))
         # a local search on the original variables finds no feasible point above the edge
         assert _multistart(p_hi, scheme, 30, seed=3)[0] == math.inf
 
@@ -158,7 +172,7 @@ def test_feasibility_edge_in_rate():
 def test_infeasible_static_power_names_c9():
     p = default_params().replace(p_com_max_db=5.0)  # 3.2 W < E_max / N = 7.4 W
     res = solve_global(p, "static-power", "exact")
-    assert not res.feasible and res.blocking == ["C9"]
+    assert not res.feasible and res.blocking == ["C9"]  # the fixed 7.4 W breaks C9 anywhere
 
 
 # --- independent multi-start local search on the original variables ------------------------

@@ -7,16 +7,24 @@ in slot n and computing the rate it achieves from where it actually is. Publishe
 (Float64, bit/s, one message per slot, at the slot start). A new plan re-targets the UAV
 without restarting the slot clock, so a planner restart (same latched plan) changes nothing.
 
+MAVLink mode (`mavlink_listen` set, e.g. `udpin:127.0.0.1:14552`): the agent does not fly
+itself. It embeds a SITL-style vehicle (`vehicle.SimVehicle`, sysid `mavlink_sysid`, 0 = 2 +
+uav_id like the bridge's default target_sysids) on that endpoint, which `mavlink_bridge` flies;
+the agent reads the vehicle's position (local NED = the bridge's default frame: N = y, E = x,
+D = -z) and runs the schedule on it (observed_mission.ObservedMission: slot n starts when the
+vehicle crosses y = n v_y delta_t). `time_scale` and the position noise do not apply then.
+
 Parameters: uav_id, time_scale (mission seconds per wall second), position_noise_std_m,
-noise_seed, max_speed_mps, max_accel_mps2 (AGENT_SPECS) and the scenario parameters of
-SCENARIO_NAMES from params.PARAM_SPECS, so one params file serves every node. Invalid values
-log one line each and exit with code 2.
+noise_seed, max_speed_mps, max_accel_mps2 (AGENT_SPECS), mavlink_listen, mavlink_sysid
+(MAVLINK_SPECS) and the scenario parameters of SCENARIO_NAMES from params.PARAM_SPECS, so one
+params file serves every node. Invalid values log one line each and exit with code 2.
 """
 from __future__ import annotations
 
 import sys
 import time
 
+from uav_insar_planner.mavlink.frames import TrackFrame
 from uav_insar_planner.nodes.planner_report import rate_tolerance_bps
 from uav_insar_planner.nodes.ros_params import check_scalars, declare_specs, spec_values
 from uav_insar_planner.params import SPEC_BY_NAME, ParamError, ParamSpec, params_from_mapping
@@ -30,7 +38,9 @@ from uav_insar_planner.seam import (
     msg_type,
     rclpy,
 )
-from uav_insar_sim.mission import Mission
+from uav_insar_sim.mission import Mission, home_position
+from uav_insar_sim.observed_mission import ObservedMission
+from uav_insar_sim.vehicle import SimVehicle
 
 PoseArray = msg_type("geometry_msgs/msg/PoseArray")
 PoseStamped = msg_type("geometry_msgs/msg/PoseStamped")
@@ -48,6 +58,12 @@ AGENT_SPECS = (
               100.0, True),
     ParamSpec("max_accel_mps2", float, 3.0, "acceleration limit [m/s^2]", 0.0, 50.0, True),
 )
+MAVLINK_SPECS = (
+    ParamSpec("mavlink_listen", str, "", "MAVLink mode: the embedded vehicle's connection "
+              "string, e.g. udpin:127.0.0.1:14552 (empty: fly /formation directly)"),
+    ParamSpec("mavlink_sysid", int, 0, "MAVLink mode: the embedded vehicle's sysid (0: 2 + "
+              "uav_id)", 0, 255),
+)
 SCENARIO_NAMES = ("num_slots", "slot_duration_s", "speed_mps", "ground_station_m",
                   "comm_bandwidth_hz", "ref_snr_db", "rate_min_mbps")
 SCENARIO_SPECS = tuple(SPEC_BY_NAME[n] for n in SCENARIO_NAMES)
@@ -56,6 +72,10 @@ LATCHED = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
 TICK_PERIOD_S = 0.05  # wall clock; the mission clock advances time_scale times faster
 FRAME_ID = "insar_track"
+# MAVLink mode: the embedded vehicle starts airborne (no arming needed) above the agent's home.
+MAVLINK_START_HEIGHT_M = 10.0
+# Its local NED frame is the bridge's default one (track_bearing_deg 0, origin_ned_m 0).
+MAVLINK_FRAME = TrackFrame()
 EXIT_BAD_PARAMS = 2
 
 
@@ -64,19 +84,23 @@ class AgentNode(Node):
 
     def __init__(self, node_name: str = "agent", **kwargs):
         super().__init__(node_name, **kwargs)
-        self.problems = declare_specs(self, AGENT_SPECS + SCENARIO_SPECS)
-        own = spec_values(self, AGENT_SPECS)
-        self.problems += check_scalars(own, AGENT_SPECS)
+        self.vehicle: SimVehicle | None = None
+        self.problems = declare_specs(self, AGENT_SPECS + MAVLINK_SPECS + SCENARIO_SPECS)
+        own = spec_values(self, AGENT_SPECS + MAVLINK_SPECS)
+        self.problems += check_scalars(own, AGENT_SPECS + MAVLINK_SPECS[1:])
         try:
             params = params_from_mapping(spec_values(self, SCENARIO_SPECS))
         except ParamError as exc:
             self.problems += exc.problems
         if self.problems:
             return
-        try:
+        try:  # Mission also checks max_speed_mps against speed_mps, which both modes need
             self.mission = Mission(own["uav_id"], params, own["max_speed_mps"],
                                    own["max_accel_mps2"], own["position_noise_std_m"],
                                    own["noise_seed"])
+            if own["mavlink_listen"]:
+                self.vehicle = embedded_vehicle(own)
+                self.mission = ObservedMission(own["uav_id"], params)
         except ValueError as exc:
             self.problems.append(str(exc))
             return
@@ -91,7 +115,17 @@ class AgentNode(Node):
         self.create_subscription(PoseArray, "formation", self._on_formation, LATCHED)
         self.create_subscription(Float64MultiArray, "formation/power", self._on_power, LATCHED)
         self.create_timer(TICK_PERIOD_S, self._tick)
+        if self.vehicle is not None:
+            self.vehicle.start()
+            self.get_logger().info(f"uav{self.k}: MAVLink mode, vehicle sysid "
+                                   f"{self.vehicle.sysid} on {own['mavlink_listen']} (port "
+                                   f"{self.vehicle.port})")
         self.get_logger().info(f"uav{self.k}: waiting for the formation")
+
+    def destroy_node(self) -> None:
+        if self.vehicle is not None:
+            self.vehicle.stop()
+        super().destroy_node()
 
     # --- plan ----------------------------------------------------------------------------
     def _on_formation(self, msg) -> None:
@@ -115,19 +149,27 @@ class AgentNode(Node):
         if n != self.mission.params.num_slots:
             self.get_logger().warning(f"uav{self.k}: plan has {n} slots, num_slots is "
                                       f"{self.mission.params.num_slots}; flying the plan's {n}")
-        self.mission.set_plan((p.x, p.z), powers)
+        if self.vehicle is None:
+            self.mission.set_plan((p.x, p.z), powers)
+        else:
+            self.mission.set_plan((p.x, p.z), powers, y_start=p.y)
         if self._wall_t0 is None and self.mission.phase == "transit":
             self._wall_t0 = time.monotonic()
-            self.get_logger().info(f"uav{self.k}: plan received, flying to x={p.x:.3f} m, "
+            how = "flying" if self.vehicle is None else "the bridge flies it"
+            self.get_logger().info(f"uav{self.k}: plan received, {how} to x={p.x:.3f} m, "
                                    f"z={p.z:.3f} m for {n} slots")
 
     # --- flight --------------------------------------------------------------------------
     def _tick(self) -> None:
-        if self._wall_t0 is not None:
-            t = (time.monotonic() - self._wall_t0) * self.time_scale
-            for sample in self.mission.advance(t):
-                self._publish_pose(sample.position)
-                self._rate_pub.publish(Float64(data=sample.rate_bps))
+        if self.vehicle is not None:
+            started = self.mission.observe(MAVLINK_FRAME.from_ned(*self.vehicle.position_ned))
+        elif self._wall_t0 is not None:
+            started = self.mission.advance((time.monotonic() - self._wall_t0) * self.time_scale)
+        else:
+            started = []
+        for sample in started:
+            self._publish_pose(sample.position)
+            self._rate_pub.publish(Float64(data=sample.rate_bps))
         self._publish_pose(self.mission.actual_position())
         if self.mission.phase != self._phase:
             self._phase = self.mission.phase
@@ -143,7 +185,9 @@ class AgentNode(Node):
 
     def _log_phase(self) -> None:
         log = self.get_logger()
-        if self._phase == "track":
+        if self._phase == "track" and self.vehicle is not None:
+            log.info(f"uav{self.k}: slot 0 started at y = {self.mission.y_start:g} m")
+        elif self._phase == "track":
             log.info(f"uav{self.k}: on the run-up, slot 0 starts at y = 0")
         elif self._phase == "idle":
             log.info(f"uav{self.k}: this scheme does not fly uav{self.k}; holding at home")
@@ -154,6 +198,21 @@ class AgentNode(Node):
             worst = min(s.margin_bps for s in samples) / 1e6 if samples else float("nan")
             log.info(f"uav{self.k}: mission complete: {len(samples)} slots flown, rate met in "
                      f"{met}, worst margin {worst:+.4g} Mbit/s")
+
+
+def embedded_vehicle(own: dict) -> SimVehicle:
+    """The MAVLink-mode vehicle for the agent parameters `own` (not started): ArduPilot-like,
+    airborne in GUIDED at MAVLINK_START_HEIGHT_M above the agent's home, with the agent's
+    speed and acceleration limits. ValueError (one line) for a bad connection string."""
+    x, y, _ = home_position(own["uav_id"])
+    sysid = own["mavlink_sysid"] or 2 + own["uav_id"]
+    start = MAVLINK_FRAME.to_ned(float(x), float(y), MAVLINK_START_HEIGHT_M)
+    try:
+        return SimVehicle(sysid, own["mavlink_listen"], "ardupilot", start_ned=start,
+                          max_speed=own["max_speed_mps"], max_accel=own["max_accel_mps2"],
+                          airborne=True)
+    except ValueError as exc:
+        raise ValueError(f"mavlink_listen: {' '.join(str(exc).split())}") from None
 
 
 def main(args: list[str] | None = None) -> int:

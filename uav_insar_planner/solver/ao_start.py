@@ -51,6 +51,8 @@ class Start:
 def _disk_radius_sq(p: Params, k: int, scheme: str, fam: frozenset[str]) -> float:
     """rho_k^2 limit (x-z distance to the station) from C9-C11 as far as they are in `fam`;
     +inf when no limit, -inf when no position works."""
+    if scheme == "static-power" and "C9" in fam and static_power_w(p) > p.p_max_w:
+        return -math.inf  # the fixed schedule itself breaks C9, wherever the UAV is
     if "C10" not in fam:
         return math.inf
     dy2 = (p.y_track - p.ground_station[1]) ** 2
@@ -58,10 +60,7 @@ def _disk_radius_sq(p: Params, k: int, scheme: str, fam: frozenset[str]) -> floa
     if c == 0.0:
         return math.inf
     if scheme == "static-power":
-        power = static_power_w(p)
-        if "C9" in fam and power > p.p_max_w:
-            return -math.inf
-        return power / c - float(dy2.max())
+        return static_power_w(p) / c - float(dy2.max())
     limit = math.inf
     if "C9" in fam:
         limit = min(limit, p.p_max_w / c - float(dy2.max()))

@@ -5,8 +5,9 @@ every other constraint an interval of slave ranges along each look-angle ray; pa
 slaves sit at the top of their feasible ranges, or one steps down to keep C4 between them) and
 runs the branch and bound of certificate.py, whose smallest open or closed box bound is a proven
 lower bound on the objective over the feasible set. An empty search (every box proven empty)
-proves infeasibility; the blocking constraint families are then a smallest set whose removal
-makes the scenario feasible (blocking.py).
+proves infeasibility; the blocking constraint families are then an irreducible infeasible set
+(ao_start.blocking_families), and the message adds the smallest sets whose removal alone makes
+it feasible (blocking.py).
 
 `bound_minimizer_band` gives the spread of the true sigma_h over the minimisers of
 Proposition 1's bound, the paper's solution set (see its docstring).
@@ -20,6 +21,7 @@ import numpy as np
 from uav_insar_planner import model
 from uav_insar_planner.params import Params
 from uav_insar_planner.solver import blocking, certificate, power, rays
+from uav_insar_planner.solver.ao_start import blocking_families
 from uav_insar_planner.solver.result import SolverResult
 
 # Branch and bound closes a box when its bound is within REL_GAP of the incumbent, so the
@@ -62,18 +64,20 @@ def solve_global(p: Params, scheme: str, objective: str) -> SolverResult:
     sc = rays.make_scenario(p, scheme, objective)
     res = certificate.search(sc, rel_gap=REL_GAP)
     if res.point is None:
-        block, alternatives = blocking.blocking_sets(p, scheme)
+        block = blocking_families(p, scheme)
+        _, fixes = blocking.blocking_sets(p, scheme)
+        relax = ("; relaxing any of these alone makes it feasible: "
+                 + ", ".join("+".join(s) for s in fixes)) if fixes else ""
+        together = " + ".join(block) + (" cannot hold together" if len(block) > 1
+                                        else " cannot be met") + relax
         if not res.exhausted:
             return _nan_result(p, res.nodes, blocking=block, lower_bound=res.lower_bound,
                                message="no feasible point found and infeasibility not proven "
-                               f"within {res.nodes} boxes; removing " + "+".join(block)
-                               + " makes it feasible")
-        note = "; other minimal sets: " + ", ".join("+".join(s) for s in alternatives[1:]) \
-            if len(alternatives) > 1 else ""
+                               f"within {res.nodes} boxes; " + together)
         return _nan_result(p, res.nodes, blocking=block, lower_bound=math.inf,
                            certificate="infeasible: every box of (r0, theta1, theta2) proven "
                            "empty by interval bounds of the C1-C11 range limits",
-                           message="removing " + "+".join(block) + " makes it feasible" + note)
+                           message=together)
     # The search's incumbent is a box centre within REL_GAP of the optimum; a local compass
     # search takes it to the optimum to machine-level accuracy (value <= the incumbent's).
     widths = (sc.r0_hi - sc.r0_lo, sc.th_hi - sc.th_lo, sc.th_hi - sc.th_lo)

@@ -1,0 +1,101 @@
+"""Agents in MAVLink mode, flown by the bridge: planner -> /formation -> mavlink_bridge ->
+MAVLink over loopback UDP -> the vehicle each agent embeds -> the agent's /uavK/pose and
+/uavK/achieved_rate. Real nodes on one executor (our runtime over Cyclone DDS), real sockets."""
+from __future__ import annotations
+
+import math
+import time
+
+import pytest
+
+from uav_insar_planner import load_params, model, rt, solve
+from uav_insar_planner.nodes.mavlink_bridge import MavlinkBridgeNode
+from uav_insar_planner.nodes.planner import LATCHED, PlannerNode
+from uav_insar_planner.rt.messages import msg_type
+from uav_insar_sim.agent_node import AgentNode
+from uav_insar_sim.observed_mission import ObservedMission, interpolate
+
+pytestmark = pytest.mark.timeout(60)
+Parameter = rt.parameter.Parameter
+SCENARIO = {"num_slots": 4, "slot_duration_s": 0.5}
+
+
+def test_slots_start_where_the_vehicle_crosses_their_lines():
+    params = load_params(overrides=SCENARIO)
+    mission = ObservedMission(1, params)
+    assert mission.observe((0.0, -5.0, 10.0)) == [] and mission.phase == "wait"
+    mission.set_plan((-30.0, 50.0), [1.0, 2.0, 3.0, 4.0], y_start=0.0)
+    step = params.speed * params.slot_duration_s  # 2.15 m between slot lines
+    assert mission.observe((-30.0, -0.5, 50.0)) == [] and mission.phase == "transit"
+    # one observation past two lines: both slots, each at its own crossing point
+    started = mission.observe((-29.0, step + 0.5, 52.0))
+    assert [s.slot for s in started] == [0, 1] and mission.phase == "track"
+    assert started[1].position == pytest.approx(
+        interpolate((-30.0, -0.5, 50.0), (-29.0, step + 0.5, 52.0), step))
+    expected = model.fdma_rate(2.0, model.distance_to_station(
+        *started[1].position, params.ground_station), params.comm_bandwidth_hz, params.beta_c)
+    assert started[1].rate_bps == pytest.approx(float(expected))
+    assert mission.observe((-29.0, step, 52.0)) == []  # backwards: nothing
+    assert [s.slot for s in mission.observe((-29.0, 4 * step, 52.0))] == [2, 3]
+    assert mission.phase == "done"
+
+
+def test_agents_in_mavlink_mode_fly_the_plan_through_the_bridge(rt_context):
+    params = load_params(overrides=SCENARIO)
+    plan = solve(params)
+    scenario = [Parameter(k, value=v) for k, v in SCENARIO.items()]
+    planner = PlannerNode(context=rt_context, parameter_overrides=scenario)
+    agents = [AgentNode(f"agent{k}", context=rt_context, parameter_overrides=scenario + [
+        Parameter("uav_id", value=k), Parameter("mavlink_listen", value="udpin:127.0.0.1:0"),
+        Parameter("max_speed_mps", value=20.0), Parameter("max_accel_mps2", value=10.0)])
+        for k in range(3)]
+    assert not any(a.problems for a in agents), [a.problems for a in agents]
+    ports = [a.vehicle.port for a in agents]
+    bridge = MavlinkBridgeNode(context=rt_context, parameter_overrides=[
+        Parameter("connections", value=[f"udpout:127.0.0.1:{p}" for p in ports]),
+        Parameter("capture_radius_m", value=0.2),
+        Parameter("velocity_feedforward", value=True)])
+    assert not bridge.problems, bridge.problems
+    watcher = rt.Node("watcher", context=rt_context)
+    formation, poses, rates = [], {k: [] for k in range(3)}, {k: [] for k in range(3)}
+    watcher.create_subscription(msg_type("geometry_msgs/msg/PoseArray"), "/formation",
+                                formation.append, LATCHED)
+    for k in range(3):
+        watcher.create_subscription(msg_type("geometry_msgs/msg/PoseStamped"), f"/uav{k}/pose",
+                                    lambda m, k=k: poses[k].append(m.pose.position), 100)
+        watcher.create_subscription(msg_type("std_msgs/msg/Float64"), f"/uav{k}/achieved_rate",
+                                    lambda m, k=k: rates[k].append(m.data), 100)
+    executor = rt.SingleThreadedExecutor(context=rt_context)
+    nodes = [planner, bridge, *agents, watcher]
+    for node in nodes:
+        executor.add_node(node)
+
+    def spin_until(done, timeout: float) -> bool:
+        end = time.monotonic() + timeout
+        while not done() and time.monotonic() < end:
+            executor.spin_once(timeout_sec=0.05)
+        return done()
+
+    n = params.num_slots
+    try:
+        assert spin_until(lambda: formation, 30.0), "no /formation"
+        assert spin_until(lambda: all(len(rates[k]) >= n for k in range(3)), 30.0), rates
+        spin_until(lambda: False, 0.5)
+    finally:
+        bridge.stop()
+        planner.stop()
+        for node in nodes:
+            node.destroy_node()
+    planned = model.fdma_rate(plan.p_com_w, model.distance_to_station(
+        plan.formation[:, :1], params.y_track[None, :], plan.formation[:, 1:],
+        params.ground_station), params.comm_bandwidth_hz, params.beta_c)
+    for k in range(3):
+        x_k, z_k = plan.formation[k]
+        last = poses[k][-1]
+        # the embedded vehicle, flown by the bridge, holds the planned across-track position
+        assert math.hypot(last.x - x_k, last.z - z_k) < 0.5, (k, last)
+        assert last.y > (n - 0.5) * params.speed * params.slot_duration_s  # flew the slots
+        assert len(rates[k]) == n  # one rate per slot, no more
+        # rates from where the vehicle really was: close to the planned ones
+        print("DBG", k, math.hypot(last.x - x_k, last.z - z_k), last.y, [r / p - 1 for r, p in zip(rates[k], planned[k])])
+        assert rates[k] == pytest.approx(list(planned[k]), rel=0.02), k
