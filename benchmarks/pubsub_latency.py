@@ -5,8 +5,9 @@
 The publisher (this process) sends PoseArray messages with 3 poses on /formation (reliable,
 transient_local, depth 1) stamped with the send time; a subscriber process (the same script
 with --subscriber) computes receive time minus stamp for each and reports median and p99,
-plus its VmRSS. Both run on the seam (rclpy when installed, else our runtime), in a private
-ROS domain unless ROS_DOMAIN_ID is set.
+plus its VmRSS. Then the real `planner` node is started as a process and its VmRSS / VmHWM
+are read once its first /formation has arrived. All run on the seam (rclpy when installed,
+else our runtime), in a private ROS domain unless ROS_DOMAIN_ID is set.
 """
 from __future__ import annotations
 
@@ -35,11 +36,31 @@ PoseArray = msg_type("geometry_msgs/msg/PoseArray")
 Pose = msg_type("geometry_msgs/msg/Pose")
 
 
-def vm_rss_kib() -> int:
-    for line in Path("/proc/self/status").read_text().splitlines():
-        if line.startswith("VmRSS:"):
+def vm_rss_kib(pid: int | str = "self", field: str = "VmRSS") -> int:
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith(field + ":"):
             return int(line.split()[1])
     return -1
+
+
+def planner_memory(node: Node, env: dict[str, str]) -> tuple[int, int]:
+    """(VmRSS, VmHWM) in KiB of a `planner` process once it has published its first plan."""
+    got: list[object] = []
+    node.create_subscription(PoseArray, "/formation", lambda m: got.append(m)
+                             if m.header.frame_id == "insar_track" else None, LATCHED)
+    proc = subprocess.Popen([sys.executable, "-m", "uav_insar_planner.nodes.planner"],
+                            env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        end = time.monotonic() + 60
+        while not got and time.monotonic() < end:
+            rclpy.spin_once(node, timeout_sec=0.2)
+        if not got:
+            raise SystemExit("the planner published no /formation within 60 s")
+        time.sleep(0.5)
+        return vm_rss_kib(proc.pid), vm_rss_kib(proc.pid, "VmHWM")
+    finally:
+        proc.terminate()
+        proc.wait(timeout=20)
 
 
 def subscriber(count: int) -> None:
@@ -100,6 +121,9 @@ def publisher(count: int, period: float) -> None:
               f"p99: {p99 / 1e3:.0f} us   max: {lat[-1] / 1e3:.0f} us")
         print(f"resident memory (VmRSS): publisher {pub_rss / 1024:.1f} MiB, "
               f"subscriber {result['rss_kib'] / 1024:.1f} MiB")
+        rss, hwm = planner_memory(node, env)
+        print(f"planner process (solver=global): VmRSS {rss / 1024:.1f} MiB, "
+              f"peak VmHWM {hwm / 1024:.1f} MiB")
         rclpy.shutdown()
     finally:
         if sub.poll() is None:

@@ -97,5 +97,4 @@ def test_agents_in_mavlink_mode_fly_the_plan_through_the_bridge(rt_context):
         assert last.y > (n - 0.5) * params.speed * params.slot_duration_s  # flew the slots
         assert len(rates[k]) == n  # one rate per slot, no more
         # rates from where the vehicle really was: close to the planned ones
-        print("DBG", k, math.hypot(last.x - x_k, last.z - z_k), last.y, [r / p - 1 for r, p in zip(rates[k], planned[k])])
-        assert rates[k] == pytest.approx(list(planned[k]), rel=0.02), k
+        assert rates[k] == pytest.approx(list(planned[k]), rel=0.005), k
