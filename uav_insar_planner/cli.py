@@ -48,16 +48,17 @@ def _build_parser() -> argparse.ArgumentParser:
 
     w = sub.add_parser("sweep", help="solve along one parameter for several schemes")
     w.add_argument("name", help="parameter, e.g. h_amb_min_m or rate_min_mbps[1]")
-    w.add_argument("start", type=float)
-    w.add_argument("stop", type=float)
-    w.add_argument("count", type=int)
+    w.add_argument("start", type=float, help="first value (the parameter's file unit)")
+    w.add_argument("stop", type=float, help="last value")
+    w.add_argument("count", type=int, help="number of evenly spaced values")
     _add_scenario_args(w)
-    w.add_argument("--schemes", nargs="+", choices=SCHEMES, default=list(SCHEMES))
+    w.add_argument("--schemes", nargs="+", choices=SCHEMES, default=list(SCHEMES),
+                   help="schemes to solve at each value (default: all four)")
     w.add_argument("--band", action="store_true",
                    help="also compute sigma_h's range over the bound's minimisers")
-    w.add_argument("--csv", metavar="FILE")
-    w.add_argument("--plot", metavar="FILE.png")
-    w.add_argument("--no-progress", action="store_true")
+    w.add_argument("--csv", metavar="FILE", help="write one row per (value, scheme)")
+    w.add_argument("--plot", metavar="FILE.png", help="plot as the paper's Figures 3/4")
+    w.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
 
     f = sub.add_parser("plot-formation", help="draw the across-track plane")
     _add_scenario_args(f)

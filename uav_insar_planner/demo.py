@@ -1,12 +1,22 @@
-"""`make demo` / `python -m uav_insar_planner.demo`: one whole mission, four processes.
+"""`make demo` / `python -m uav_insar_planner.demo`: one whole mission, eight processes.
 
 Starts the `planner` and three `agent` executables as separate processes, as `ros2 run` would,
 on a private ROS_DOMAIN_ID with discovery kept on this host; this process watches the topics
-like `ros2 topic echo` would. It prints /formation, each UAV's achieved rate per slot (a
-compact table), and a summary; then stops every process with SIGINT (as Ctrl-C would).
+like `ros2 topic echo` would. Unless `--no-mavlink`, it also closes the MAVLink loop: three
+`uav-insar vehicle` processes (SITL-style, sysid 2..4, airborne, on free loopback UDP ports)
+and the `mavlink_bridge` node wired to them, which flies the planned formation through real
+MAVLink bytes; the vehicles' positions come back on /uavK/mavlink/pose. The vehicles fly in
+wall-clock time (no time_scale): they gather at their start points, then fly a short pass of
+`--mavlink-pass-s` seconds along the track at speed_mps.
 
-Exit code 0 when every flown UAV reported every slot; 1 when something did not happen in time
-(no plan, a process died, slots missing); 2 for bad options.
+It prints /formation, each UAV's achieved rate per slot (a compact table), the MAVLink
+vehicles (a table), and a summary (per UAV: slots and rates; per vehicle: the across-track
+error to the planned (x_k, z_k) on the pass, max and final, and the distance flown along the
+track); then stops every process with SIGINT (as Ctrl-C would).
+
+Exit code 0 when every flown UAV reported every slot and every flown vehicle flew its pass;
+1 when something did not happen in time (no plan, a process died, slots missing, no pass);
+2 for bad options.
 """
 from __future__ import annotations
 
@@ -16,11 +26,13 @@ import os
 import random
 import shutil
 import signal
+import socket
 import subprocess
 import sys
 import threading
 import time
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -29,13 +41,22 @@ from uav_insar_planner.params import Params
 
 REPO_CONFIG = Path(__file__).resolve().parents[1] / "config" / "params.yaml"
 STOP_TIMEOUT_S = 5.0
+# MAVLink part: the bridge starts the pass once every vehicle is this close to its start point
+# (tighter than the bridge's 1 m default, so the pass shows tracking, not the approach).
+CAPTURE_RADIUS_M = 0.2
+SETTLE_S = 1.0  # after the pass, before the final error is taken
+MAVLINK_TIMEOUT_S = 30.0  # for the approach and the pass, after the agents are done
+FIRST_SYSID = 2  # vehicles sysid 2, 3, 4: the bridge's default target_sysids
+MODULES = {"planner": "uav_insar_planner.nodes.planner", "agent": "uav_insar_sim.agent_node",
+           "mavlink_bridge": "uav_insar_planner.nodes.mavlink_bridge",
+           "uav-insar": "uav_insar_planner.cli"}
 # Held while the demo prints a block (echo, table), so node log lines do not cut into it.
 PRINT_LOCK = threading.Lock()
 
 
 # --- processes ---------------------------------------------------------------------------
 def executable(name: str) -> list[str]:
-    """How to start console script `name` (`planner`, `agent`): the one installed beside this
+    """How to start console script `name` (a key of MODULES): the one installed beside this
     Python (what `ros2 run` would find), else `python -m` on its module."""
     script = Path(sys.executable).parent / name
     if script.exists():
@@ -43,8 +64,7 @@ def executable(name: str) -> list[str]:
     found = shutil.which(name)
     if found:
         return [found]
-    module = {"planner": "uav_insar_planner.nodes.planner", "agent": "uav_insar_sim.agent_node"}
-    return [sys.executable, "-m", module[name]]
+    return [sys.executable, "-m", MODULES[name]]
 
 
 def ros_env(domain_id: int) -> dict[str, str]:
@@ -60,9 +80,14 @@ def start_node(name: str, ros_args: Sequence[str], env: dict[str, str],
     """Start executable `name` with `--ros-args ros_args` in `env`. With `echo_prefix`, its
     output is printed line by line with that prefix (like ros2 launch); otherwise it is left
     in the pipe `proc.stdout` (stderr merged) for the caller to read."""
-    proc = subprocess.Popen([*executable(name), "--ros-args", *ros_args], env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                            start_new_session=True)
+    return start_process([*executable(name), "--ros-args", *ros_args], env, echo_prefix)
+
+
+def start_process(cmd: Sequence[str], env: dict[str, str],
+                  echo_prefix: str | None = None) -> subprocess.Popen:
+    """Start `cmd` in `env`, its output handled as `start_node` says."""
+    proc = subprocess.Popen(list(cmd), env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, text=True, start_new_session=True)
     if echo_prefix is not None:
         def pump() -> None:
             for line in proc.stdout:
@@ -75,20 +100,58 @@ def start_node(name: str, ros_args: Sequence[str], env: dict[str, str],
 
 def stop_node(proc: subprocess.Popen, timeout: float = STOP_TIMEOUT_S) -> int:
     """SIGINT (Ctrl-C), then SIGTERM, then SIGKILL, each given `timeout`; returns the exit code."""
+    return stop_nodes([proc], timeout)[0]
+
+
+def stop_nodes(procs: Sequence[subprocess.Popen], timeout: float = STOP_TIMEOUT_S) -> list[int]:
+    """`stop_node` for all of `procs` at once (each signal to all, then one shared wait), so
+    they shut down in parallel; returns their exit codes in order."""
     for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGKILL):
-        if proc.poll() is not None:
-            break
-        proc.send_signal(sig)
-        try:
-            proc.wait(timeout)
-        except subprocess.TimeoutExpired:
-            continue
-    return proc.wait()
+        alive = [p for p in procs if p.poll() is None]
+        for proc in alive:
+            proc.send_signal(sig)
+        end = time.monotonic() + timeout
+        for proc in alive:
+            try:
+                proc.wait(max(0.0, end - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                continue
+    return [p.wait() for p in procs]
 
 
 def free_domain_id() -> int:
     """A random domain id in 1..101 (its discovery ports stay below the ephemeral range)."""
     return random.randint(1, 101)
+
+
+def free_udp_ports(count: int) -> list[int]:
+    """`count` distinct UDP ports on 127.0.0.1 that are free now (bound together, released)."""
+    socks = [socket.socket(socket.AF_INET, socket.SOCK_DGRAM) for _ in range(count)]
+    try:
+        for sock in socks:
+            sock.bind(("127.0.0.1", 0))
+        return [sock.getsockname()[1] for sock in socks]
+    finally:
+        for sock in socks:
+            sock.close()
+
+
+def start_mavlink(ports: Sequence[int], pass_s: float, common: Sequence[str],
+                  env: dict[str, str]) -> list[subprocess.Popen]:
+    """Three vehicles (sysid 2..4, airborne 20 m up, listening on 127.0.0.1:ports[k]) and the
+    bridge sending to them; the vehicles first, so the bridge's first datagrams find them."""
+    procs = [start_process([*executable("uav-insar"), "vehicle", "--sysid",
+                            str(FIRST_SYSID + k), "--listen", f"udpin:127.0.0.1:{port}",
+                            "--airborne", "--start-ned", "0", str(3 * k), "-20"],
+                           env, f"[vehicle{FIRST_SYSID + k}]")
+             for k, port in enumerate(ports)]
+    connections = ", ".join(f"'udpout:127.0.0.1:{port}'" for port in ports)
+    sysids = ", ".join(str(FIRST_SYSID + k) for k in range(len(ports)))
+    procs.append(start_node("mavlink_bridge", [
+        *common, "-p", f"connections:=[{connections}]", "-p", f"target_sysids:=[{sysids}]",
+        "-p", "velocity_feedforward:=true", "-p", f"capture_radius_m:={CAPTURE_RADIUS_M}",
+        "-p", f"track_duration_s:={float(pass_s)}"], env, "[bridge]"))
+    return procs
 
 
 # --- watching ----------------------------------------------------------------------------
@@ -105,8 +168,59 @@ def message_yaml(msg: Any) -> str:
     return to_yaml(msg)
 
 
+Vec3 = tuple[float, float, float]
+
+
+@dataclass
+class PassRecord:
+    """One vehicle on the MAVLink pass (metres): across-track error to its planned (x_k, z_k),
+    worst and latest, and its distance along the track from y_start."""
+
+    max_error: float = 0.0
+    final_error: float = math.nan
+    along_track: float = 0.0
+
+
+class MavlinkPass:
+    """Follows the vehicles' positions (/uavK/mavlink/pose) against their start points
+    `starts[k]` = (x_k, y_start, z_k). The pass begins (`began`, monotonic time) when every
+    vehicle is within `capture_radius` of its start point, the bridge's own rule; from then
+    on every position updates that vehicle's PassRecord."""
+
+    def __init__(self, starts: dict[int, Vec3], capture_radius: float) -> None:
+        self.starts = starts
+        self.capture_radius = capture_radius
+        self.latest: dict[int, Vec3] = {}
+        self.poses = dict.fromkeys(starts, 0)
+        self.records = {k: PassRecord() for k in starts}
+        self.began: float | None = None
+
+    def update(self, k: int, position: Vec3, now: float) -> None:
+        if k not in self.starts:
+            return
+        self.latest[k] = position
+        self.poses[k] += 1
+        if self.began is None:
+            if len(self.latest) == len(self.starts) and all(
+                    math.dist(self.latest[j], start) <= self.capture_radius
+                    for j, start in self.starts.items()):
+                self.began = now
+            return
+        x, y, z = position
+        x_k, y_start, z_k = self.starts[k]
+        record = self.records[k]
+        record.final_error = math.hypot(x - x_k, z - z_k)
+        record.max_error = max(record.max_error, record.final_error)
+        record.along_track = y - y_start
+
+    def done(self, now: float, duration: float) -> bool:
+        """True once the pass began at least `duration` seconds ago."""
+        return self.began is not None and now - self.began >= duration
+
+
 class Watcher:
-    """A node that records /formation, /formation/power, rates and diagnostics."""
+    """A node that records /formation, /formation/power, rates, the planner's plan status
+    and, once `mavlink_pass` is set, the vehicles' positions."""
 
     def __init__(self, node: Any) -> None:
         from uav_insar_planner.nodes.planner import LATCHED
@@ -115,7 +229,8 @@ class Watcher:
         self.formation = None
         self.power = None
         self.rates: dict[int, list[float]] = {0: [], 1: [], 2: []}
-        self.diagnostics = None
+        self.plan_status = None
+        self.mavlink_pass: MavlinkPass | None = None
         node.create_subscription(msg_type("geometry_msgs/msg/PoseArray"), "formation",
                                  self._on_formation, LATCHED)
         node.create_subscription(msg_type("std_msgs/msg/Float64MultiArray"), "formation/power",
@@ -125,6 +240,9 @@ class Watcher:
         for k in range(3):
             node.create_subscription(msg_type("std_msgs/msg/Float64"), f"uav{k}/achieved_rate",
                                      lambda msg, k=k: self.rates[k].append(msg.data), 100)
+            node.create_subscription(msg_type("geometry_msgs/msg/PoseStamped"),
+                                     f"uav{k}/mavlink/pose",
+                                     lambda msg, k=k: self._on_mavlink_pose(k, msg), 100)
 
     def _on_formation(self, msg) -> None:
         self.formation = msg
@@ -133,13 +251,20 @@ class Watcher:
         self.power = msg
 
     def _on_diagnostics(self, msg) -> None:
-        self.diagnostics = msg
+        # The bridge publishes on /diagnostics too: keep the planner's plan status only.
+        for status in msg.status:
+            if status.name == PLAN_STATUS_NAME:
+                self.plan_status = status
+
+    def _on_mavlink_pose(self, k: int, msg) -> None:
+        if self.mavlink_pass is not None:
+            p = msg.pose.position
+            self.mavlink_pass.update(k, (p.x, p.y, p.z), time.monotonic())
 
     def plan_failed(self) -> bool:
         """True once /diagnostics reports the plan as ERROR (infeasible or solve failed)."""
-        return self.diagnostics is not None and any(
-            s.name == PLAN_STATUS_NAME and s.message and level_of(s) == ERROR
-            for s in self.diagnostics.status)
+        s = self.plan_status
+        return s is not None and bool(s.message) and level_of(s) == ERROR
 
     @property
     def num_slots(self) -> int:
@@ -182,6 +307,18 @@ def rate_table(rates: dict[int, list[float]], uavs: Sequence[int],
     return rows
 
 
+def mavlink_table(mavlink_pass: MavlinkPass, ports: Sequence[int]) -> list[str]:
+    """One line per vehicle: sysid, endpoint, positions received, planned (x_k, z_k) and the
+    last position, all in the track frame."""
+    rows = ["  uav   sysid  vehicle endpoint         poses   target x, z      last x, y, z"]
+    for k, (x_k, _, z_k) in mavlink_pass.starts.items():
+        last = mavlink_pass.latest.get(k)
+        where = "-" if last is None else " ".join(f"{c:8.3f}" for c in last)
+        rows.append(f"  uav{k}  {FIRST_SYSID + k:5d}  udpin:127.0.0.1:{ports[k]:<6d}  "
+                    f"{mavlink_pass.poses[k]:5d}  {x_k:8.3f} {z_k:7.3f}  {where}")
+    return rows
+
+
 def run(args: argparse.Namespace) -> int:
     from uav_insar_planner.nodes.planner_report import rate_tolerance_bps
     from uav_insar_planner.params import ParamError, load_params, parse_override
@@ -216,43 +353,65 @@ def run(args: argparse.Namespace) -> int:
                                    f"position_noise_std_m:={args.noise_std}",
                                    "-r", f"__node:=agent{k}"], env, f"[agent{k}]")
               for k in range(3)]
+    ports: list[int] = []
+    if not args.no_mavlink:
+        ports = ([args.mavlink_base_port + 10 * k for k in range(3)] if args.mavlink_base_port
+                 else free_udp_ports(3))
+        print(f"demo: MAVLink vehicles sysid {FIRST_SYSID}..{FIRST_SYSID + 2} on UDP ports "
+              f"{', '.join(map(str, ports))}, pass of {args.mavlink_pass_s:g} s", flush=True)
+        procs += start_mavlink(ports, args.mavlink_pass_s, common, env)
     code = 1
     try:
         if not spin_until(executor, lambda: (watcher.formation and watcher.power)
                           or watcher.plan_failed(), 40.0, procs) or watcher.plan_failed():
             print("demo: no plan on /formation (see the planner's log above)", flush=True)
             return 1
+        plan_time = time.monotonic()
         with PRINT_LOCK:
             print("\n$ ros2 topic echo /formation  (first message)")
             print(message_yaml(watcher.formation) + "---", flush=True)
         uavs, n_slots = watcher.flown(), watcher.num_slots
+        if not args.no_mavlink:
+            starts = {k: (p.x, p.y, p.z) for k, p in
+                      ((k, watcher.formation.poses[k].position) for k in uavs)}
+            watcher.mavlink_pass = MavlinkPass(starts, CAPTURE_RADIUS_M)
         mission_s = n_slots * params.slot_duration_s + 60.0  # + transit and run-up
         complete = spin_until(executor, lambda: all(len(watcher.rates[k]) >= n_slots
                                                     for k in uavs),
                               mission_s / args.time_scale + 10.0, procs)
+        flew_pass = args.no_mavlink or spin_until(
+            executor, lambda: watcher.mavlink_pass.done(time.monotonic(),
+                                                        args.mavlink_pass_s + SETTLE_S),
+            MAVLINK_TIMEOUT_S, procs)
         tol = rate_tolerance_bps(params.rate_min_bps)
         with PRINT_LOCK:
             print("\nachieved rate per slot [Mbit/s], slots first-last ('!' = below R_min)")
             print("\n".join(rate_table(watcher.rates, uavs, params.rate_min_bps, tol)))
-            print(summary(watcher, params, uavs, tol), flush=True)
-        code = 0 if complete else 1
+            if watcher.mavlink_pass is not None:
+                print("\nMAVLink vehicles (track frame [m]; positions from /uavK/mavlink/pose)")
+                print("\n".join(mavlink_table(watcher.mavlink_pass, ports)))
+            print(summary(watcher, params, uavs, tol, plan_time), flush=True)
         if not complete:
             print("demo: the mission did not complete in time", flush=True)
+        if not flew_pass:
+            print("demo: the MAVLink vehicles did not fly their pass in time", flush=True)
+        code = 0 if complete and flew_pass else 1
         return code
     finally:
-        codes = [stop_node(p) for p in procs]
+        codes = stop_nodes(procs)
         node.destroy_node()
         rclpy.try_shutdown()
-        print(f"demo: stopped planner and agents (exit codes {codes})", flush=True)
+        what = "planner and agents" if args.no_mavlink else "planner, agents, vehicles, bridge"
+        print(f"demo: stopped {what} (exit codes {codes})", flush=True)
 
 
-def summary(watcher: Watcher, params: Params, uavs: Sequence[int], tol: float) -> str:
-    """The plan and, per UAV, slots flown, rate met or missed and the worst margin."""
+def summary(watcher: Watcher, params: Params, uavs: Sequence[int], tol: float,
+            plan_time: float) -> str:
+    """The plan and, per UAV, slots flown, rate met or missed and the worst margin; per
+    MAVLink vehicle, its across-track error on the pass and its distance along the track."""
     lines = ["\nsummary"]
-    if watcher.diagnostics is not None:
-        for status in watcher.diagnostics.status:
-            if status.name == PLAN_STATUS_NAME:
-                lines.append(f"  plan: {status.message}")
+    if watcher.plan_status is not None:
+        lines.append(f"  plan: {watcher.plan_status.message}")
     for k in uavs:
         p = watcher.formation.poses[k].position
         rates = watcher.rates[k]
@@ -261,29 +420,48 @@ def summary(watcher: Watcher, params: Params, uavs: Sequence[int], tol: float) -
         verdict = "rate met in every slot" if rates and not missed else f"missed in {missed}"
         lines.append(f"  uav{k}: x={p.x:8.3f} m z={p.z:7.3f} m  {len(rates)}/{watcher.num_slots}"
                      f" slots, {verdict}, worst margin {worst:+.3g} bit/s")
+    mp = watcher.mavlink_pass
+    if mp is not None and mp.began is None:
+        lines.append("  MAVLink: the vehicles never gathered at their start points")
+    elif mp is not None:
+        lines.append(f"  MAVLink: formation established {mp.began - plan_time:.1f} s after the "
+                     f"plan (all within {mp.capture_radius:g} m), then the pass")
+        for k, r in mp.records.items():
+            lines.append(f"  uav{k} via MAVLink: across-track error max {r.max_error:.3f} m, "
+                         f"final {r.final_error:.3f} m; flew {r.along_track:.1f} m along track")
     return "\n".join(lines)
 
 
 def main(argv: list[str] | None = None) -> int:
     """Parse the options and fly the demo; returns the exit code (see the module docstring)."""
     parser = argparse.ArgumentParser(prog="python -m uav_insar_planner.demo",
-                                     description="Fly one mission: planner + three agents.")
+                                     description="Fly one mission: planner + three agents, "
+                                                 "and the MAVLink bridge + three vehicles.")
     parser.add_argument("--params-file", type=Path,
                         default=REPO_CONFIG if REPO_CONFIG.exists() else None,
                         help="ROS 2 params file for every node (default: config/params.yaml)")
     parser.add_argument("--num-slots", type=int, default=0,
                         help="override num_slots (default: the params file's)")
     parser.add_argument("--time-scale", type=float, default=20.0,
-                        help="mission seconds per wall second (default 20)")
+                        help="agents' mission seconds per wall second (default 20)")
     parser.add_argument("--noise-std", type=float, default=0.0,
                         help="agents' position disturbance std per axis [m] (default 0)")
     parser.add_argument("-p", "--param", action="append", default=[], metavar="NAME:=VALUE",
                         help="a parameter for every node, e.g. -p solver:=paper-ao")
     parser.add_argument("--domain-id", type=int, default=None,
                         help="ROS_DOMAIN_ID to use (default: a random one in 1..101)")
+    parser.add_argument("--no-mavlink", action="store_true",
+                        help="skip the MAVLink part (bridge and vehicles)")
+    parser.add_argument("--mavlink-pass-s", type=float, default=5.0,
+                        help="how long the vehicles fly along the track, wall clock (default 5)")
+    parser.add_argument("--mavlink-base-port", type=int, default=0,
+                        help="vehicles listen on UDP PORT, PORT+10, PORT+20 (default: free "
+                             "ports chosen by the OS)")
     args = parser.parse_args(argv)
     if args.time_scale <= 0 or args.noise_std < 0:
         parser.error("--time-scale must be > 0 and --noise-std >= 0")
+    if not args.mavlink_pass_s > 0 or not 0 <= args.mavlink_base_port <= 65515:
+        parser.error("--mavlink-pass-s must be > 0 and --mavlink-base-port in 0..65515")
     return run(args)
 
 

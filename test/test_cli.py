@@ -1,0 +1,83 @@
+"""`uav-insar` as a user runs it: exit codes, JSON shape, sweep CSV and plots."""
+import csv
+import json
+import subprocess
+import sys
+
+import numpy as np
+
+from uav_insar_planner.params import default_params
+from uav_insar_planner.solver import solve
+
+CLI = [sys.executable, "-m", "uav_insar_planner.cli"]
+
+
+def run(*args, timeout=120):
+    return subprocess.run([*CLI, *args], capture_output=True, text=True, timeout=timeout)
+
+
+def test_solve_json_matches_library_plan():
+    proc = run("solve", "--json")
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    for key in ("feasible", "scheme", "sigma_h_m", "sigma_h_bound_m", "formation", "p_com_w",
+                "iterations", "solve_time_s", "constraints", "lower_bound_m",
+                "optimality_gap"):
+        assert key in out
+    assert out["feasible"] and out["scheme"] == "proposed"
+    assert set(out["constraints"]) == {f"C{i}" for i in range(1, 12)}
+    assert all(c["ok"] for c in out["constraints"].values())
+    assert len(out["p_com_w"]) == 3 and all(len(row) == 80 for row in out["p_com_w"])
+    plan = solve(default_params())
+    got = np.array([[out["formation"][f"uav{k}"]["x_m"], out["formation"][f"uav{k}"]["z_m"]]
+                    for k in range(3)])
+    np.testing.assert_allclose(got, plan.formation, rtol=1e-9)
+    assert out["sigma_h_m"] <= out["sigma_h_bound_m"]
+
+
+def test_solve_text_lists_every_constraint_and_scheme_option():
+    proc = run("solve", "--scheme", "single-baseline", "--set", "h_amb_min_m=1.0")
+    assert proc.returncode == 0, proc.stderr
+    assert "uav2  (not flown by this scheme)" in proc.stdout
+    for i in range(1, 12):
+        assert f"  C{i} " in proc.stdout
+
+
+def test_infeasible_exit_3_with_blocking_constraints():
+    proc = run("solve", "--json", "--set", "z_max_m=30")
+    assert proc.returncode == 3
+    out = json.loads(proc.stdout)
+    assert not out["feasible"]
+    assert out["blocking_constraints"] == ["C1", "C5"]
+
+
+def test_bad_choice_exit_2():
+    proc = run("solve", "--scheme", "best")
+    assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1
+
+
+def test_sweep_csv_and_plot(tmp_path):
+    csv_path, png = tmp_path / "s.csv", tmp_path / "s.png"
+    proc = run("sweep", "rate_min_mbps[1]", "17", "18.5", "4", "--schemes", "proposed",
+               "static-power", "--set", "p_com_max_db=9", "--csv", str(csv_path),
+               "--plot", str(png), "--no-progress")
+    assert proc.returncode == 0, proc.stderr
+    rows = list(csv.DictReader(line for line in csv_path.read_text().splitlines()
+                               if not line.startswith("#")))
+    assert len(rows) == 8
+    feas = {(float(r["value"]), r["scheme"]): r["feasible"] == "True" for r in rows}
+    assert feas[(17.0, "static-power")] and not feas[(17.5, "static-power")]
+    assert not feas[(18.5, "proposed")]
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_sweep_rejects_unknown_name():
+    proc = run("sweep", "rate_min_mbps", "1", "2", "3")
+    assert proc.returncode == 2 and "needs an index" in proc.stderr
+
+
+def test_plot_formation(tmp_path):
+    png = tmp_path / "f.png"
+    proc = run("plot-formation", "--out", str(png))
+    assert proc.returncode == 0, proc.stderr
+    assert png.stat().st_size > 10_000
