@@ -98,3 +98,13 @@ def test_agents_in_mavlink_mode_fly_the_plan_through_the_bridge(rt_context):
         assert len(rates[k]) == n  # one rate per slot, no more
         # rates from where the vehicle really was: close to the planned ones
         assert rates[k] == pytest.approx(list(planned[k]), rel=0.005), k
+
+
+def test_a_bad_mavlink_listen_is_one_problem_line(rt_context):
+    agent = AgentNode("agent", context=rt_context, parameter_overrides=[
+        Parameter("mavlink_listen", value="nowhere")])
+    try:
+        assert len(agent.problems) == 1 and agent.problems[0].startswith("mavlink_listen:")
+        assert agent.vehicle is None
+    finally:
+        agent.destroy_node()

@@ -176,11 +176,12 @@ def test_replan_service_answers_at_once_and_republishes(bringup):
 
 
 def test_infeasible_plan_is_an_error_and_not_published(bringup):
-    # 5 Gbit/s on a 1 GHz channel needs far more than P_com^max at any distance (C10).
+    # 5 Gbit/s on a 1 GHz channel needs far more than P_com^max at any distance: C9 and C10
+    # cannot hold together.
     b = bringup(agents=False, scenario={**SCENARIO, "rate_min_mbps": [5000.0, 16.95, 1.0]})
     assert b.spin_until(lambda: b.diagnostics, 30.0)
     plan_status = statuses(b.diagnostics[0])["planner: plan"]
     assert plan_status.level == 2 and "not published" in plan_status.message
-    assert "blocked by C10" in plan_status.message
+    assert "blocked by C9, C10" in plan_status.message
     b.spin_until(lambda: False, 0.5)
     assert b.formations == [] and b.powers == []

@@ -44,7 +44,7 @@ STOP_TIMEOUT_S = 5.0
 # MAVLink part: the bridge starts the pass once every vehicle is this close to its start point
 # (tighter than the bridge's 1 m default, so the pass shows tracking, not the approach).
 CAPTURE_RADIUS_M = 0.2
-SETTLE_S = 1.0  # after the pass, before the final error is taken
+SETTLE_S = 3.0  # after the pass: the vehicles brake past its end and return; then the final error
 MAVLINK_TIMEOUT_S = 30.0  # for the approach and the pass, after the agents are done
 FIRST_SYSID = 2  # vehicles sysid 2, 3, 4: the bridge's default target_sysids
 MODULES = {"planner": "uav_insar_planner.nodes.planner", "agent": "uav_insar_sim.agent_node",
@@ -390,7 +390,8 @@ def run(args: argparse.Namespace) -> int:
             if watcher.mavlink_pass is not None:
                 print("\nMAVLink vehicles (track frame [m]; positions from /uavK/mavlink/pose)")
                 print("\n".join(mavlink_table(watcher.mavlink_pass, ports)))
-            print(summary(watcher, params, uavs, tol, plan_time), flush=True)
+            print(summary(watcher, params, uavs, tol, plan_time,
+                          args.mavlink_pass_s * params.speed), flush=True)
         if not complete:
             print("demo: the mission did not complete in time", flush=True)
         if not flew_pass:
@@ -406,9 +407,10 @@ def run(args: argparse.Namespace) -> int:
 
 
 def summary(watcher: Watcher, params: Params, uavs: Sequence[int], tol: float,
-            plan_time: float) -> str:
+            plan_time: float, pass_m: float) -> str:
     """The plan and, per UAV, slots flown, rate met or missed and the worst margin; per
-    MAVLink vehicle, its across-track error on the pass and its distance along the track."""
+    MAVLink vehicle, its across-track error on the pass and its distance along the track
+    (the pass is `pass_m` long)."""
     lines = ["\nsummary"]
     if watcher.plan_status is not None:
         lines.append(f"  plan: {watcher.plan_status.message}")
@@ -428,7 +430,8 @@ def summary(watcher: Watcher, params: Params, uavs: Sequence[int], tol: float,
                      f"plan (all within {mp.capture_radius:g} m), then the pass")
         for k, r in mp.records.items():
             lines.append(f"  uav{k} via MAVLink: across-track error max {r.max_error:.3f} m, "
-                         f"final {r.final_error:.3f} m; flew {r.along_track:.1f} m along track")
+                         f"final {r.final_error:.3f} m; flew {r.along_track:.1f} m along track "
+                         f"(pass {pass_m:.1f} m)")
     return "\n".join(lines)
 
 

@@ -1,0 +1,48 @@
+"""`make demo` end to end: the demo module as a user runs it (a subprocess that starts the
+planner, three agents, three MAVLink vehicles and the bridge as processes of their own)."""
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+
+import pytest
+from conftest import REPO
+
+pytestmark = pytest.mark.timeout(90)
+MAVLINK_LINE = re.compile(r"uav(\d) via MAVLink: across-track error max ([\d.]+) m, "
+                          r"final ([\d.]+) m; flew ([-\d.]+) m along track \(pass ([\d.]+) m\)")
+
+
+def test_demo_flies_the_whole_chain_and_exits_0(ros_domain):
+    proc = subprocess.run(
+        [sys.executable, "-m", "uav_insar_planner.demo", "--num-slots", "10",
+         "--time-scale", "20", "--mavlink-pass-s", "1", "--domain-id", str(ros_domain)],
+        cwd=REPO, capture_output=True, text=True, timeout=60)
+    out = proc.stdout
+    assert proc.returncode == 0, out + proc.stderr
+    summary = out[out.index("\nsummary"):]
+    assert summary.count("10/10 slots, rate met in every slot") == 3, summary
+    vehicles = {int(m[1]): m for m in MAVLINK_LINE.finditer(summary)}
+    assert sorted(vehicles) == [0, 1, 2], summary
+    for m in vehicles.values():
+        assert float(m[2]) < 0.5 and float(m[3]) < 0.5, m[0]  # across-track, on the pass
+        assert float(m[4]) == pytest.approx(float(m[5]), abs=0.5), m[0]  # flew the pass
+    assert re.search(r"demo: stopped .* \(exit codes \[(0, ){7}0\]\)", out), out[-500:]
+
+
+def test_demo_without_mavlink_starts_no_bridge(ros_domain):
+    proc = subprocess.run(
+        [sys.executable, "-m", "uav_insar_planner.demo", "--num-slots", "5",
+         "--time-scale", "40", "--no-mavlink", "--domain-id", str(ros_domain)],
+        cwd=REPO, capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "[bridge]" not in proc.stdout and "MAVLink" not in proc.stdout
+    assert "(exit codes [0, 0, 0, 0])" in proc.stdout
+
+
+def test_bad_demo_option_exits_2():
+    proc = subprocess.run([sys.executable, "-m", "uav_insar_planner.demo",
+                           "--mavlink-pass-s", "0"], cwd=REPO, capture_output=True, text=True,
+                          timeout=30)
+    assert proc.returncode == 2 and "--mavlink-pass-s" in proc.stderr
