@@ -25,18 +25,13 @@ import sys
 import time
 
 from uav_insar_planner.mavlink.frames import TrackFrame
+from uav_insar_planner.nodes.common import LATCHED, run_node
 from uav_insar_planner.nodes.planner_report import rate_tolerance_bps
 from uav_insar_planner.nodes.ros_params import check_scalars, declare_specs, spec_values
 from uav_insar_planner.params import SPEC_BY_NAME, ParamError, ParamSpec, params_from_mapping
 from uav_insar_planner.seam import (
-    DurabilityPolicy,
-    ExternalShutdownException,
-    HistoryPolicy,
     Node,
-    QoSProfile,
-    ReliabilityPolicy,
     msg_type,
-    rclpy,
 )
 from uav_insar_sim.mission import Mission, home_position
 from uav_insar_sim.observed_mission import ObservedMission
@@ -67,16 +62,12 @@ MAVLINK_SPECS = (
 SCENARIO_NAMES = ("num_slots", "slot_duration_s", "speed_mps", "ground_station_m",
                   "comm_bandwidth_hz", "ref_snr_db", "rate_min_mbps")
 SCENARIO_SPECS = tuple(SPEC_BY_NAME[n] for n in SCENARIO_NAMES)
-LATCHED = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
-                     reliability=ReliabilityPolicy.RELIABLE,
-                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
 TICK_PERIOD_S = 0.05  # wall clock; the mission clock advances time_scale times faster
 FRAME_ID = "insar_track"
 # MAVLink mode: the embedded vehicle starts airborne (no arming needed) above the agent's home.
 MAVLINK_START_HEIGHT_M = 10.0
 # Its local NED frame is the bridge's default one (track_bearing_deg 0, origin_ned_m 0).
 MAVLINK_FRAME = TrackFrame()
-EXIT_BAD_PARAMS = 2
 
 
 class AgentNode(Node):
@@ -217,22 +208,7 @@ def embedded_vehicle(own: dict) -> SimVehicle:
 
 def main(args: list[str] | None = None) -> int:
     """Run one agent until Ctrl-C / SIGTERM; exit code 2 when the parameters are invalid."""
-    rclpy.init(args=args)
-    node = AgentNode()
-    code = 0
-    try:
-        if node.problems:
-            for line in node.problems:
-                node.get_logger().error(line)
-            code = EXIT_BAD_PARAMS
-        else:
-            rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
-    return code
+    return run_node(AgentNode, args)
 
 
 if __name__ == "__main__":

@@ -22,16 +22,11 @@ import sys
 from typing import Any
 
 from uav_insar_planner.mavlink.bridge import Bridge, BridgeConfig, VehicleStatus
+from uav_insar_planner.nodes.common import LATCHED, run_node
 from uav_insar_planner.seam import (
-    DurabilityPolicy,
-    ExternalShutdownException,
-    HistoryPolicy,
     Node,
     ParameterDescriptor,
-    QoSProfile,
-    ReliabilityPolicy,
     msg_type,
-    rclpy,
 )
 
 PoseArray = msg_type("geometry_msgs/msg/PoseArray")
@@ -41,12 +36,8 @@ DiagnosticStatus = msg_type("diagnostic_msgs/msg/DiagnosticStatus")
 KeyValue = msg_type("diagnostic_msgs/msg/KeyValue")
 
 FRAME_ID = "insar_track"
-LATCHED = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
-                     reliability=ReliabilityPolicy.RELIABLE,
-                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
 POSE_PERIOD_S = 0.05  # poll the bridge at 20 Hz: vehicles report at ~10 Hz
 DIAGNOSTICS_PERIOD_S = 1.0
-EXIT_BAD_PARAMS = 2
 
 #: (name, default, description); defaults pair with `uav-insar vehicle --sysid 2..4
 #: --listen udpin:127.0.0.1:14552/14562/14572`.
@@ -199,23 +190,7 @@ class MavlinkBridgeNode(Node):
 
 def main(args: list[str] | None = None) -> int:
     """Run the bridge until Ctrl-C / SIGTERM; exit code 2 when the parameters are invalid."""
-    rclpy.init(args=args)
-    node = MavlinkBridgeNode()
-    code = 0
-    try:
-        if node.problems:
-            for line in node.problems:
-                node.get_logger().error(line)
-            code = EXIT_BAD_PARAMS
-        else:
-            rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        node.stop()
-        node.destroy_node()
-        rclpy.try_shutdown()
-    return code
+    return run_node(MavlinkBridgeNode, args)
 
 
 if __name__ == "__main__":

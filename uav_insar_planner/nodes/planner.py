@@ -19,6 +19,7 @@ import sys
 import threading
 
 from uav_insar_planner.nodes import planner_report as report
+from uav_insar_planner.nodes.common import LATCHED, run_node
 from uav_insar_planner.nodes.ros_params import declare_specs, spec_values
 from uav_insar_planner.nodes.solve_worker import SolveWorker
 from uav_insar_planner.params import (
@@ -30,12 +31,7 @@ from uav_insar_planner.params import (
 )
 from uav_insar_planner.plan import Plan
 from uav_insar_planner.seam import (
-    DurabilityPolicy,
-    ExternalShutdownException,
-    HistoryPolicy,
     Node,
-    QoSProfile,
-    ReliabilityPolicy,
     SetParametersResult,
     msg_type,
     rclpy,
@@ -55,11 +51,7 @@ DiagnosticStatus = msg_type("diagnostic_msgs/msg/DiagnosticStatus")
 KeyValue = msg_type("diagnostic_msgs/msg/KeyValue")
 Trigger = msg_type("std_srvs/srv/Trigger")
 
-LATCHED = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
-                     reliability=ReliabilityPolicy.RELIABLE,
-                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
 DIAGNOSTICS_PERIOD_S = 1.0
-EXIT_BAD_PARAMS = 2
 
 
 class PlannerNode(Node):
@@ -194,23 +186,7 @@ class PlannerNode(Node):
 
 def main(args: list[str] | None = None) -> int:
     """Run the planner until Ctrl-C / SIGTERM; exit code 2 when the parameters are invalid."""
-    rclpy.init(args=args)
-    node = PlannerNode()
-    code = 0
-    try:
-        if node.problems:
-            for line in node.problems:
-                node.get_logger().error(line)
-            code = EXIT_BAD_PARAMS
-        else:
-            rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        node.stop()
-        node.destroy_node()
-        rclpy.try_shutdown()
-    return code
+    return run_node(PlannerNode, args)
 
 
 if __name__ == "__main__":
