@@ -81,3 +81,18 @@ def test_plot_formation(tmp_path):
     proc = run("plot-formation", "--out", str(png))
     assert proc.returncode == 0, proc.stderr
     assert png.stat().st_size > 10_000
+
+
+def test_sweep_band_brackets_the_paper_solution_set(tmp_path):
+    """The exact optimum is the least sigma_h of all; the paper's solution set (formations
+    reaching the least bound) can only do as well or worse, and reaches the same bound."""
+    csv_path = tmp_path / "b.csv"
+    proc = run("sweep", "h_amb_min_m", "0.9", "1.2", "2", "--schemes", "proposed", "--band",
+               "--csv", str(csv_path), "--no-progress")
+    assert proc.returncode == 0, proc.stderr
+    rows = list(csv.DictReader(line for line in csv_path.read_text().splitlines()
+                               if not line.startswith("#")))
+    for r in rows:
+        sigma, lo, hi = float(r["sigma_h_m"]), float(r["band_lo_m"]), float(r["band_hi_m"])
+        assert sigma <= lo * (1 + 1e-3) and lo < hi
+        assert float(r["bound_opt_m"]) <= float(r["sigma_h_bound_m"]) * (1 + 1e-9)

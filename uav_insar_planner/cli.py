@@ -55,7 +55,8 @@ def _build_parser() -> argparse.ArgumentParser:
     w.add_argument("--schemes", nargs="+", choices=SCHEMES, default=list(SCHEMES),
                    help="schemes to solve at each value (default: all four)")
     w.add_argument("--band", action="store_true",
-                   help="also compute sigma_h's range over the bound's minimisers")
+                   help="also show the bound's optimum and sigma_h's range over the bound's "
+                   "minimisers (the paper's solution set)")
     w.add_argument("--csv", metavar="FILE", help="write one row per (value, scheme)")
     w.add_argument("--plot", metavar="FILE.png", help="plot as the paper's Figures 3/4")
     w.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
@@ -107,10 +108,14 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     rows = run_sweep(params, args.name, values, args.schemes, band=args.band,
                      progress=bar.update)
     bar.close()
-    print(f"{'value':>10}  {'scheme':<16} {'sigma_h_m':>10} {'bound_m':>10}  blocking")
+    extra = f" {'bound_opt':>10} {'band_lo':>9} {'band_hi':>9}" if args.band else ""
+    print(f"{'value':>10}  {'scheme':<16} {'sigma_h_m':>10} {'bound_m':>10}{extra}  blocking")
     for r in rows:
         sh = f"{r.sigma_h_m:10.5f}" if r.feasible else f"{'infeas.':>10}"
         bd = f"{r.sigma_h_bound_m:10.5f}" if r.feasible else f"{'':>10}"
+        if args.band:
+            bd += (f" {r.bound_opt_m:10.5f} {r.band_lo_m:9.5f} {r.band_hi_m:9.5f}"
+                   if r.feasible else " " * 31)
         print(f"{r.value:10.4g}  {r.scheme:<16} {sh} {bd}  {r.blocking}")
     if "proposed" in args.schemes and len(args.schemes) > 1:
         for scheme, g in sorted(gains(rows).items()):

@@ -45,6 +45,9 @@ def plot_sweep(rows: Sequence[SweepRow], name: str, path: str | Path) -> None:
             ax.plot([r.value for r in ok], [r.sigma_h_bound_m for r in ok], "--", color=color,
                     label=label + r": bound $\overline{\sigma_h}$")
         band = [r for r in ok if np.isfinite(r.band_lo_m)]
+        if band and scheme == "proposed":
+            ax.plot([r.value for r in band], [r.bound_opt_m for r in band], ":", color=color,
+                    label=label + ": least bound (paper's optimum)")
         if band:
             ax.fill_between([r.value for r in band], [r.band_lo_m for r in band],
                             [r.band_hi_m for r in band], color=color, alpha=0.15,

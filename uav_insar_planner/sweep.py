@@ -17,14 +17,16 @@ _INDEXED = re.compile(r"^(?P<name>[a-z_0-9]+)(?:\[(?P<index>\d+)\])?$")
 
 @dataclass
 class SweepRow:
-    """One (value, scheme) point. band_lo/hi: sigma_h over the bound's minimisers (NaN when
-    not computed)."""
+    """One (value, scheme) point. With `band`: bound_opt_m, the least Proposition-1 bound (the
+    paper's optimum), and band_lo/hi_m, the range of sigma_h over the formations reaching it
+    (the paper's solution set); NaN when not computed."""
 
     value: float
     scheme: str
     feasible: bool
     sigma_h_m: float
     sigma_h_bound_m: float
+    bound_opt_m: float
     band_lo_m: float
     band_hi_m: float
     optimality_gap: float
@@ -68,13 +70,15 @@ def run_sweep(params: Params, name: str, values: Iterable[float], schemes: Seque
         p = with_value(params, base, index, float(value))
         for scheme in schemes:
             plan = solve(p, scheme=scheme, objective=objective, solver=solver)
-            lo = hi = float("nan")
+            bound_opt = lo = hi = float("nan")
             if band and plan.feasible:
                 from uav_insar_planner.solver.global_opt import bound_minimizer_band
 
+                bound_opt = solve(p, scheme=scheme, objective="bound",
+                                  solver="global").sigma_h_bound_m
                 lo, hi = bound_minimizer_band(p, scheme)
             rows.append(SweepRow(float(value), scheme, plan.feasible, plan.sigma_h_m,
-                                 plan.sigma_h_bound_m, lo, hi, plan.optimality_gap,
+                                 plan.sigma_h_bound_m, bound_opt, lo, hi, plan.optimality_gap,
                                  plan.solve_time_s, " ".join(plan.blocking_constraints)))
             if progress:
                 progress()
