@@ -2,9 +2,9 @@
 
 `blocking_sets` gives the smallest family sets whose removal alone makes the scenario feasible
 (which relaxations would help), proven with the branch and bound of certificate.py in
-feasibility mode. The families that cannot hold together (an irreducible infeasible set) come
-from `ao_start.blocking_families`, whose closed-form ray intervals on a grid stay fast when
-few families are left, where this search's box becomes huge.
+feasibility mode. `irreducible_set` gives the families that cannot hold together (an irreducible
+infeasible set), deciding each trial with the same search and falling back to the closed-form
+ray grid of ao_start when few families are left and the search's box becomes huge.
 C2 is structural (it defines the master's ray) and is never dropped; a fixed master off C2 is
 reported by the solver directly.
 """
@@ -39,3 +39,33 @@ def blocking_sets(p: Params, scheme: str, max_size: int = 3) -> tuple[list[str],
                 return found[0], found
     return [], []
 
+
+
+def feasible_families(p: Params, scheme: str, on: frozenset[str],
+                      max_nodes: int = 2_000) -> bool:
+    """Is (P) with only the families `on` (plus C2) feasible? The branch and bound decides
+    most cases in milliseconds, both ways; when its node budget runs out undecided (few
+    families left make its box huge), the closed-form ray grid of ao_start decides."""
+    from uav_insar_planner.solver.ao_start import find_start
+
+    sc = rays.make_scenario(p, scheme, "bound", frozenset(FAMILIES) - on)
+    with np.errstate(all="ignore"):
+        res = certificate.search(sc, max_nodes=max_nodes, stop_when_feasible=True)
+    if res.point is not None:
+        return True
+    if res.exhausted:
+        return False
+    return find_start(p, scheme, on | {"C2"}, first=True) is not None
+
+
+def irreducible_set(p: Params, scheme: str) -> list[str]:
+    """Deletion filter (Chinneck) from C11 down: drop each family in turn and keep it dropped
+    while the rest stays infeasible. What is left cannot hold together, and each member is
+    needed for that; from C11 down, so geometric families are kept when both a geometric and
+    a communication explanation exist."""
+    keep = set(FAMILIES)
+    for family in sorted(FAMILIES, key=lambda n: -int(n[1:])):
+        trial = keep - {family}
+        if not feasible_families(p, scheme, frozenset(trial)):
+            keep = trial
+    return sorted(keep, key=lambda n: int(n[1:]))

@@ -6,8 +6,7 @@ slaves sit at the top of their feasible ranges, or one steps down to keep C4 bet
 runs the branch and bound of certificate.py, whose smallest open or closed box bound is a proven
 lower bound on the objective over the feasible set. An empty search (every box proven empty)
 proves infeasibility; the blocking constraint families are then an irreducible infeasible set
-(ao_start.blocking_families), and the message adds the smallest sets whose removal alone makes
-it feasible (blocking.py).
+and the message adds the smallest sets whose removal alone makes it feasible (blocking.py).
 
 `bound_minimizer_band` gives the spread of the true sigma_h over the minimisers of
 Proposition 1's bound, the paper's solution set (see its docstring).
@@ -21,7 +20,6 @@ import numpy as np
 from uav_insar_planner import model
 from uav_insar_planner.params import Params
 from uav_insar_planner.solver import blocking, certificate, power, rays
-from uav_insar_planner.solver.ao_start import blocking_families
 from uav_insar_planner.solver.result import SolverResult
 
 # Branch and bound closes a box when its bound is within REL_GAP of the incumbent, so the
@@ -64,7 +62,7 @@ def solve_global(p: Params, scheme: str, objective: str) -> SolverResult:
     sc = rays.make_scenario(p, scheme, objective)
     res = certificate.search(sc, rel_gap=REL_GAP)
     if res.point is None:
-        block = blocking_families(p, scheme)
+        block = blocking.irreducible_set(p, scheme)
         _, fixes = blocking.blocking_sets(p, scheme)
         relax = ("; relaxing any of these alone makes it feasible: "
                  + ", ".join("+".join(s) for s in fixes)) if fixes else ""
