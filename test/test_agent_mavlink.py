@@ -40,21 +40,27 @@ def test_slots_start_where_the_vehicle_crosses_their_lines():
     assert mission.phase == "done"
 
 
-def test_agents_in_mavlink_mode_fly_the_plan_through_the_bridge(rt_context):
+@pytest.mark.parametrize("bearing_deg, origin", [(0.0, [0.0, 0.0, 0.0]),
+                                                 (90.0, [5.0, -3.0, 0.0])])
+def test_agents_in_mavlink_mode_fly_the_plan_through_the_bridge(rt_context, bearing_deg,
+                                                                origin):
+    """Also with a rotated, offset track frame, given alike to the bridge and the agents."""
     params = load_params(overrides=SCENARIO)
     plan = solve(params)
+    frame = [Parameter("track_bearing_deg", value=bearing_deg),
+             Parameter("origin_ned_m", value=origin)]
     scenario = [Parameter(k, value=v) for k, v in SCENARIO.items()]
     planner = PlannerNode(context=rt_context, parameter_overrides=scenario)
     agents = [AgentNode(f"agent{k}", context=rt_context, parameter_overrides=scenario + [
         Parameter("uav_id", value=k), Parameter("mavlink_listen", value="udpin:127.0.0.1:0"),
-        Parameter("max_speed_mps", value=20.0), Parameter("max_accel_mps2", value=10.0)])
-        for k in range(3)]
+        Parameter("max_speed_mps", value=20.0), Parameter("max_accel_mps2", value=10.0),
+        *frame]) for k in range(3)]
     assert not any(a.problems for a in agents), [a.problems for a in agents]
     ports = [a.vehicle.port for a in agents]
     bridge = MavlinkBridgeNode(context=rt_context, parameter_overrides=[
         Parameter("connections", value=[f"udpout:127.0.0.1:{p}" for p in ports]),
         Parameter("capture_radius_m", value=0.2),
-        Parameter("velocity_feedforward", value=True)])
+        Parameter("velocity_feedforward", value=True), *frame])
     assert not bridge.problems, bridge.problems
     watcher = rt.Node("watcher", context=rt_context)
     formation, poses, rates = [], {k: [] for k in range(3)}, {k: [] for k in range(3)}

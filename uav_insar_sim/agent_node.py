@@ -10,17 +10,19 @@ without restarting the slot clock, so a planner restart (same latched plan) chan
 MAVLink mode (`mavlink_listen` set, e.g. `udpin:127.0.0.1:14552`): the agent does not fly
 itself. It embeds a SITL-style vehicle (`vehicle.SimVehicle`, sysid `mavlink_sysid`, 0 = 2 +
 uav_id like the bridge's default target_sysids) on that endpoint, which `mavlink_bridge` flies;
-the agent reads the vehicle's position (local NED = the bridge's default frame: N = y, E = x,
-D = -z) and runs the schedule on it (observed_mission.ObservedMission: slot n starts when the
+the agent reads the vehicle's position (converted to the track frame with `track_bearing_deg`
+and `origin_ned_m`, which must match the bridge's; default N = y, E = x, D = -z) and runs the schedule on it (observed_mission.ObservedMission: slot n starts when the
 vehicle crosses y = n v_y delta_t). `time_scale` and the position noise do not apply then.
 
 Parameters: uav_id, time_scale (mission seconds per wall second), position_noise_std_m,
-noise_seed, max_speed_mps, max_accel_mps2 (AGENT_SPECS), mavlink_listen, mavlink_sysid
+noise_seed, max_speed_mps, max_accel_mps2 (AGENT_SPECS), mavlink_listen, mavlink_sysid,
+track_bearing_deg, origin_ned_m
 (MAVLINK_SPECS) and the scenario parameters of SCENARIO_NAMES from params.PARAM_SPECS, so one
 params file serves every node. Invalid values log one line each and exit with code 2.
 """
 from __future__ import annotations
 
+import math
 import sys
 import time
 
@@ -58,6 +60,10 @@ MAVLINK_SPECS = (
               "string, e.g. udpin:127.0.0.1:14552 (empty: fly /formation directly)"),
     ParamSpec("mavlink_sysid", int, 0, "MAVLink mode: the embedded vehicle's sysid (0: 2 + "
               "uav_id)", 0, 255),
+    ParamSpec("track_bearing_deg", float, 0.0, "MAVLink mode: bearing of the along-track "
+              "axis from north [deg], as the bridge's", -360.0, 360.0),
+    ParamSpec("origin_ned_m", float, [0.0, 0.0, 0.0], "MAVLink mode: track origin in the "
+              "vehicle's local NED [m], as the bridge's", length=3),
 )
 SCENARIO_NAMES = ("num_slots", "slot_duration_s", "speed_mps", "ground_station_m",
                   "comm_bandwidth_hz", "ref_snr_db", "rate_min_mbps")
@@ -66,8 +72,6 @@ TICK_PERIOD_S = 0.05  # wall clock; the mission clock advances time_scale times 
 FRAME_ID = "insar_track"
 # MAVLink mode: the embedded vehicle starts airborne (no arming needed) above the agent's home.
 MAVLINK_START_HEIGHT_M = 10.0
-# Its local NED frame is the bridge's default one (track_bearing_deg 0, origin_ned_m 0).
-MAVLINK_FRAME = TrackFrame()
 
 
 class AgentNode(Node):
@@ -78,7 +82,11 @@ class AgentNode(Node):
         self.vehicle: SimVehicle | None = None
         self.problems = declare_specs(self, AGENT_SPECS + MAVLINK_SPECS + SCENARIO_SPECS)
         own = spec_values(self, AGENT_SPECS + MAVLINK_SPECS)
-        self.problems += check_scalars(own, AGENT_SPECS + MAVLINK_SPECS[1:])
+        self.problems += check_scalars(own, AGENT_SPECS + MAVLINK_SPECS[1:3])
+        origin = own["origin_ned_m"]
+        if len(origin) != 3 or not all(math.isfinite(v) for v in origin):
+            self.problems.append(f"origin_ned_m: value {list(origin)!r} is not allowed; "
+                                 "expected 3 finite numbers (N, E, D)")
         try:
             params = params_from_mapping(spec_values(self, SCENARIO_SPECS))
         except ParamError as exc:
@@ -89,8 +97,10 @@ class AgentNode(Node):
             self.mission = Mission(own["uav_id"], params, own["max_speed_mps"],
                                    own["max_accel_mps2"], own["position_noise_std_m"],
                                    own["noise_seed"])
+            # The embedded vehicle's local NED relates to the track as the bridge's does.
+            self.frame = TrackFrame.from_degrees(own["track_bearing_deg"], own["origin_ned_m"])
             if own["mavlink_listen"]:
-                self.vehicle = embedded_vehicle(own)
+                self.vehicle = embedded_vehicle(own, self.frame)
                 self.mission = ObservedMission(own["uav_id"], params)
         except ValueError as exc:
             self.problems.append(str(exc))
@@ -153,7 +163,7 @@ class AgentNode(Node):
     # --- flight --------------------------------------------------------------------------
     def _tick(self) -> None:
         if self.vehicle is not None:
-            started = self.mission.observe(MAVLINK_FRAME.from_ned(*self.vehicle.position_ned))
+            started = self.mission.observe(self.frame.from_ned(*self.vehicle.position_ned))
         elif self._wall_t0 is not None:
             started = self.mission.advance((time.monotonic() - self._wall_t0) * self.time_scale)
         else:
@@ -191,13 +201,13 @@ class AgentNode(Node):
                      f"{met}, worst margin {worst:+.4g} Mbit/s")
 
 
-def embedded_vehicle(own: dict) -> SimVehicle:
+def embedded_vehicle(own: dict, frame: TrackFrame) -> SimVehicle:
     """The MAVLink-mode vehicle for the agent parameters `own` (not started): ArduPilot-like,
     airborne in GUIDED at MAVLINK_START_HEIGHT_M above the agent's home, with the agent's
     speed and acceleration limits. ValueError (one line) for a bad connection string."""
     x, y, _ = home_position(own["uav_id"])
     sysid = own["mavlink_sysid"] or 2 + own["uav_id"]
-    start = MAVLINK_FRAME.to_ned(float(x), float(y), MAVLINK_START_HEIGHT_M)
+    start = frame.to_ned(float(x), float(y), MAVLINK_START_HEIGHT_M)
     try:
         return SimVehicle(sysid, own["mavlink_listen"], "ardupilot", start_ned=start,
                           max_speed=own["max_speed_mps"], max_accel=own["max_accel_mps2"],

@@ -62,6 +62,8 @@ def plan_status(plan: Plan) -> Status:
         ("feasible", str(plan.feasible).lower()),
         ("sigma_h_m", fmt(plan.sigma_h_m)),
         ("sigma_h_bound_m", fmt(plan.sigma_h_bound_m)),
+        ("lower_bound_m", fmt(plan.lower_bound_m)),
+        ("optimality_gap", fmt(plan.optimality_gap)),
     ]
     for name, pair in sorted(plan.metrics.get("pairs", {}).items()):
         values += [
