@@ -11,7 +11,8 @@ MAVLink mode (`mavlink_listen` set, e.g. `udpin:127.0.0.1:14552`): the agent doe
 itself. It embeds a SITL-style vehicle (`vehicle.SimVehicle`, sysid `mavlink_sysid`, 0 = 2 +
 uav_id like the bridge's default target_sysids) on that endpoint, which `mavlink_bridge` flies;
 the agent reads the vehicle's position (converted to the track frame with `track_bearing_deg`
-and `origin_ned_m`, which must match the bridge's; default N = y, E = x, D = -z) and runs the schedule on it (observed_mission.ObservedMission: slot n starts when the
+and `origin_ned_m`, which must match the bridge's; default N = y, E = x, D = -z) and runs the
+schedule on it (observed_mission.ObservedMission: slot n starts when the
 vehicle crosses y = n v_y delta_t). `time_scale` and the position noise do not apply then.
 
 Parameters: uav_id, time_scale (mission seconds per wall second), position_noise_std_m,
