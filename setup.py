@@ -14,7 +14,6 @@ setup(
         ("share/" + package_name, ["package.xml"]),
         ("share/" + package_name + "/config", glob("config/*.yaml")),
     ],
-    package_data={package_name: ["data/*.yaml"]},
     python_requires=">=3.10",
     install_requires=[
         "numpy>=1.24",
