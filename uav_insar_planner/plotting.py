@@ -93,12 +93,13 @@ def plot_formation(p: Params, plan: Plan, path: str | Path) -> None:
     """The across-track plane: target line, the UAVs with their beams and swaths, the ground
     station with each UAV's communication disk (C9-C11), the master's C2 line and each slave's
     feasible region with the others at the plan."""
-    fig, ax = plt.subplots(figsize=(8, 6))
     flown = [k for k in range(3) if np.isfinite(plan.formation[k, 0])]
     gx, _, gz = p.ground_station
     xs_all = [plan.formation[k, 0] for k in flown] + [p.x_t, gx]
     xlo, xhi = min(xs_all) - 40, max(xs_all) + 40
     zhi = max(max(plan.formation[k, 1] for k in flown), gz) + 30
+    # equal axes: size the figure to the plane so the plot fills it
+    fig, ax = plt.subplots(figsize=(10, max(3.5, 10 * zhi / (xhi - xlo) + 1.2)))
     xs, zs = np.linspace(xlo, xhi, 400), np.linspace(0, zhi, 300)
     colors = ["tab:red", "tab:blue", "tab:green"]
     for k in flown:
