@@ -168,3 +168,21 @@ def test_bad_configuration_is_one_line(change, words):
     with pytest.raises(ValueError) as err:
         Bridge(BridgeConfig(**cfg))
     assert words in str(err.value) and "\n" not in str(err.value)
+
+
+def test_along_track_target_brakes_to_the_pass_end():
+    """Cruise, then a constant deceleration that stops exactly at speed * duration."""
+    from uav_insar_planner.mavlink.bridge import BRAKE_MPS2, along_track
+
+    v, d = 4.3, 5.0
+    assert along_track(1.0, v, 0.0) == (4.3, 4.3)  # endless pass: pure cruise
+    assert along_track(2.0, v, d) == pytest.approx((8.6, 4.3))  # cruising
+    t_brake = d - v / BRAKE_MPS2 / 2
+    ts = [t_brake + i * 0.01 for i in range(400)]
+    pts = [along_track(t, v, d) for t in ts]
+    steps = list(zip(pts[:-1], pts[1:], strict=True))
+    assert all(b[0] >= a[0] for a, b in steps)  # never backwards
+    assert all(abs(b[1] - a[1]) <= BRAKE_MPS2 * 0.01 + 1e-9 for a, b in steps)
+    assert pts[-1] == pytest.approx((v * d, 0.0))  # stops at the pass end
+    # a pass too short to brake at BRAKE_MPS2 brakes harder and still ends at speed * d
+    assert along_track(10.0, 3.0, 1.0) == pytest.approx((3.0, 0.0))

@@ -6,7 +6,8 @@ Contract (DESIGN.md section 6, issue 4):
 - Setpoints in MAV_FRAME_LOCAL_NED at `setpoint_rate_hz` (2..50, default 10): type_mask
   3576 (position only) or 3520 (position + velocity feed-forward along the track).
 - UAV k's target: (x_k, y_start, z_k) until the track starts, then
-  (x_k, y_start + v (t - t_start), z_k), ending after `track_duration_s` (0: no end).
+  (x_k, y_start + v (t - t_start), z_k); with `track_duration_s` > 0 it brakes to a stop
+  exactly at y_start + v track_duration_s (`along_track`).
   The track starts (t_start) once every linked UAV with a target is within
   `capture_radius_m` of its start point (0: at once), so the formation is established before
   the pass; UAVs that are lost or whose arming failed do not hold the others back.
@@ -63,6 +64,30 @@ def command_name(command: int) -> str:
     """MAV_CMD number -> its short name (COMPONENT_ARM_DISARM, ...)."""
     entry = MAV.enums["MAV_CMD"].get(command)
     return entry.name.removeprefix("MAV_CMD_") if entry else f"CMD({command})"
+
+
+# Braking at the end of a finite pass, gentle for a multicopter's position controller.
+BRAKE_MPS2 = 1.5
+
+
+def along_track(elapsed: float, speed: float, duration: float) -> tuple[float, float]:
+    """(offset, velocity) of the along-track target `elapsed` seconds into the pass.
+
+    duration 0: cruise at `speed` for ever. Otherwise cruise, then brake at BRAKE_MPS2 (less
+    for a short pass) so that the target stops exactly at speed * duration: a target that
+    stopped dead would make every vehicle overshoot by v^2 / (2 a_max) and come back.
+    """
+    if duration <= 0.0:
+        return speed * elapsed, speed
+    if speed <= 0.0:
+        return 0.0, 0.0
+    brake_s = min(speed / BRAKE_MPS2, 2.0 * duration)
+    decel = speed / brake_s
+    t_brake = duration - brake_s / 2.0  # cruise + braking distances add up to speed * duration
+    if elapsed <= t_brake:
+        return speed * elapsed, speed
+    tau = min(elapsed - t_brake, brake_s)
+    return speed * t_brake + speed * tau - 0.5 * decel * tau * tau, speed - decel * tau
 
 
 @dataclass(frozen=True)
@@ -417,11 +442,9 @@ class Bridge:
         x, y, z = self._formation[uav]
         if self._t_start is None:
             return (x, y, z), (0.0, 0.0, 0.0)
-        elapsed = now - self._t_start
-        duration = self.config.track_duration_s
-        if duration > 0.0 and elapsed >= duration:
-            return (x, y + self.config.speed_mps * duration, z), (0.0, 0.0, 0.0)
-        return (x, y + self.config.speed_mps * elapsed, z), (0.0, self.config.speed_mps, 0.0)
+        offset, speed = along_track(now - self._t_start, self.config.speed_mps,
+                                    self.config.track_duration_s)
+        return (x, y + offset, z), (0.0, speed, 0.0)
 
     def _maybe_start_track(self, now: float) -> None:
         if self._t_start is not None or self._formation is None:
