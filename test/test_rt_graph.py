@@ -59,9 +59,12 @@ def test_ros_discovery_info_and_user_data(children, ros_domain):
 
     assert _wait(collect), nodes
     talker_info = nodes[("/", "talker")]
-    assert len(talker_info.writer_gid_seq) == 2  # /formation and /chatter
+    # Every node also serves the six parameter services (one reader and one writer each) and
+    # publishes /parameter_events.
+    assert len(talker_info.writer_gid_seq) == 2 + 6 + 1  # /formation and /chatter
     server_info = nodes[("/planner_ns", "server")]
-    assert len(server_info.reader_gid_seq) == 1 and len(server_info.writer_gid_seq) == 1
+    assert len(server_info.reader_gid_seq) == 1 + 6
+    assert len(server_info.writer_gid_seq) == 1 + 6 + 1
 
     pubs = BuiltinDataReader(dp, BuiltinTopicDcpsPublication)
     subs = BuiltinDataReader(dp, BuiltinTopicDcpsSubscription)

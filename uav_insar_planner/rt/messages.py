@@ -20,16 +20,28 @@ from typing import Any
 from cyclonedds.idl import IdlMeta, IdlStruct
 from cyclonedds.idl import types as t
 from rosbags.interfaces import Nodetype
-from rosbags.typesys import Stores, get_typestore
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
 
-# rosbags carries no service definitions; these are the Jazzy std_srvs .srv files we support,
-# as (request fields, response fields). An empty request gets rosidl's placeholder member.
-_SERVICES: dict[str, tuple[list[tuple[str, str]], list[tuple[str, str]]]] = {
-    "std_srvs/srv/Trigger": ([], [("success", "bool"), ("message", "string")]),
-    "std_srvs/srv/Empty": ([], []),
-    "std_srvs/srv/SetBool": ([("data", "bool")], [("success", "bool"), ("message", "string")]),
+# rosbags carries no service definitions; these are the Jazzy .srv files we support, as the
+# request and response halves in .msg syntax (relative type names resolve to the package's msg
+# types). An empty half gets rosidl's placeholder member.
+_SERVICES: dict[str, tuple[str, str]] = {
+    "std_srvs/srv/Trigger": ("", "bool success\nstring message"),
+    "std_srvs/srv/Empty": ("", ""),
+    "std_srvs/srv/SetBool": ("bool data", "bool success\nstring message"),
+    "rcl_interfaces/srv/DescribeParameters": ("string[] names",
+                                              "ParameterDescriptor[] descriptors"),
+    "rcl_interfaces/srv/GetParameters": ("string[] names", "ParameterValue[] values"),
+    "rcl_interfaces/srv/GetParameterTypes": ("string[] names", "uint8[] types"),
+    "rcl_interfaces/srv/ListParameters": (
+        "uint64 DEPTH_RECURSIVE=0\nstring[] prefixes\nuint64 depth",
+        "ListParametersResult result"),
+    "rcl_interfaces/srv/SetParameters": ("Parameter[] parameters",
+                                         "SetParametersResult[] results"),
+    "rcl_interfaces/srv/SetParametersAtomically": ("Parameter[] parameters",
+                                                   "SetParametersResult result"),
 }
 
 # Field defaults written in the Jazzy .msg files (rosbags drops them). Derived by reading the
@@ -61,12 +73,17 @@ _SERVICE_CLASSES: dict[str, type] = {}
 
 
 def _register_services() -> None:
+    """Add every `_SERVICES` half to the typestore as `pkg/srv/Name_Request` / `_Response`, so
+    rosbags can serialize them and compute their RIHS01 hashes like any message type."""
+    placeholder = ("structure_needs_at_least_one_member", (Nodetype.BASE, ("uint8", 0)))
     defs = {}
-    for srv, (req, rep) in _SERVICES.items():
-        for suffix, fields in (("_Request", req), ("_Response", rep)):
-            fields = fields or [("structure_needs_at_least_one_member", "uint8")]
-            defs[srv + suffix] = (
-                [], [(name, (Nodetype.BASE, (typ, 0))) for name, typ in fields])
+    for srv, halves in _SERVICES.items():
+        pkg, _kind, name = srv.split("/")
+        for suffix, text in zip(("_Request", "_Response"), halves, strict=True):
+            # The .msg parser only knows msg names; parse as one, register under the srv name.
+            parsed = get_types_from_msg(text, f"{pkg}/msg/{name}{suffix}")
+            consts, fields = next(iter(parsed.values()))
+            defs[srv + suffix] = (consts, fields or [placeholder])
     TYPESTORE.register(defs)
 
 

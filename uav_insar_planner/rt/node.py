@@ -10,10 +10,18 @@ from .callback_groups import CallbackGroup, MutuallyExclusiveCallbackGroup
 from .clock import Clock, ClockType
 from .context import Context, get_default_context
 from .entities import Publisher, Subscription, Timer
+from .exceptions import ParameterNotDeclaredException
 from .logging import RcutilsLogger
+from .messages import get_message
 from .parameter import Parameter
+from .parameter_service import ParameterService, list_parameters
 from .params import ParameterStore
-from .qos import QoSProfile, as_profile, qos_profile_services_default
+from .qos import (
+    QoSProfile,
+    as_profile,
+    qos_profile_parameter_events,
+    qos_profile_services_default,
+)
 
 
 class Node:
@@ -21,7 +29,9 @@ class Node:
 
     Name and namespace honour `-r __node:=` / `-r __ns:=` from the context's and this node's
     arguments; parameter overrides come from `-p` / `--params-file` sections that match the
-    node's fully qualified name, then from `parameter_overrides`.
+    node's fully qualified name, then from `parameter_overrides`. Unless
+    `start_parameter_services` is False the node serves the six rcl_interfaces parameter
+    services (`ros2 param`), see parameter_service.
     """
 
     def __init__(self, node_name: str, *, context: Context | None = None,
@@ -65,12 +75,20 @@ class Node:
         for p in parameter_overrides or []:
             overrides[p.name] = p
         self._params = ParameterStore(overrides, allow_undeclared_parameters)
+        # Created before use_sim_time is declared so that, as in rclpy, every declaration and
+        # change of this node's parameters is announced on /parameter_events.
+        self._parameter_events = self.create_publisher(
+            get_message("rcl_interfaces/msg/ParameterEvent"), "/parameter_events",
+            qos_profile_parameter_events)
+        self._params.on_event = self._publish_parameter_event
         self.declare_parameter("use_sim_time", False)
         if automatically_declare_parameters_from_overrides:
             for name, p in overrides.items():
                 if not self._params.has(name):
                     self._params.declare(name, p.value)
         self.context.add_node(self)
+        if start_parameter_services:
+            ParameterService(self)
 
     # --- identity -------------------------------------------------------------------------
     def get_name(self) -> str:
@@ -277,6 +295,30 @@ class Node:
 
     def set_parameters_atomically(self, parameter_list: list[Parameter]) -> Any:
         return self._params.set(parameter_list, atomically=True)[0]
+
+    def _publish_parameter_event(self, new: list[Parameter], changed: list[Parameter]) -> None:
+        msg = self._parameter_events.msg_type(
+            stamp=self._clock.now().to_msg(), node=self.get_fully_qualified_name(),
+            new_parameters=[p.to_parameter_msg() for p in new],
+            changed_parameters=[p.to_parameter_msg() for p in changed])
+        self._parameter_events.publish(msg)
+
+    def get_parameter_type(self, name: str) -> int:
+        """The parameter's ParameterType code; ParameterNotDeclaredException if undeclared."""
+        if not self._params.has(name):
+            raise ParameterNotDeclaredException(name)
+        return int(self._params.get(name).type_)
+
+    def get_parameter_types(self, names_: list[str]) -> list[int]:
+        return [self.get_parameter_type(n) for n in names_]
+
+    def list_parameters(self, prefixes: list[str], depth: int) -> Any:
+        """rclpy Node.list_parameters: a ListParametersResult (see parameter_service)."""
+        if not all(isinstance(p, str) for p in prefixes):
+            raise TypeError("all prefixes must be instances of type str")
+        if depth < 0:
+            raise ValueError("the depth must be greater than or equal to zero")
+        return list_parameters(self._params.names(), prefixes, depth)
 
     def describe_parameter(self, name: str) -> Any:
         return self._params.describe(name)

@@ -101,6 +101,20 @@ class Parameter:
     def to_parameter_msg(self) -> Any:
         return ParameterMsg(name=self._name, value=self.get_parameter_value())
 
+    @classmethod
+    def from_parameter_msg(cls, msg: Any) -> Parameter:
+        """The Parameter an rcl_interfaces/msg/Parameter carries: the value field its type code
+        names, the others ignored (as rclpy). ValueError for an unknown type code."""
+        type_ = Parameter.Type(msg.value.type)
+        if type_ == Parameter.Type.NOT_SET:
+            return cls(msg.name, type_)
+        value = getattr(msg.value, _VALUE_FIELDS[int(type_)])
+        if type_ == Parameter.Type.BYTE_ARRAY:
+            value = bytes(value)  # our BYTE_ARRAY holds bytes; the wire gives a list of ints
+        elif type_ in _ARRAY_TYPES:
+            value = list(value)
+        return cls(msg.name, type_, value)
+
     def __repr__(self) -> str:
         return f"Parameter(name={self._name!r}, type_={self._type.name}, value={self._value!r})"
 

@@ -52,6 +52,9 @@ class ParameterStore:
         self._pre: list[Callable] = []
         self._on_set: list[Callable] = []
         self._post: list[Callable] = []
+        # Told (new, changed) after every successful declare or set; the node publishes
+        # /parameter_events from it.
+        self.on_event: Callable[[list[Parameter], list[Parameter]], None] | None = None
 
     # --- declaring ------------------------------------------------------------------------
     def declare(self, name: str, value: Any = None, descriptor: Any = None,
@@ -89,6 +92,7 @@ class ParameterStore:
             self._values[name] = param
         for cb in self._post:
             cb([param])
+        self._notify([param], [])
         return param
 
     # --- reading --------------------------------------------------------------------------
@@ -136,6 +140,7 @@ class ParameterStore:
             result = self._run_callbacks(params)
             if not result.successful:
                 return result
+            new = [p for p in params if p.name not in self._values]
             for p in params:
                 if p.name not in self._values:
                     self._descriptors[p.name] = ParameterDescriptor(name=p.name,
@@ -143,7 +148,12 @@ class ParameterStore:
                 self._values[p.name] = p
         for cb in self._post:
             cb(list(params))
+        self._notify(new, [p for p in params if p not in new])
         return SetParametersResult(successful=True)
+
+    def _notify(self, new: list[Parameter], changed: list[Parameter]) -> None:
+        if self.on_event is not None:
+            self.on_event(new, changed)
 
     def _check(self, p: Parameter) -> str | None:
         desc = self._descriptors.get(p.name)
