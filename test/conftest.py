@@ -5,7 +5,10 @@ import itertools
 import os
 import subprocess
 import sys
+import time
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -84,3 +87,11 @@ def rt_context(ros_domain: int):
     rt.init(args=["test"], context=ctx, domain_id=ros_domain)
     yield ctx
     ctx.try_shutdown()
+
+
+def spin_until(executor: Any, done: Callable[[], Any], timeout: float) -> bool:
+    """Spin `executor` in 50 ms steps until `done()` is truthy or `timeout` s have passed."""
+    end = time.monotonic() + timeout
+    while not done() and time.monotonic() < end:
+        executor.spin_once(timeout_sec=0.05)
+    return bool(done())

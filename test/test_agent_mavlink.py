@@ -4,9 +4,9 @@ MAVLink over loopback UDP -> the vehicle each agent embeds -> the agent's /uavK/
 from __future__ import annotations
 
 import math
-import time
 
 import pytest
+from conftest import spin_until
 
 from uav_insar_planner import load_params, model, rt, solve
 from uav_insar_planner.nodes.mavlink_bridge import MavlinkBridgeNode
@@ -76,17 +76,11 @@ def test_agents_in_mavlink_mode_fly_the_plan_through_the_bridge(rt_context, bear
     for node in nodes:
         executor.add_node(node)
 
-    def spin_until(done, timeout: float) -> bool:
-        end = time.monotonic() + timeout
-        while not done() and time.monotonic() < end:
-            executor.spin_once(timeout_sec=0.05)
-        return done()
-
     n = params.num_slots
     try:
-        assert spin_until(lambda: formation, 30.0), "no /formation"
-        assert spin_until(lambda: all(len(rates[k]) >= n for k in range(3)), 30.0), rates
-        spin_until(lambda: False, 0.5)
+        assert spin_until(executor, lambda: formation, 30.0), "no /formation"
+        assert spin_until(executor, lambda: all(len(rates[k]) >= n for k in range(3)), 30.0), rates
+        spin_until(executor, lambda: False, 0.5)
     finally:
         bridge.stop()
         planner.stop()

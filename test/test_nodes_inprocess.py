@@ -3,10 +3,10 @@ on Cyclone DDS, real topics), watched by a test node."""
 from __future__ import annotations
 
 import math
-import time
 
 import numpy as np
 import pytest
+from conftest import spin_until
 
 from uav_insar_planner import load_params, model, rt, solve
 from uav_insar_planner.nodes.planner import LATCHED, PlannerNode
@@ -49,12 +49,7 @@ class Bringup:
             self.executor.add_node(node)
 
     def spin_until(self, done, timeout: float) -> bool:
-        end = time.monotonic() + timeout
-        while not done():
-            if time.monotonic() > end:
-                return False
-            self.executor.spin_once(timeout_sec=0.05)
-        return True
+        return spin_until(self.executor, done, timeout)
 
     def close(self) -> None:
         self.planner.stop()

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import os
 import signal
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import spin_until
 
 from uav_insar_planner import load_params, model, rt, solve
 from uav_insar_planner.demo import start_node, stop_node
@@ -42,12 +42,7 @@ class Watcher:
         self.executor.add_node(n)
 
     def spin_until(self, done, timeout: float) -> bool:
-        end = time.monotonic() + timeout
-        while not done():
-            if time.monotonic() > end:
-                return False
-            self.executor.spin_once(timeout_sec=0.05)
-        return True
+        return spin_until(self.executor, done, timeout)
 
 
 @pytest.fixture

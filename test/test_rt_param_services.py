@@ -4,9 +4,9 @@ listing rules, and the real PlannerNode driven through them by a client over Cyc
 from __future__ import annotations
 
 import math
-import time
 
 import pytest
+from conftest import spin_until
 from test_rt_messages import to_rosbags
 
 from uav_insar_planner import rt
@@ -131,12 +131,7 @@ class PlannerUnderTest:
         self.executor.add_node(self.cli_node)
 
     def spin_until(self, done, timeout: float) -> bool:
-        end = time.monotonic() + timeout
-        while not done():
-            if time.monotonic() > end:
-                return False
-            self.executor.spin_once(timeout_sec=0.05)
-        return True
+        return spin_until(self.executor, done, timeout)
 
     def call(self, service: str, **fields):
         client = self.clients[service]
