@@ -23,11 +23,19 @@ setup(
         "pyyaml>=6",
         "matplotlib>=3.6",
         "tqdm>=4.60",
-        "cyclonedds==11.0.1",
-        "rosbags>=0.10",
         "pymavlink>=2.4.40",
     ],
-    extras_require={"test": ["pytest>=7", "pytest-timeout>=2", "ruff>=0.4"]},
+    extras_require={
+        # ROS 2 Jazzy from PyPI wheels (x86_64 Linux, CPython 3.10-3.13). Not for a sourced
+        # Jazzy: colcon installs no extras, so that rclpy stays the only one (see README).
+        "ros": [
+            "ros-jazzy-rclpy[fastrtps]>=7.1",
+            "ros-jazzy-common-interfaces>=5.3",
+            "ros-jazzy-std-srvs>=5.3",
+            "ros-jazzy-rcl-interfaces>=2.0",
+        ],
+        "test": ["pytest>=7", "pytest-timeout>=2", "ruff>=0.4"],
+    },
     zip_safe=True,
     maintainer="uav_insar_planner developers",
     maintainer_email="dev@example.invalid",

@@ -1,4 +1,5 @@
-"""Shared fixtures: a private ROS domain per test and real child processes on it."""
+"""Shared fixtures: a private ROS domain per test (real rclpy on Fast DDS), an rclpy Context
+on it, and real child processes on it."""
 from __future__ import annotations
 
 import itertools
@@ -13,25 +14,23 @@ from typing import Any
 import pytest
 
 REPO = Path(__file__).resolve().parent.parent
-CHILD = Path(__file__).resolve().parent / "rt_child.py"
 _counter = itertools.count()
 
 
 def _next_domain() -> int:
-    # Domains 1..101 keep Cyclone's discovery ports below Linux's ephemeral range; pid spreads
-    # parallel pytest processes, the counter separates tests within one.
-    return 1 + (os.getpid() * 7 + next(_counter)) % 101
+    # Fast DDS takes domains 0..232; pid spreads parallel pytest runs, the counter separates
+    # tests within one. 0 stays free for whatever else runs on the machine.
+    return 1 + (os.getpid() * 7 + next(_counter)) % 232
 
 
 @pytest.fixture
 def ros_domain(monkeypatch: pytest.MonkeyPatch) -> int:
-    """A domain id for this test alone, exported as ROS_DOMAIN_ID, with our runtime forced
-    and the default discovery settings (no CYCLONEDDS_URI, no discovery range)."""
+    """A domain id for this test alone, exported as ROS_DOMAIN_ID, discovery kept on this
+    host (no multicast to the network)."""
     domain = _next_domain()
     monkeypatch.setenv("ROS_DOMAIN_ID", str(domain))
-    monkeypatch.setenv("UAV_INSAR_RUNTIME", "embedded")
-    for var in ("CYCLONEDDS_URI", "ROS_AUTOMATIC_DISCOVERY_RANGE", "ROS_STATIC_PEERS"):
-        monkeypatch.delenv(var, raising=False)
+    monkeypatch.setenv("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    monkeypatch.delenv("ROS_STATIC_PEERS", raising=False)
     return domain
 
 
@@ -53,7 +52,7 @@ class Children:
     def start(self, *args: str, script: Path | None = None,
               module: str | None = None) -> subprocess.Popen:
         env = dict(os.environ, PYTHONPATH=str(REPO), PYTHONUNBUFFERED="1")
-        cmd = [sys.executable] + (["-m", module] if module else [str(script or CHILD)])
+        cmd = [sys.executable] + (["-m", module] if module else [str(script)])
         proc = subprocess.Popen(cmd + list(args), env=env, cwd=REPO, text=True,
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE)
         self.procs.append(proc)
@@ -79,12 +78,12 @@ def children(ros_domain: int):
 
 
 @pytest.fixture
-def rt_context(ros_domain: int):
-    """An initialized in-process context of our runtime on the test's domain."""
-    from uav_insar_planner import rt
+def ros_context(ros_domain: int):
+    """An initialized rclpy Context of its own on the test's domain."""
+    import rclpy
 
-    ctx = rt.Context()
-    rt.init(args=["test"], context=ctx, domain_id=ros_domain)
+    ctx = rclpy.Context()
+    rclpy.init(args=["test"], context=ctx, domain_id=ros_domain)
     yield ctx
     ctx.try_shutdown()
 

@@ -1,22 +1,25 @@
 """Agents in MAVLink mode, flown by the bridge: planner -> /formation -> mavlink_bridge ->
 MAVLink over loopback UDP -> the vehicle each agent embeds -> the agent's /uavK/pose and
-/uavK/achieved_rate. Real nodes on one executor (our runtime over Cyclone DDS), real sockets."""
+/uavK/achieved_rate. Real nodes on one executor (our runtime over real rclpy), real sockets."""
 from __future__ import annotations
 
 import math
 
 import pytest
 from conftest import spin_until
+from geometry_msgs.msg import PoseArray, PoseStamped
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from std_msgs.msg import Float64
 
-from uav_insar_planner import load_params, model, rt, solve
+from uav_insar_planner import load_params, model, solve
 from uav_insar_planner.nodes.mavlink_bridge import MavlinkBridgeNode
 from uav_insar_planner.nodes.planner import LATCHED, PlannerNode
-from uav_insar_planner.rt.messages import msg_type
 from uav_insar_sim.agent_node import AgentNode
 from uav_insar_sim.observed_mission import ObservedMission, interpolate
 
 pytestmark = pytest.mark.timeout(60)
-Parameter = rt.parameter.Parameter
 SCENARIO = {"num_slots": 4, "slot_duration_s": 0.5}
 
 
@@ -42,7 +45,7 @@ def test_slots_start_where_the_vehicle_crosses_their_lines():
 
 @pytest.mark.parametrize("bearing_deg, origin", [(0.0, [0.0, 0.0, 0.0]),
                                                  (90.0, [5.0, -3.0, 0.0])])
-def test_agents_in_mavlink_mode_fly_the_plan_through_the_bridge(rt_context, bearing_deg,
+def test_agents_in_mavlink_mode_fly_the_plan_through_the_bridge(ros_context, bearing_deg,
                                                                 origin):
     """Also with a rotated, offset track frame, given alike to the bridge and the agents."""
     params = load_params(overrides=SCENARIO)
@@ -50,28 +53,28 @@ def test_agents_in_mavlink_mode_fly_the_plan_through_the_bridge(rt_context, bear
     frame = [Parameter("track_bearing_deg", value=bearing_deg),
              Parameter("origin_ned_m", value=origin)]
     scenario = [Parameter(k, value=v) for k, v in SCENARIO.items()]
-    planner = PlannerNode(context=rt_context, parameter_overrides=scenario)
-    agents = [AgentNode(f"agent{k}", context=rt_context, parameter_overrides=scenario + [
+    planner = PlannerNode(context=ros_context, parameter_overrides=scenario)
+    agents = [AgentNode(f"agent{k}", context=ros_context, parameter_overrides=scenario + [
         Parameter("uav_id", value=k), Parameter("mavlink_listen", value="udpin:127.0.0.1:0"),
         Parameter("max_speed_mps", value=20.0), Parameter("max_accel_mps2", value=10.0),
         *frame]) for k in range(3)]
     assert not any(a.problems for a in agents), [a.problems for a in agents]
     ports = [a.vehicle.port for a in agents]
-    bridge = MavlinkBridgeNode(context=rt_context, parameter_overrides=[
+    bridge = MavlinkBridgeNode(context=ros_context, parameter_overrides=[
         Parameter("connections", value=[f"udpout:127.0.0.1:{p}" for p in ports]),
         Parameter("capture_radius_m", value=0.2),
         Parameter("velocity_feedforward", value=True), *frame])
     assert not bridge.problems, bridge.problems
-    watcher = rt.Node("watcher", context=rt_context)
+    watcher = Node("watcher", context=ros_context)
     formation, poses, rates = [], {k: [] for k in range(3)}, {k: [] for k in range(3)}
-    watcher.create_subscription(msg_type("geometry_msgs/msg/PoseArray"), "/formation",
+    watcher.create_subscription(PoseArray, "/formation",
                                 formation.append, LATCHED)
     for k in range(3):
-        watcher.create_subscription(msg_type("geometry_msgs/msg/PoseStamped"), f"/uav{k}/pose",
+        watcher.create_subscription(PoseStamped, f"/uav{k}/pose",
                                     lambda m, k=k: poses[k].append(m.pose.position), 100)
-        watcher.create_subscription(msg_type("std_msgs/msg/Float64"), f"/uav{k}/achieved_rate",
+        watcher.create_subscription(Float64, f"/uav{k}/achieved_rate",
                                     lambda m, k=k: rates[k].append(m.data), 100)
-    executor = rt.SingleThreadedExecutor(context=rt_context)
+    executor = SingleThreadedExecutor(context=ros_context)
     nodes = [planner, bridge, *agents, watcher]
     for node in nodes:
         executor.add_node(node)
@@ -100,8 +103,8 @@ def test_agents_in_mavlink_mode_fly_the_plan_through_the_bridge(rt_context, bear
         assert rates[k] == pytest.approx(list(planned[k]), rel=0.005), k
 
 
-def test_a_bad_mavlink_listen_is_one_problem_line(rt_context):
-    agent = AgentNode("agent", context=rt_context, parameter_overrides=[
+def test_a_bad_mavlink_listen_is_one_problem_line(ros_context):
+    agent = AgentNode("agent", context=ros_context, parameter_overrides=[
         Parameter("mavlink_listen", value="nowhere")])
     try:
         assert len(agent.problems) == 1 and agent.problems[0].startswith("mavlink_listen:")

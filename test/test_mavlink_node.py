@@ -1,6 +1,6 @@
 """End to end through ROS and MAVLink: planner node -> /formation -> mavlink_bridge node ->
 MAVLink over UDP -> three SITL-style vehicles -> /uavK/mavlink/pose and /diagnostics.
-The nodes run as separate processes (our runtime over Cyclone DDS, or rclpy when sourced),
+The nodes run as separate processes on real rclpy,
 the vehicles in this process; each test gets its own ROS_DOMAIN_ID (conftest `ros_domain`)."""
 import math
 import os
@@ -10,6 +10,8 @@ import sys
 import time
 
 import pytest
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import PoseArray, PoseStamped
 
 from uav_insar_sim.vehicle import SimVehicle
 
@@ -19,7 +21,7 @@ PY = sys.executable
 
 
 def ros_env() -> dict:
-    """The environment `ros_domain` prepared (private domain, our runtime), for children."""
+    """The environment `ros_domain` prepared (private domain, localhost discovery), for children."""
     return dict(os.environ, PYTHONUNBUFFERED="1")
 
 
@@ -57,15 +59,9 @@ def test_bad_parameter_exits_2_with_one_line(param, ros_domain):
 
 def test_planner_bridge_vehicles_end_to_end(ros_domain):
     env = ros_env()
-    from uav_insar_planner.seam import (
-        DurabilityPolicy,
-        HistoryPolicy,
-        Node,
-        QoSProfile,
-        ReliabilityPolicy,
-        msg_type,
-        rclpy,
-    )
+    import rclpy
+    from rclpy.node import Node
+    from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
     vehicles = [SimVehicle(s, "udpin:127.0.0.1:0", "ardupilot", start_ned=(0.0, 3.0 * k, -40.0),
                            max_speed=20.0, max_accel=10.0, airborne=True)
@@ -76,27 +72,30 @@ def test_planner_bridge_vehicles_end_to_end(ros_domain):
     bridge = start("uav_insar_planner.nodes.mavlink_bridge", env, f"connections:=[{ports}]",
                    "target_sysids:=[2, 3, 4]", "speed_mps:=2.0", "velocity_feedforward:=true")
     planner = start("uav_insar_planner.nodes.planner", env)
-    rclpy.init()
-    node = Node("mavlink_e2e_probe")
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    node = Node("mavlink_e2e_probe", context=context)
+    executor = rclpy.executors.SingleThreadedExecutor(context=context)
+    executor.add_node(node)
     latched = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
                          reliability=ReliabilityPolicy.RELIABLE,
                          durability=DurabilityPolicy.TRANSIENT_LOCAL)
     formation, poses, diags = [], {0: [], 1: [], 2: []}, []
-    node.create_subscription(msg_type("geometry_msgs/msg/PoseArray"), "/formation",
+    node.create_subscription(PoseArray, "/formation",
                              lambda m: formation.append([(p.position.x, p.position.y,
                                                           p.position.z) for p in m.poses]),
                              latched)
     for k in range(3):
-        node.create_subscription(msg_type("geometry_msgs/msg/PoseStamped"),
+        node.create_subscription(PoseStamped,
                                  f"/uav{k}/mavlink/pose",
                                  lambda m, k=k: poses[k].append(m), 10)
-    node.create_subscription(msg_type("diagnostic_msgs/msg/DiagnosticArray"), "/diagnostics",
+    node.create_subscription(DiagnosticArray, "/diagnostics",
                              lambda m: diags.append(m), 10)
 
     def spin_until(predicate, timeout):
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline and not predicate():
-            rclpy.spin_once(node, timeout_sec=0.1)
+            executor.spin_once(timeout_sec=0.1)
         return predicate()
 
     def in_formation():
@@ -130,7 +129,7 @@ def test_planner_bridge_vehicles_end_to_end(ros_domain):
         assert all(s.message.startswith("linked") for s in last.values())
     finally:
         node.destroy_node()
-        rclpy.try_shutdown()
+        context.try_shutdown()
         bridge_out = finish(bridge)
         finish(planner)
         for v in vehicles:

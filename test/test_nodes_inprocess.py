@@ -1,5 +1,5 @@
-"""Launch-free bring-up in one process: planner and three agents on one executor (our runtime
-on Cyclone DDS, real topics), watched by a test node."""
+"""Launch-free bring-up in one process: planner and three agents on one executor (real rclpy
+on Fast DDS, real topics), watched by a test node."""
 from __future__ import annotations
 
 import math
@@ -7,17 +7,22 @@ import math
 import numpy as np
 import pytest
 from conftest import spin_until
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from geometry_msgs.msg import PoseArray
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from std_msgs.msg import Float64, Float64MultiArray
+from std_srvs.srv import Trigger
 
-from uav_insar_planner import load_params, model, rt, solve
+from uav_insar_planner import load_params, model, solve
 from uav_insar_planner.nodes.planner import LATCHED, PlannerNode
 from uav_insar_planner.nodes.planner_report import rate_tolerance_bps
-from uav_insar_planner.rt.messages import msg_type
 from uav_insar_sim.agent_node import AgentNode
 
 N = 6
 TIME_SCALE = 40.0
 SCENARIO = {"num_slots": N}
-Parameter = rt.parameter.Parameter
 
 
 class Bringup:
@@ -31,20 +36,20 @@ class Bringup:
             Parameter("uav_id", value=k), Parameter("time_scale", value=TIME_SCALE),
             Parameter("position_noise_std_m", value=noise_std),
             Parameter("noise_seed", value=3)]) for k in range(3)] if agents else []
-        self.watcher = rt.Node("watcher", context=ctx)
+        self.watcher = Node("watcher", context=ctx)
         self.formations, self.powers, self.diagnostics = [], [], []
         self.rates = {k: [] for k in range(3)}
         w = self.watcher
-        w.create_subscription(msg_type("geometry_msgs/msg/PoseArray"), "/formation",
+        w.create_subscription(PoseArray, "/formation",
                               self.formations.append, LATCHED)
-        w.create_subscription(msg_type("std_msgs/msg/Float64MultiArray"), "/formation/power",
+        w.create_subscription(Float64MultiArray, "/formation/power",
                               self.powers.append, LATCHED)
-        w.create_subscription(msg_type("diagnostic_msgs/msg/DiagnosticArray"), "/diagnostics",
+        w.create_subscription(DiagnosticArray, "/diagnostics",
                               self.diagnostics.append, 50)
         for k in range(3):
-            w.create_subscription(msg_type("std_msgs/msg/Float64"), f"/uav{k}/achieved_rate",
+            w.create_subscription(Float64, f"/uav{k}/achieved_rate",
                                   lambda m, k=k: self.rates[k].append(m.data), 100)
-        self.executor = rt.SingleThreadedExecutor(context=ctx)
+        self.executor = SingleThreadedExecutor(context=ctx)
         for node in [self.planner, *self.agents, w]:
             self.executor.add_node(node)
 
@@ -58,11 +63,11 @@ class Bringup:
 
 
 @pytest.fixture
-def bringup(rt_context):
+def bringup(ros_context):
     made = []
 
     def make(**kw):
-        made.append(Bringup(rt_context, **kw))
+        made.append(Bringup(ros_context, **kw))
         return made[-1]
 
     yield make
@@ -108,14 +113,14 @@ def test_planner_and_agents_fly_the_solved_plan(bringup):
 
     b.spin_until(lambda: False, 1.2)  # one more diagnostics period after the mission
     last = statuses(b.diagnostics[-1])
-    assert last["planner: plan"].level == 0
+    assert last["planner: plan"].level == DiagnosticStatus.OK
     keys = {kv.key for kv in last["planner: plan"].values}
     assert {"sigma_h_m", "sigma_h_bound_m", "b_perp_m.uav1", "h_amb_m.uav2", "coherence.uav1",
             "solve_time_s", "iterations", "scheme"} <= keys
     for k in range(3):
         uav = last[f"planner: uav{k}"]
         values = {kv.key: kv.value for kv in uav.values}
-        assert uav.level == 0, uav.message
+        assert uav.level == DiagnosticStatus.OK, uav.message
         assert float(values["position_error_m"]) < 1e-9
         assert values["slots_reported"] == str(N)
 
@@ -131,7 +136,8 @@ def test_position_noise_shrinks_the_margin_and_warns(bringup):
     margins = np.concatenate([np.array(b.rates[k]) - params.rate_min_bps[k] for k in range(3)])
     assert margins.min() < -1e4
     assert not np.allclose(np.concatenate([b.rates[k] for k in range(3)]), expected.ravel())
-    assert b.spin_until(lambda: any(s.level == 1 for d in b.diagnostics for s in d.status),
+    warn = DiagnosticStatus.WARN
+    assert b.spin_until(lambda: any(s.level == warn for d in b.diagnostics for s in d.status),
                         5.0), "no WARN for a UAV missing R_min"
     errors = [float(kv.value) for d in b.diagnostics for s in d.status for kv in s.values
               if kv.key == "position_error_m"]
@@ -154,13 +160,13 @@ def test_runtime_parameter_set_replans_or_is_refused(bringup):
     u2 = b.formations[-1].poses[2].position
     assert math.isnan(u2.x) and math.isnan(u2.z)
     assert not any(np.reshape(b.powers[-1].data, (3, N))[2])
-    assert statuses(b.diagnostics[-1])["planner: plan"].level == 0
+    assert statuses(b.diagnostics[-1])["planner: plan"].level == DiagnosticStatus.OK
 
 
 def test_replan_service_answers_at_once_and_republishes(bringup):
     b = bringup(agents=False)
     assert b.spin_until(lambda: b.formations, 30.0)
-    trigger = msg_type("std_srvs/srv/Trigger")
+    trigger = Trigger
     client = b.watcher.create_client(trigger, "/planner/replan")
     assert client.wait_for_service(timeout_sec=5.0)
     future = client.call_async(trigger.Request())
@@ -176,7 +182,7 @@ def test_infeasible_plan_is_an_error_and_not_published(bringup):
     b = bringup(agents=False, scenario={**SCENARIO, "rate_min_mbps": [5000.0, 16.95, 1.0]})
     assert b.spin_until(lambda: b.diagnostics, 30.0)
     plan_status = statuses(b.diagnostics[0])["planner: plan"]
-    assert plan_status.level == 2 and "not published" in plan_status.message
+    assert plan_status.level == DiagnosticStatus.ERROR and "not published" in plan_status.message
     assert "blocked by C9, C10" in plan_status.message
     b.spin_until(lambda: False, 0.5)
     assert b.formations == [] and b.powers == []

@@ -1,5 +1,5 @@
 """Launch-free bring-up with real processes: the installed `planner` and `agent` executables
-started as `ros2 run` would, watched from this process over Cyclone DDS."""
+started as `ros2 run` would, watched from this process over real rclpy."""
 from __future__ import annotations
 
 import os
@@ -9,12 +9,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import spin_until
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import PoseArray
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from std_msgs.msg import Float64, Float64MultiArray
 
-from uav_insar_planner import load_params, model, rt, solve
+from uav_insar_planner import load_params, model, solve
 from uav_insar_planner.demo import start_node, stop_node
 from uav_insar_planner.nodes.planner import LATCHED
 from uav_insar_planner.nodes.planner_report import rate_tolerance_bps
-from uav_insar_planner.rt.messages import msg_type
 
 CONFIG = str(Path(__file__).resolve().parents[1] / "config" / "params.yaml")
 N = 30
@@ -25,21 +29,24 @@ class Watcher:
     """Records what the nodes publish, on its own node in `ctx`."""
 
     def __init__(self, ctx):
-        self.node = rt.Node("watcher", context=ctx)
+        self.node = Node("watcher", context=ctx)
         self.formations, self.powers, self.diagnostics = [], [], []
         self.rates = {k: [] for k in range(3)}
         n = self.node
-        n.create_subscription(msg_type("geometry_msgs/msg/PoseArray"), "/formation",
+        n.create_subscription(PoseArray, "/formation",
                               self.formations.append, LATCHED)
-        n.create_subscription(msg_type("std_msgs/msg/Float64MultiArray"), "/formation/power",
+        n.create_subscription(Float64MultiArray, "/formation/power",
                               self.powers.append, LATCHED)
-        n.create_subscription(msg_type("diagnostic_msgs/msg/DiagnosticArray"), "/diagnostics",
+        n.create_subscription(DiagnosticArray, "/diagnostics",
                               self.diagnostics.append, 50)
         for k in range(3):
-            n.create_subscription(msg_type("std_msgs/msg/Float64"), f"/uav{k}/achieved_rate",
+            n.create_subscription(Float64, f"/uav{k}/achieved_rate",
                                   lambda m, k=k: self.rates[k].append(m.data), 100)
-        self.executor = rt.SingleThreadedExecutor(context=ctx)
+        self.executor = SingleThreadedExecutor(context=ctx)
         self.executor.add_node(n)
+
+    def agents_matched(self) -> bool:
+        return all(self.node.count_publishers(f"/uav{k}/achieved_rate") for k in range(3))
 
     def spin_until(self, done, timeout: float) -> bool:
         return spin_until(self.executor, done, timeout)
@@ -60,14 +67,17 @@ def procs(ros_domain):
         proc.communicate(timeout=10)
 
 
-def test_planner_and_three_agent_processes_survive_a_planner_restart(rt_context, procs):
+def test_planner_and_three_agent_processes_survive_a_planner_restart(ros_context, procs):
     params = load_params(CONFIG, {"num_slots": N})
     plan = solve(params)
-    w = Watcher(rt_context)
+    w = Watcher(ros_context)
     common = ["--params-file", CONFIG, "-p", f"num_slots:={N}"]
-    planner = procs("planner", *common)
     agents = [procs("agent", *common, "-p", f"uav_id:={k}", "-p", f"time_scale:={TIME_SCALE}",
                     "-r", f"__node:=agent{k}") for k in range(3)]
+    # Discovery of a new process can take a Fast DDS announcement period (~3 s): the agents
+    # must be matched before the plan starts their slots, or their first rates are lost.
+    assert w.spin_until(w.agents_matched, 20.0), "agents not discovered"
+    planner = procs("planner", *common)
 
     assert w.spin_until(lambda: w.formations and w.powers, 30.0), "no /formation"
     poses = np.array([[p.position.x, p.position.z] for p in w.formations[0].poses])
@@ -85,7 +95,8 @@ def test_planner_and_three_agent_processes_survive_a_planner_restart(rt_context,
     again = np.array([[p.position.x, p.position.z] for p in w.formations[-1].poses])
     assert np.allclose(again, poses)
 
-    assert w.spin_until(lambda: all(len(r) >= N for r in w.rates.values()), 30.0), w.rates
+    assert w.spin_until(lambda: all(len(r) >= N for r in w.rates.values()), 30.0), \
+        {k: len(r) for k, r in w.rates.items()}
     w.spin_until(lambda: False, 0.5)
     tol = rate_tolerance_bps(params.rate_min_bps)
     d = model.distance_to_station(plan.formation[:, :1], params.y_track[None, :],
@@ -99,11 +110,11 @@ def test_planner_and_three_agent_processes_survive_a_planner_restart(rt_context,
 
 
 def test_bad_params_file_stops_the_planner_with_code_2_and_publishes_nothing(
-        rt_context, procs, tmp_path):
+        ros_context, procs, tmp_path):
     bad = tmp_path / "bad.yaml"
     bad.write_text('"/**":\n  ros__parameters:\n    num_slots: 0\n    scheme: nope\n'
                    "    z_min_m: 150.0\n")
-    w = Watcher(rt_context)
+    w = Watcher(ros_context)
     planner = procs("planner", "--params-file", str(bad))
     out, _ = planner.communicate(timeout=30)
     assert planner.returncode == 2, out

@@ -106,13 +106,20 @@ def test_solve_worker_coalesces_requests_and_reports_errors():
         worker.stop()
 
 
-def test_spec_range_and_scalar_checks():
-    from uav_insar_planner.nodes.ros_params import check_scalars, spec_range
+def test_descriptor_ranges_and_scalar_checks():
+    from uav_insar_planner.nodes.parameters import as_double, check_scalars, descriptor_for
 
-    assert spec_range(SPEC_BY_NAME["num_slots"]) == (1, 100000)
-    assert spec_range(SPEC_BY_NAME["speed_mps"]) == (0.0, math.inf)
-    assert spec_range(SPEC_BY_NAME["ground_station_m"]) is None
-    assert spec_range(SPEC_BY_NAME["scheme"]) is None
+    rng = descriptor_for(SPEC_BY_NAME["num_slots"], False).integer_range[0]
+    assert (rng.from_value, rng.to_value) == (1, 100000)
+    rng = descriptor_for(SPEC_BY_NAME["speed_mps"], True).floating_point_range[0]
+    assert (rng.from_value, rng.to_value) == (0.0, math.inf)
+    assert descriptor_for(SPEC_BY_NAME["speed_mps"], True).read_only
+    for name in ("ground_station_m", "scheme"):
+        d = descriptor_for(SPEC_BY_NAME[name], False)
+        assert not d.floating_point_range and not d.integer_range and not d.read_only
+    assert "one of proposed" in descriptor_for(SPEC_BY_NAME["scheme"], False).description
+    assert as_double(4) == 4.0 and as_double([70, 150, 25]) == [70.0, 150.0, 25.0]
+    assert as_double(True) is None and as_double(2.5) is None and as_double("4") is None
     specs = (ParamSpec("time_scale", float, 1.0, "x", 0.0, 1000.0, True),
              ParamSpec("uav_id", int, 0, "k", 0, 2))
     assert check_scalars({"time_scale": 20.0, "uav_id": 2}, specs) == []

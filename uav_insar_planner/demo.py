@@ -1,6 +1,6 @@
 """`make demo` / `python -m uav_insar_planner.demo`: one whole mission, eight processes.
 
-Starts the `planner` and three `agent` executables as separate processes, as `ros2 run` would,
+Starts three `agent` executables and the `planner` as separate processes, as `ros2 run` would,
 on a private ROS_DOMAIN_ID with discovery kept on this host; this process watches the topics
 like `ros2 topic echo` would. Unless `--no-mavlink`, it also closes the MAVLink loop: three
 `uav-insar vehicle` processes (SITL-style, sysid 2..4, airborne, on free loopback UDP ports)
@@ -155,19 +155,6 @@ def start_mavlink(ports: Sequence[int], pass_s: float, common: Sequence[str],
 
 
 # --- watching ----------------------------------------------------------------------------
-def message_yaml(msg: Any) -> str:
-    """A message as `ros2 topic echo` prints it."""
-    from uav_insar_planner.seam import USING_RCLPY
-
-    if USING_RCLPY:
-        from rosidl_runtime_py.convert import message_to_yaml
-
-        return message_to_yaml(msg)
-    from uav_insar_planner.echo import to_yaml
-
-    return to_yaml(msg)
-
-
 Vec3 = tuple[float, float, float]
 
 
@@ -223,24 +210,28 @@ class Watcher:
     and, once `mavlink_pass` is set, the vehicles' positions."""
 
     def __init__(self, node: Any) -> None:
-        from uav_insar_planner.nodes.planner import LATCHED
-        from uav_insar_planner.seam import msg_type
+        from diagnostic_msgs.msg import DiagnosticArray
+        from geometry_msgs.msg import PoseArray, PoseStamped
+        from std_msgs.msg import Float64, Float64MultiArray
 
+        from uav_insar_planner.nodes.common import LATCHED
+
+        self.node = node
         self.formation = None
         self.power = None
         self.rates: dict[int, list[float]] = {0: [], 1: [], 2: []}
         self.plan_status = None
         self.mavlink_pass: MavlinkPass | None = None
-        node.create_subscription(msg_type("geometry_msgs/msg/PoseArray"), "formation",
+        node.create_subscription(PoseArray, "formation",
                                  self._on_formation, LATCHED)
-        node.create_subscription(msg_type("std_msgs/msg/Float64MultiArray"), "formation/power",
+        node.create_subscription(Float64MultiArray, "formation/power",
                                  self._on_power, LATCHED)
-        node.create_subscription(msg_type("diagnostic_msgs/msg/DiagnosticArray"), "/diagnostics",
+        node.create_subscription(DiagnosticArray, "/diagnostics",
                                  self._on_diagnostics, 10)
         for k in range(3):
-            node.create_subscription(msg_type("std_msgs/msg/Float64"), f"uav{k}/achieved_rate",
+            node.create_subscription(Float64, f"uav{k}/achieved_rate",
                                      lambda msg, k=k: self.rates[k].append(msg.data), 100)
-            node.create_subscription(msg_type("geometry_msgs/msg/PoseStamped"),
+            node.create_subscription(PoseStamped,
                                      f"uav{k}/mavlink/pose",
                                      lambda msg, k=k: self._on_mavlink_pose(k, msg), 100)
 
@@ -261,6 +252,10 @@ class Watcher:
             p = msg.pose.position
             self.mavlink_pass.update(k, (p.x, p.y, p.z), time.monotonic())
 
+    def agents_matched(self) -> bool:
+        """True once this node has discovered every agent's achieved_rate publisher."""
+        return all(self.node.count_publishers(f"/uav{k}/achieved_rate") for k in range(3))
+
     def plan_failed(self) -> bool:
         """True once /diagnostics reports the plan as ERROR (infeasible or solve failed)."""
         s = self.plan_status
@@ -276,7 +271,7 @@ class Watcher:
 
 
 def level_of(status: Any) -> int:
-    """DiagnosticStatus.level as an int (rclpy gives a 1-byte bytes, our runtime an int)."""
+    """DiagnosticStatus.level as an int (rclpy gives the byte field as a 1-byte bytes)."""
     level = status.level
     return level[0] if isinstance(level, (bytes, bytearray)) else int(level)
 
@@ -333,7 +328,11 @@ def run(args: argparse.Namespace) -> int:
         return 2
     domain = args.domain_id if args.domain_id is not None else free_domain_id()
     os.environ.update(ros_env(domain))
-    from uav_insar_planner.seam import Node, SingleThreadedExecutor, rclpy
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.node import Node
+
+    from uav_insar_planner.msg_yaml import message_to_yaml
 
     common = ["--params-file", str(args.params_file)] if args.params_file else []
     common += ["-p", f"num_slots:={params.num_slots}", *(a for text in args.param
@@ -341,27 +340,34 @@ def run(args: argparse.Namespace) -> int:
     print(f"demo: ROS_DOMAIN_ID={domain}, {params.num_slots} slots of "
           f"{params.slot_duration_s:g} s at time_scale {args.time_scale:g}, scheme "
           f"{params.scheme}, solver {params.solver}", flush=True)
-    rclpy.init(args=["demo"])
-    node = Node("demo_watcher")
+    context = rclpy.Context()
+    rclpy.init(args=["demo"], context=context)
+    node = Node("demo_watcher", context=context)
     watcher = Watcher(node)
-    executor = SingleThreadedExecutor()
+    executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
     env = ros_env(domain)
-    procs = [start_node("planner", common, env, "[planner]")]
-    procs += [start_node("agent", [*common, "-p", f"uav_id:={k}", "-p",
-                                   f"time_scale:={args.time_scale}", "-p",
-                                   f"position_noise_std_m:={args.noise_std}",
-                                   "-r", f"__node:=agent{k}"], env, f"[agent{k}]")
-              for k in range(3)]
+    procs = [start_node("agent", [*common, "-p", f"uav_id:={k}", "-p",
+                                  f"time_scale:={args.time_scale}", "-p",
+                                  f"position_noise_std_m:={args.noise_std}",
+                                  "-r", f"__node:=agent{k}"], env, f"[agent{k}]")
+             for k in range(3)]
     ports: list[int] = []
-    if not args.no_mavlink:
-        ports = ([args.mavlink_base_port + 10 * k for k in range(3)] if args.mavlink_base_port
-                 else free_udp_ports(3))
-        print(f"demo: MAVLink vehicles sysid {FIRST_SYSID}..{FIRST_SYSID + 2} on UDP ports "
-              f"{', '.join(map(str, ports))}, pass of {args.mavlink_pass_s:g} s", flush=True)
-        procs += start_mavlink(ports, args.mavlink_pass_s, common, env)
     code = 1
     try:
+        # A new process can take a discovery announcement period (~3 s) to be seen: the
+        # watcher must see the agents before the plan starts their slots, or it misses rates.
+        if not spin_until(executor, watcher.agents_matched, 20.0, procs):
+            print("demo: the agents did not come up (see their log above)", flush=True)
+            return 1
+        procs.append(start_node("planner", common, env, "[planner]"))
+        if not args.no_mavlink:
+            ports = ([args.mavlink_base_port + 10 * k for k in range(3)]
+                     if args.mavlink_base_port else free_udp_ports(3))
+            print(f"demo: MAVLink vehicles sysid {FIRST_SYSID}..{FIRST_SYSID + 2} on UDP "
+                  f"ports {', '.join(map(str, ports))}, pass of {args.mavlink_pass_s:g} s",
+                  flush=True)
+            procs += start_mavlink(ports, args.mavlink_pass_s, common, env)
         if not spin_until(executor, lambda: (watcher.formation and watcher.power)
                           or watcher.plan_failed(), 40.0, procs) or watcher.plan_failed():
             print("demo: no plan on /formation (see the planner's log above)", flush=True)
@@ -369,7 +375,7 @@ def run(args: argparse.Namespace) -> int:
         plan_time = time.monotonic()
         with PRINT_LOCK:
             print("\n$ ros2 topic echo /formation  (first message)")
-            print(message_yaml(watcher.formation) + "---", flush=True)
+            print(message_to_yaml(watcher.formation) + "---", flush=True)
         uavs, n_slots = watcher.flown(), watcher.num_slots
         if not args.no_mavlink:
             starts = {k: (p.x, p.y, p.z) for k, p in
@@ -401,7 +407,7 @@ def run(args: argparse.Namespace) -> int:
     finally:
         codes = stop_nodes(procs)
         node.destroy_node()
-        rclpy.try_shutdown()
+        context.try_shutdown()
         what = "planner and agents" if args.no_mavlink else "planner, agents, vehicles, bridge"
         print(f"demo: stopped {what} (exit codes {codes})", flush=True)
 

@@ -15,11 +15,12 @@ and `origin_ned_m`, which must match the bridge's; default N = y, E = x, D = -z)
 schedule on it (observed_mission.ObservedMission: slot n starts when the
 vehicle crosses y = n v_y delta_t). `time_scale` and the position noise do not apply then.
 
-Parameters: uav_id, time_scale (mission seconds per wall second), position_noise_std_m,
-noise_seed, max_speed_mps, max_accel_mps2 (AGENT_SPECS), mavlink_listen, mavlink_sysid,
-track_bearing_deg, origin_ned_m
-(MAVLINK_SPECS) and the scenario parameters of SCENARIO_NAMES from params.PARAM_SPECS, so one
-params file serves every node. Invalid values log one line each and exit with code 2.
+Parameters (nodes/parameters.py, all read-only: a mission is set up once): uav_id, time_scale
+(mission seconds per wall second), position_noise_std_m, noise_seed, max_speed_mps,
+max_accel_mps2 (AGENT_SPECS), mavlink_listen, mavlink_sysid, track_bearing_deg, origin_ned_m
+(MAVLINK_SPECS) and the scenario parameters of AGENT_SCENARIO_NAMES from params.PARAM_SPECS, so
+one params file serves every node. Invalid values or unknown names log one line each and exit
+with code 2.
 """
 from __future__ import annotations
 
@@ -27,48 +28,30 @@ import math
 import sys
 import time
 
+from geometry_msgs.msg import PoseArray, PoseStamped
+from rclpy.node import Node
+from std_msgs.msg import Float64, Float64MultiArray
+
 from uav_insar_planner.mavlink.frames import TrackFrame
 from uav_insar_planner.nodes.common import LATCHED, run_node
-from uav_insar_planner.nodes.planner_report import rate_tolerance_bps
-from uav_insar_planner.nodes.ros_params import check_scalars, declare_specs, spec_values
-from uav_insar_planner.params import SPEC_BY_NAME, ParamError, ParamSpec, params_from_mapping
-from uav_insar_planner.seam import (
-    Node,
-    msg_type,
+from uav_insar_planner.nodes.parameters import (
+    AGENT_SPECS,
+    MAVLINK_SPECS,
+    agent_scenario_specs,
+    check_scalars,
+    declare_specs,
+    guard_sets,
+    spec_values,
+    unknown_overrides,
 )
+from uav_insar_planner.nodes.planner_report import rate_tolerance_bps
+from uav_insar_planner.params import ParamError, params_from_mapping
 from uav_insar_sim.mission import Mission, home_position
 from uav_insar_sim.observed_mission import ObservedMission
 from uav_insar_sim.vehicle import SimVehicle
 
-PoseArray = msg_type("geometry_msgs/msg/PoseArray")
-PoseStamped = msg_type("geometry_msgs/msg/PoseStamped")
-Float64 = msg_type("std_msgs/msg/Float64")
-Float64MultiArray = msg_type("std_msgs/msg/Float64MultiArray")
-
-AGENT_SPECS = (
-    ParamSpec("uav_id", int, 0, "which UAV this agent flies: 0 master, 1, 2", 0, 2),
-    ParamSpec("time_scale", float, 1.0, "mission seconds per wall-clock second", 0.0, 1000.0,
-              True),
-    ParamSpec("position_noise_std_m", float, 0.0, "std of the position disturbance per axis "
-              "[m]", 0.0, 100.0),
-    ParamSpec("noise_seed", int, 0, "seed of the position disturbance", 0, 2**31 - 1),
-    ParamSpec("max_speed_mps", float, 10.0, "speed limit [m/s], at least speed_mps", 0.0,
-              100.0, True),
-    ParamSpec("max_accel_mps2", float, 3.0, "acceleration limit [m/s^2]", 0.0, 50.0, True),
-)
-MAVLINK_SPECS = (
-    ParamSpec("mavlink_listen", str, "", "MAVLink mode: the embedded vehicle's connection "
-              "string, e.g. udpin:127.0.0.1:14552 (empty: fly /formation directly)"),
-    ParamSpec("mavlink_sysid", int, 0, "MAVLink mode: the embedded vehicle's sysid (0: 2 + "
-              "uav_id)", 0, 255),
-    ParamSpec("track_bearing_deg", float, 0.0, "MAVLink mode: bearing of the along-track "
-              "axis from north [deg], as the bridge's", -360.0, 360.0),
-    ParamSpec("origin_ned_m", float, [0.0, 0.0, 0.0], "MAVLink mode: track origin in the "
-              "vehicle's local NED [m], as the bridge's", length=3),
-)
-SCENARIO_NAMES = ("num_slots", "slot_duration_s", "speed_mps", "ground_station_m",
-                  "comm_bandwidth_hz", "ref_snr_db", "rate_min_mbps")
-SCENARIO_SPECS = tuple(SPEC_BY_NAME[n] for n in SCENARIO_NAMES)
+SCENARIO_SPECS = agent_scenario_specs()
+RATE_HISTORY_DEPTH = 100
 TICK_PERIOD_S = 0.05  # wall clock; the mission clock advances time_scale times faster
 FRAME_ID = "insar_track"
 # MAVLink mode: the embedded vehicle starts airborne (no arming needed) above the agent's home.
@@ -81,7 +64,8 @@ class AgentNode(Node):
     def __init__(self, node_name: str = "agent", **kwargs):
         super().__init__(node_name, **kwargs)
         self.vehicle: SimVehicle | None = None
-        self.problems = declare_specs(self, AGENT_SPECS + MAVLINK_SPECS + SCENARIO_SPECS)
+        self.problems = declare_specs(self, AGENT_SPECS + MAVLINK_SPECS + SCENARIO_SPECS,
+                                      read_only=True) + unknown_overrides(self)
         own = spec_values(self, AGENT_SPECS + MAVLINK_SPECS)
         self.problems += check_scalars(own, AGENT_SPECS + MAVLINK_SPECS[1:3])
         origin = own["origin_ned_m"]
@@ -106,6 +90,7 @@ class AgentNode(Node):
         except ValueError as exc:
             self.problems.append(str(exc))
             return
+        guard_sets(self)
         self.k = own["uav_id"]
         self.time_scale = own["time_scale"]
         self._formation = None
@@ -113,7 +98,10 @@ class AgentNode(Node):
         self._wall_t0: float | None = None
         self._phase = self.mission.phase
         self._pose_pub = self.create_publisher(PoseStamped, f"uav{self.k}/pose", 10)
-        self._rate_pub = self.create_publisher(Float64, f"uav{self.k}/achieved_rate", 10)
+        # One rate per slot, each one counts: a history deep enough that a subscriber stalled
+        # for a few seconds (a busy 2-core host, a planner restarting) still gets them all.
+        self._rate_pub = self.create_publisher(Float64, f"uav{self.k}/achieved_rate",
+                                               RATE_HISTORY_DEPTH)
         self.create_subscription(PoseArray, "formation", self._on_formation, LATCHED)
         self.create_subscription(Float64MultiArray, "formation/power", self._on_power, LATCHED)
         self.create_timer(TICK_PERIOD_S, self._tick)
@@ -219,7 +207,7 @@ def embedded_vehicle(own: dict, frame: TrackFrame) -> SimVehicle:
 
 def main(args: list[str] | None = None) -> int:
     """Run one agent until Ctrl-C / SIGTERM; exit code 2 when the parameters are invalid."""
-    return run_node(AgentNode, args)
+    return run_node(AgentNode, "agent", args)
 
 
 if __name__ == "__main__":

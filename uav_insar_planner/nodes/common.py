@@ -1,17 +1,30 @@
-"""What every node of the suite shares: the latched plan QoS and the run-until-stopped loop."""
+"""What every node of the suite shares: the latched plan QoS and the run-until-stopped loop.
+
+`run_node` checks what rcl would otherwise turn into a traceback before it initialises
+rclpy: ROS_DOMAIN_ID, and each `--params-file` (readable, YAML, sections that name a node
+of the suite, each with a `ros__parameters` mapping). Every problem is one line on stderr,
+exit code 2, nothing published.
+"""
 from __future__ import annotations
 
-from collections.abc import Callable
+import difflib
+import os
+import re
+import signal
+import sys
+from collections.abc import Callable, Iterator, Sequence
+from pathlib import Path
+from typing import Any
 
-from uav_insar_planner.seam import (
-    DurabilityPolicy,
-    ExternalShutdownException,
-    HistoryPolicy,
-    Node,
-    QoSProfile,
-    ReliabilityPolicy,
-    rclpy,
-)
+import rclpy
+import rclpy.logging
+import yaml
+from rclpy.executors import ExternalShutdownException
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+from uav_insar_planner.params import yaml_load
 
 # /formation and /formation/power: a late joiner (an agent started after the planner, or a
 # planner restarted) still gets the last plan.
@@ -19,16 +32,132 @@ LATCHED = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
                      reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
 EXIT_BAD_PARAMS = 2
+# Fast DDS derives its ports from the domain id; above 232 they pass 65535 and the process
+# aborts inside the middleware.
+DOMAIN_ID_MAX = 232
+SUITE_NODE_NAMES = ("planner", "agent", "mavlink_bridge")
+PARAMS_FILE_MAX_BYTES = 1 << 20
 
 
-def run_node(make_node: Callable[[], Node], args: list[str] | None = None) -> int:
-    """init, build the node, spin until Ctrl-C / SIGTERM, shut down; 0, or EXIT_BAD_PARAMS
-    when the node found invalid parameters (its `problems`, one log line each) and so never
-    started publishing. A node's optional `stop()` runs before it is destroyed."""
-    rclpy.init(args=args)
-    node = make_node()
+def params_files(args: Sequence[str]) -> Iterator[str]:
+    """The paths given with --params-file inside the --ros-args ... [--] spans of `args`."""
+    in_ros, expect_file = False, False
+    for arg in args:
+        if expect_file:
+            expect_file = False
+            yield arg
+        elif arg == "--ros-args":
+            in_ros = True
+        elif arg == "--":
+            in_ros = False
+        elif in_ros and arg == "--params-file":
+            expect_file = True
+
+
+def _suite_node(section: str, own_name: str) -> bool:
+    """Whether a params-file section key can address a node of the suite (or this node)."""
+    name = str(section).rstrip("/").split("/")[-1]
+    return ("*" in name or name == own_name or name in SUITE_NODE_NAMES
+            or re.fullmatch(r"agent\d+", name) is not None)
+
+
+def _sections(doc: dict, prefix: str = "") -> Iterator[tuple[str, Any]]:
+    """(node key, body) of each section; nested namespace keys are joined with '/'."""
+    for key, body in doc.items():
+        path = f"{prefix}/{key}".replace("//", "/") if prefix else str(key)
+        if isinstance(body, dict) and "ros__parameters" not in body and body and all(
+                isinstance(v, dict) for v in body.values()):
+            yield from _sections(body, path)
+        else:
+            yield path, body
+
+
+def params_file_problems(path: str, own_name: str) -> list[str]:
+    """One line per problem of params file `path` for a node named `own_name`."""
+    where = f"params file {path!r}"
+    try:
+        p = Path(path)
+        if p.is_file() and p.stat().st_size > PARAMS_FILE_MAX_BYTES:
+            return [f"{where}: larger than {PARAMS_FILE_MAX_BYTES} bytes; expected a params file"]
+        doc = yaml_load(p.read_bytes().decode("utf-8"))
+    except OSError as exc:
+        return [f"{where}: cannot be read ({exc.strerror or exc}); expected a readable file"]
+    except UnicodeDecodeError:
+        return [f"{where}: is not UTF-8 text; expected a YAML params file"]
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        at = f" at line {mark.line + 1}" if mark else ""
+        return [f"{where}: is not valid YAML{at}; expected '/**:' or 'NODE:' sections with "
+                "ros__parameters"]
+    if doc is None or doc == {}:
+        return [f"{where}: is empty; expected '/**:' or 'NODE:' sections with "
+                "ros__parameters"]
+    if not isinstance(doc, dict):
+        return [f"{where}: must map node names to {{ros__parameters: {{...}}}}"]
+    problems = []
+    for key, body in _sections(doc):
+        if not isinstance(body, dict) or not isinstance(body.get("ros__parameters"), dict):
+            problems.append(f"{where}: section {str(key)!r} must hold a 'ros__parameters' "
+                            "mapping")
+        elif not _suite_node(key, own_name):
+            near = difflib.get_close_matches(str(key).split("/")[-1],
+                                             [*SUITE_NODE_NAMES, own_name], n=1)
+            hint = f" (did you mean {near[0]}?)" if near else ""
+            problems.append(f"{where}: section {str(key)!r} names no node of "
+                            f"uav_insar_planner{hint}; expected /**, {', '.join(SUITE_NODE_NAMES)}"
+                            " or this node's name")
+    return problems
+
+
+def startup_problems(args: Sequence[str], own_name: str) -> list[str]:
+    """What would stop rcl from starting, each as one line: domain id and params files."""
+    problems = []
+    domain = os.environ.get("ROS_DOMAIN_ID", "").strip()
+    if domain and not (domain.isdigit() and int(domain) <= DOMAIN_ID_MAX):
+        problems.append(f"ROS_DOMAIN_ID: value {domain[:20]!r} is not allowed; expected an "
+                        f"integer 0..{DOMAIN_ID_MAX}")
+    for path in params_files(args):
+        problems += params_file_problems(path, own_name)
+    return problems
+
+
+def _report(name: str, lines: Sequence[str]) -> None:
+    for line in lines:
+        print(f"[ERROR] [{name}]: {line}", file=sys.stderr, flush=True)
+
+
+def _terminate(signum: int, frame: Any) -> None:
+    raise KeyboardInterrupt  # SIGTERM stops a node the way Ctrl-C does
+
+
+def run_node(make_node: Callable[[], Node], default_name: str,
+             args: list[str] | None = None) -> int:
+    """Check the start-up arguments, init, build the node, spin until Ctrl-C / SIGTERM, shut
+    down; 0, or EXIT_BAD_PARAMS when the arguments or the node's parameters were invalid
+    (the node's `problems`, one line each), in which case nothing was published. A node's
+    optional `stop()` runs before it is destroyed."""
+    argv = list(sys.argv if args is None else args)
+    problems = startup_problems(argv, default_name)
+    if problems:
+        _report(default_name, problems)
+        return EXIT_BAD_PARAMS
+    signal.signal(signal.SIGTERM, _terminate)
+    # rcl logs its own "Failed to parse global arguments" before raising; ours says which.
+    rclpy.logging.set_logger_level("rcl", rclpy.logging.LoggingSeverity.FATAL)
+    try:
+        rclpy.init(args=argv)
+    except _rclpy.UnknownROSArgsError as exc:
+        _report(default_name, [f"unknown ROS arguments {str(exc)[:200]}; expected -p NAME:=VALUE, "
+                               "-r FROM:=TO, --params-file FILE, --log-level LEVEL, ..."])
+        return EXIT_BAD_PARAMS
+    except _rclpy.RCLError as exc:
+        _report(default_name, [" ".join(str(exc).split(", at ")[0].split())])
+        return EXIT_BAD_PARAMS
+    rclpy.logging.set_logger_level("rcl", rclpy.logging.LoggingSeverity.UNSET)
+    node = None
     code = 0
     try:
+        node = make_node()
         if node.problems:
             for line in node.problems:
                 node.get_logger().error(line)
@@ -38,9 +167,10 @@ def run_node(make_node: Callable[[], Node], args: list[str] | None = None) -> in
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
-        stop = getattr(node, "stop", None)
-        if stop is not None:
-            stop()
-        node.destroy_node()
+        if node is not None:
+            stop = getattr(node, "stop", None)
+            if stop is not None:
+                stop()
+            node.destroy_node()
         rclpy.try_shutdown()
     return code

@@ -1,12 +1,13 @@
 """The MAVLink bridge node (`ros2 run uav_insar_planner mavlink_bridge`): a thin ROS adapter
 over `uav_insar_planner.mavlink.bridge.Bridge`, which does all MAVLink work in its own thread.
 
-Parameters (docs/mavlink.md has the full table):
+Parameters (nodes/parameters.py BRIDGE_SPECS, all read-only: the links are opened once):
   connections (string[]), target_sysids (int[]), source_sysid, track_bearing_deg,
   origin_ned_m (double[3], N E D), setpoint_rate_hz, velocity_feedforward, arm_and_takeoff,
   autopilot (ardupilot|px4), speed_mps, track_duration_s, capture_radius_m,
   heartbeat_timeout_s.
-A bad value logs one line and exits with code 2 before anything is published or opened.
+A bad value or unknown name logs one line and exits with code 2 before anything is published
+or opened.
 
 Subscribes  formation (geometry_msgs/PoseArray, reliable + transient_local, depth 1):
             poses[k] = (x_k, y_start, z_k) in the track frame; NaN for a UAV not flown.
@@ -21,45 +22,23 @@ import math
 import sys
 from typing import Any
 
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import PoseArray, PoseStamped
+from rclpy.node import Node
+
 from uav_insar_planner.mavlink.bridge import Bridge, BridgeConfig, VehicleStatus
 from uav_insar_planner.nodes.common import LATCHED, run_node
-from uav_insar_planner.seam import (
-    Node,
-    ParameterDescriptor,
-    msg_type,
+from uav_insar_planner.nodes.parameters import (
+    BRIDGE_SPECS,
+    declare_specs,
+    guard_sets,
+    spec_values,
+    unknown_overrides,
 )
-
-PoseArray = msg_type("geometry_msgs/msg/PoseArray")
-PoseStamped = msg_type("geometry_msgs/msg/PoseStamped")
-DiagnosticArray = msg_type("diagnostic_msgs/msg/DiagnosticArray")
-DiagnosticStatus = msg_type("diagnostic_msgs/msg/DiagnosticStatus")
-KeyValue = msg_type("diagnostic_msgs/msg/KeyValue")
 
 FRAME_ID = "insar_track"
 POSE_PERIOD_S = 0.05  # poll the bridge at 20 Hz: vehicles report at ~10 Hz
 DIAGNOSTICS_PERIOD_S = 1.0
-
-#: (name, default, description); defaults pair with `uav-insar vehicle --sysid 2..4
-#: --listen udpin:127.0.0.1:14552/14562/14572`.
-PARAMETERS: tuple[tuple[str, Any, str], ...] = (
-    ("connections", ["udpout:127.0.0.1:14552", "udpout:127.0.0.1:14562",
-                     "udpout:127.0.0.1:14572"],
-     "pymavlink connection string per UAV (or one shared): udpout:HOST:PORT, "
-     "udpin:HOST:PORT, tcp:HOST:PORT, /dev/ttyUSB0,57600"),
-    ("target_sysids", [2, 3, 4], "MAVLink system id of UAV 0, 1, 2 (1..255, distinct)"),
-    ("source_sysid", 255, "our own system id (ArduPilot: match SYSID_MYGCS)"),
-    ("track_bearing_deg", 0.0, "bearing of the along-track axis y from north [deg]"),
-    ("origin_ned_m", [0.0, 0.0, 0.0], "track origin in local NED (N, E, D) [m]"),
-    ("setpoint_rate_hz", 10.0, "SET_POSITION_TARGET_LOCAL_NED rate per UAV, 2..50 [Hz]"),
-    ("velocity_feedforward", False, "send the along-track velocity too (type_mask 3520)"),
-    ("arm_and_takeoff", False, "set GUIDED/OFFBOARD, arm and take off (default: you do)"),
-    ("autopilot", "ardupilot", "ardupilot | px4: mode numbers and arming sequence"),
-    ("speed_mps", 4.3, "along-track speed v_y [m/s]"),
-    ("track_duration_s", 0.0, "length of the pass in time, then hold at its end; 0: no end"),
-    ("capture_radius_m", 1.0, "start the pass when every UAV is this close to its start "
-                              "point; 0: start at once [m]"),
-    ("heartbeat_timeout_s", 5.0, "report a UAV lost after this long without heartbeat [s]"),
-)
 
 
 class MavlinkBridgeNode(Node):
@@ -68,28 +47,17 @@ class MavlinkBridgeNode(Node):
 
     def __init__(self, node_name: str = "mavlink_bridge", **kwargs: Any):
         super().__init__(node_name, **kwargs)
-        self.problems: list[str] = []
         self.bridge: Bridge | None = None
-        values = self._declare()
+        self.problems = declare_specs(self, BRIDGE_SPECS, read_only=True)
+        self.problems += unknown_overrides(self)
         if self.problems:
             return
+        values = spec_values(self, BRIDGE_SPECS)
         try:
-            config = BridgeConfig(
-                connections=tuple(values["connections"]),
-                target_sysids=tuple(values["target_sysids"]),
-                source_sysid=values["source_sysid"],
-                track_bearing_deg=values["track_bearing_deg"],
-                origin_ned_m=tuple(values["origin_ned_m"]),
-                setpoint_rate_hz=values["setpoint_rate_hz"],
-                velocity_feedforward=values["velocity_feedforward"],
-                arm_and_takeoff=values["arm_and_takeoff"],
-                autopilot=values["autopilot"],
-                speed_mps=values["speed_mps"],
-                track_duration_s=values["track_duration_s"],
-                capture_radius_m=values["capture_radius_m"],
-                heartbeat_timeout_s=values["heartbeat_timeout_s"])
+            config = BridgeConfig(**{name: tuple(v) if isinstance(v, list) else v
+                                     for name, v in values.items()})
             self.bridge = Bridge(config)
-        except ValueError as exc:
+        except (TypeError, ValueError) as exc:
             self.problems.append(str(exc))
             return
         n = len(config.target_sysids)
@@ -100,19 +68,8 @@ class MavlinkBridgeNode(Node):
         self.create_subscription(PoseArray, "formation", self._on_formation, LATCHED)
         self.create_timer(POSE_PERIOD_S, self._publish_poses)
         self.create_timer(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)
+        guard_sets(self)
         self.bridge.start()
-
-    def _declare(self) -> dict[str, Any]:
-        values: dict[str, Any] = {}
-        for name, default, description in PARAMETERS:
-            descriptor = ParameterDescriptor(description=description)
-            try:
-                self.declare_parameter(name, default, descriptor)
-            except Exception as exc:  # rclpy's InvalidParameter*Exception share no base
-                self.problems.append(f"{name}: {' '.join(str(exc).split())}")
-                continue
-            values[name] = self.get_parameter(name).value
-        return values
 
     def stop(self) -> None:
         if self.bridge is not None:
@@ -129,9 +86,16 @@ class MavlinkBridgeNode(Node):
         self.get_logger().info(f"formation received: {flown} UAV(s) with a target")
 
     def _publish_poses(self) -> None:
+        logger = self.get_logger()
         for event in self.bridge.drain_events():
-            log = getattr(self.get_logger(), "warning" if event.level == "warn" else event.level)
-            log(("swarm" if event.uav < 0 else f"uav{event.uav}") + ": " + event.text)
+            text = ("swarm" if event.uav < 0 else f"uav{event.uav}") + ": " + event.text
+            # rclpy ties a severity to each call site: one call per severity.
+            if event.level == "error":
+                logger.error(text)
+            elif event.level == "warn":
+                logger.warning(text)
+            else:
+                logger.info(text)
         stamp = self.get_clock().now().to_msg()
         for s in self.bridge.status():
             age = s.position_age_s
@@ -190,7 +154,7 @@ class MavlinkBridgeNode(Node):
 
 def main(args: list[str] | None = None) -> int:
     """Run the bridge until Ctrl-C / SIGTERM; exit code 2 when the parameters are invalid."""
-    return run_node(MavlinkBridgeNode, args)
+    return run_node(MavlinkBridgeNode, "mavlink_bridge", args)
 
 
 if __name__ == "__main__":

@@ -1,8 +1,9 @@
 """The planner node (`ros2 run uav_insar_planner planner`): solve, publish, watch the agents.
 
 Parameters: every entry of `params.PARAM_SPECS` (config/params.yaml), validated as a whole by
-`params_from_mapping` before anything is published. A bad value at start logs one line per
-problem and exits with code 2; a bad value set at run time is refused with the same lines.
+`params_from_mapping` before anything is published. A bad value or an unknown name at start
+logs one line per problem and exits with code 2; a run-time set is validated in the on-set
+callback (refused with the same lines, nothing changes) and solved after it took effect.
 
 Publishes (names relative to the node's namespace, except /diagnostics):
   formation         geometry_msgs/PoseArray, reliable + transient_local, depth 1
@@ -18,9 +19,24 @@ from __future__ import annotations
 import sys
 import threading
 
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import Point, Pose, PoseArray, PoseStamped, Quaternion
+from rcl_interfaces.msg import SetParametersResult
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension
+from std_srvs.srv import Trigger
+
 from uav_insar_planner.nodes import planner_report as report
 from uav_insar_planner.nodes.common import LATCHED, run_node
-from uav_insar_planner.nodes.ros_params import declare_specs, spec_values
+from uav_insar_planner.nodes.parameters import (
+    declare_specs,
+    guard_sets,
+    shown,
+    spec_values,
+    unknown_overrides,
+)
 from uav_insar_planner.nodes.solve_worker import SolveWorker
 from uav_insar_planner.params import (
     PARAM_SPECS,
@@ -30,26 +46,7 @@ from uav_insar_planner.params import (
     params_from_mapping,
 )
 from uav_insar_planner.plan import Plan
-from uav_insar_planner.seam import (
-    Node,
-    SetParametersResult,
-    msg_type,
-    rclpy,
-)
 from uav_insar_planner.solver import solve
-
-PoseArray = msg_type("geometry_msgs/msg/PoseArray")
-Pose = msg_type("geometry_msgs/msg/Pose")
-Point = msg_type("geometry_msgs/msg/Point")
-Quaternion = msg_type("geometry_msgs/msg/Quaternion")
-PoseStamped = msg_type("geometry_msgs/msg/PoseStamped")
-Float64 = msg_type("std_msgs/msg/Float64")
-Float64MultiArray = msg_type("std_msgs/msg/Float64MultiArray")
-MultiArrayDimension = msg_type("std_msgs/msg/MultiArrayDimension")
-DiagnosticArray = msg_type("diagnostic_msgs/msg/DiagnosticArray")
-DiagnosticStatus = msg_type("diagnostic_msgs/msg/DiagnosticStatus")
-KeyValue = msg_type("diagnostic_msgs/msg/KeyValue")
-Trigger = msg_type("std_srvs/srv/Trigger")
 
 DIAGNOSTICS_PERIOD_S = 1.0
 
@@ -60,7 +57,7 @@ class PlannerNode(Node):
 
     def __init__(self, node_name: str = "planner", **kwargs):
         super().__init__(node_name, **kwargs)
-        self.problems = declare_specs(self, PARAM_SPECS)
+        self.problems = declare_specs(self, PARAM_SPECS) + unknown_overrides(self)
         params = None
         try:
             params = params_from_mapping(spec_values(self, PARAM_SPECS))
@@ -83,7 +80,10 @@ class PlannerNode(Node):
             self.create_subscription(Float64, f"uav{k}/achieved_rate",
                                      lambda msg, k=k: self._on_rate(k, msg), 10)
         self.create_service(Trigger, "~/replan", self._on_replan)
+        self._pending: tuple[Params, str] | None = None
+        guard_sets(self)
         self.add_on_set_parameters_callback(self._on_set_parameters)
+        self.add_post_set_parameters_callback(self._after_set_parameters)
         self.create_timer(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)
         self._worker = SolveWorker(solve, self._on_solved)
         self._worker.request(params, "start")
@@ -94,7 +94,8 @@ class PlannerNode(Node):
             self._worker.stop()
 
     # --- parameters and replanning -------------------------------------------------------
-    def _on_set_parameters(self, parameters: list) -> SetParametersResult:
+    def _on_set_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
+        """Validate the whole scenario with the changes; nothing changes yet."""
         changes = {p.name: p.value for p in parameters if p.name in SPEC_BY_NAME}
         if not changes:
             return SetParametersResult(successful=True)
@@ -104,10 +105,21 @@ class PlannerNode(Node):
             reason = "; ".join(exc.problems)
             self.get_logger().warning(f"parameter set refused: {reason}")
             return SetParametersResult(successful=False, reason=reason)
+        described = ", ".join(f"{name} {shown(self.get_parameter(name).value)} -> "
+                              f"{shown(value)}" for name, value in sorted(changes.items()))
         with self._state_lock:
-            self._scenario = params
-        self._worker.request(params, "parameters set: " + ", ".join(sorted(changes)))
+            self._pending = (params, described)
         return SetParametersResult(successful=True)
+
+    def _after_set_parameters(self, parameters: list[Parameter]) -> None:
+        """The set took effect: adopt the scenario and solve it."""
+        with self._state_lock:
+            pending, self._pending = self._pending, None
+            if pending is not None:
+                self._scenario = pending[0]
+        if pending is not None:
+            self.get_logger().info(f"parameters set: {pending[1]}; solving again")
+            self._worker.request(pending[0], "parameters set: " + pending[1])
 
     def _on_replan(self, request, response):
         with self._state_lock:
@@ -128,8 +140,11 @@ class PlannerNode(Node):
             self.get_logger().error(status.message)
         else:
             status = report.plan_status(plan)
-            log = self.get_logger().info if plan.feasible else self.get_logger().error
-            log(f"{reason}: {status.message}")
+            # rclpy ties a severity to each call site: one call per severity.
+            if plan.feasible:
+                self.get_logger().info(f"{reason}: {status.message}")
+            else:
+                self.get_logger().error(f"{reason}: {status.message}")
         with self._state_lock:
             self._plan_status = status
             if plan is not None and plan.feasible:
@@ -156,6 +171,9 @@ class PlannerNode(Node):
 
     def _publish_diagnostics(self) -> None:
         with self._state_lock:
+            if self._worker.failure is not None:  # no more plans will come: say so
+                self._plan_status = report.failure_status(
+                    self._scenario.scheme, "solve worker died: " + self._worker.failure)
             statuses = [self._plan_status] if self._plan_status else []
             if self._plan is not None:
                 rate_min = self._scenario.rate_min_bps
@@ -186,7 +204,7 @@ class PlannerNode(Node):
 
 def main(args: list[str] | None = None) -> int:
     """Run the planner until Ctrl-C / SIGTERM; exit code 2 when the parameters are invalid."""
-    return run_node(PlannerNode, args)
+    return run_node(PlannerNode, "planner", args)
 
 
 if __name__ == "__main__":

@@ -2,7 +2,8 @@
 
 Requests coalesce: while a solve runs, later requests replace each other and only the newest
 is solved next (a burst of parameter sets costs at most one extra solve). Results are handed
-to `on_result(params, plan, error, reason)` on the worker thread.
+to `on_result(params, plan, error, reason)` on the worker thread. If `on_result` raises, the
+thread ends and `failure` says why, so the node can report itself broken instead of OK.
 """
 from __future__ import annotations
 
@@ -25,6 +26,7 @@ class SolveWorker:
         self._pending: tuple[Params, str] | None = None
         self._busy = False
         self._stopped = False
+        self.failure: str | None = None
         self._thread = threading.Thread(target=self._run, name="solve-worker", daemon=True)
         self._thread.start()
 
@@ -60,4 +62,8 @@ class SolveWorker:
                 self._busy = False
                 if self._stopped:
                     return
-            self._on_result(params, plan, error, reason)
+            try:
+                self._on_result(params, plan, error, reason)
+            except Exception as exc:  # recorded, never silent: the node turns ERROR
+                self.failure = f"{type(exc).__name__}: {exc}"
+                return

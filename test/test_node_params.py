@@ -1,0 +1,208 @@
+"""Parameters of the real node processes, as a user meets them: params files and --ros-args at
+start-up, and run-time sets through the nodes' rcl_interfaces services (what `ros2 param set`
+and `ros2 service call` send). Every node runs on real rclpy, on the test's private domain."""
+from __future__ import annotations
+
+import os
+import subprocess
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import spin_until
+from geometry_msgs.msg import PoseArray
+from rcl_interfaces.msg import Parameter as ParameterMsg
+from rcl_interfaces.msg import ParameterType, ParameterValue
+from rcl_interfaces.srv import GetParameters, SetParameters
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from std_srvs.srv import Trigger
+
+from uav_insar_planner import load_params, solve
+from uav_insar_planner.demo import start_node, stop_node
+from uav_insar_planner.nodes.common import LATCHED
+
+CONFIG = str(Path(__file__).resolve().parents[1] / "config" / "params.yaml")
+N = 8
+
+
+class Probe:
+    """A node in this process that watches /formation and calls the nodes' services."""
+
+    def __init__(self, ctx) -> None:
+        self.node = Node("probe", context=ctx)
+        self.formations: list = []
+        self.node.create_subscription(PoseArray, "/formation", self.formations.append, LATCHED)
+        self.executor = SingleThreadedExecutor(context=ctx)
+        self.executor.add_node(self.node)
+
+    def spin_until(self, done, timeout: float) -> bool:
+        return spin_until(self.executor, done, timeout)
+
+    def call(self, srv_type, name: str, request, timeout: float = 10.0):
+        client = self.node.create_client(srv_type, name)
+        assert self.spin_until(client.service_is_ready, 15.0), f"no service {name}"
+        future = client.call_async(request)
+        assert self.spin_until(future.done, timeout), f"{name}: no answer"
+        self.node.destroy_client(client)
+        return future.result()
+
+    def set(self, node: str, name: str, value: ParameterValue):
+        request = SetParameters.Request(parameters=[ParameterMsg(name=name, value=value)])
+        return self.call(SetParameters, f"/{node}/set_parameters", request).results[0]
+
+    def get(self, node: str, name: str) -> ParameterValue:
+        return self.call(GetParameters, f"/{node}/get_parameters",
+                         GetParameters.Request(names=[name])).values[0]
+
+
+def double(v: float) -> ParameterValue:
+    return ParameterValue(type=ParameterType.PARAMETER_DOUBLE, double_value=v)
+
+
+def integer(v: int) -> ParameterValue:
+    return ParameterValue(type=ParameterType.PARAMETER_INTEGER, integer_value=v)
+
+
+def xz(msg) -> np.ndarray:
+    return np.array([[p.position.x, p.position.z] for p in msg.poses])
+
+
+@pytest.fixture
+def procs(ros_domain):
+    started: list[subprocess.Popen] = []
+
+    def start(name, *ros_args):
+        started.append(start_node(name, ros_args, dict(os.environ)))
+        return started[-1]
+
+    yield start
+    for proc in started:
+        if proc.poll() is None:
+            proc.kill()
+        proc.communicate(timeout=10)
+
+
+def test_runtime_sets_replan_refuse_or_convert_as_ros2_param_set_would(ros_context, procs):
+    planner = procs("planner", "-p", f"num_slots:={N}")
+    agent = procs("agent", "-p", f"num_slots:={N}", "-r", "__node:=agent0")
+    probe = Probe(ros_context)
+    assert probe.spin_until(lambda: probe.formations, 30.0), "no /formation"
+    base = load_params(overrides={"num_slots": N})
+    assert np.allclose(xz(probe.formations[0]), solve(base).formation, atol=1e-6)
+
+    ok = probe.set("planner", "h_amb_min_m", double(0.9))
+    assert ok.successful, ok.reason
+    assert probe.spin_until(lambda: len(probe.formations) >= 2, 30.0), "no replan after set"
+    expected = solve(base.replace(h_amb_min_m=0.9)).formation
+    assert np.allclose(xz(probe.formations[-1]), expected, atol=1e-6)
+
+    refused = probe.set("planner", "h_amb_min_m", double(-1.0))
+    assert not refused.successful
+    assert "h_amb_min_m" in refused.reason and "-1.0" in refused.reason, refused.reason
+    assert "> 0" in refused.reason or "0.0" in refused.reason, refused.reason
+    probe.spin_until(lambda: False, 1.5)
+    assert len(probe.formations) == 2, "a refused set must not replan"
+    assert probe.get("planner", "h_amb_min_m").double_value == 0.9
+
+    # An integer for a double is the double meant (ros2 param set /planner h_amb_min_m 1).
+    as_int = probe.set("planner", "h_amb_min_m", integer(1))
+    assert as_int.successful, as_int.reason
+    got = probe.get("planner", "h_amb_min_m")
+    assert (got.type, got.double_value) == (ParameterType.PARAMETER_DOUBLE, 1.0)
+    assert probe.spin_until(lambda: len(probe.formations) >= 3, 30.0)
+
+    reply = probe.call(Trigger, "/planner/replan", Trigger.Request())
+    assert reply.success and "solving" in reply.message
+    assert probe.spin_until(lambda: len(probe.formations) >= 4, 30.0)
+
+    # Start-up-only parameters are refused, never "successful" and ignored.
+    for node, name, value in (("agent0", "uav_id", integer(2)),
+                              ("agent0", "speed_mps", double(2.0))):
+        refused = probe.set(node, name, value)
+        assert not refused.successful and "read-only" in refused.reason, refused.reason
+    assert probe.get("agent0", "uav_id").integer_value == 0
+    assert [stop_node(p) for p in (planner, agent)] == [0, 0]
+
+
+def test_integer_in_params_file_is_the_double_meant(ros_context, procs, tmp_path):
+    f = tmp_path / "ints.yaml"
+    f.write_text(f'"/**":\n  ros__parameters:\n    num_slots: {N}\n    speed_mps: 4\n'
+                 "    ground_station_m: [70, 150, 25]\n")
+    planner = procs("planner", "--params-file", str(f))
+    probe = Probe(ros_context)
+    assert probe.spin_until(lambda: probe.formations, 30.0), "no /formation"
+    assert probe.get("planner", "speed_mps").double_value == 4.0
+    expected = solve(load_params(overrides={"num_slots": N, "speed_mps": 4.0,
+                                            "ground_station_m": [70.0, 150.0, 25.0]}))
+    assert np.allclose(xz(probe.formations[0]), expected.formation, atol=1e-6)
+    assert stop_node(planner) == 0
+
+
+BAD_FILES = {
+    "misspelt name": ('"/**":\n  ros__parameters:\n    num_slot: 3\n',
+                      "num_slot: no such parameter", "did you mean num_slots?"),
+    "section for no node": ("planer:\n  ros__parameters:\n    num_slots: 3\n",
+                            "section 'planer' names no node", "did you mean planner?"),
+    "empty file": ("", "is empty", "ros__parameters"),
+    "not YAML": ("a: [\n", "is not valid YAML", "line"),
+    "no ros__parameters": ('"/**":\n  num_slots: 3\n', "must hold a 'ros__parameters'", ""),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_FILES))
+def test_bad_params_file_stops_every_node_with_one_line_and_code_2(procs, tmp_path, case):
+    text, what, hint = BAD_FILES[case]
+    f = tmp_path / "bad.yaml"
+    f.write_text(text)
+    for name in ("planner", "agent", "mavlink_bridge"):
+        proc = procs(name, "--params-file", str(f))
+        out, _ = proc.communicate(timeout=30)
+        assert proc.returncode == 2, out
+        lines = out.strip().splitlines()
+        assert len(lines) == 1 and "[ERROR]" in lines[0], out
+        assert what in lines[0] and hint in lines[0], lines[0]
+        assert "Traceback" not in out
+
+
+@pytest.mark.parametrize("args,what", [
+    (["--params-file", "/nonexistent/p.yaml"], "cannot be read"),
+    (["-p"], "Couldn't parse trailing -p flag"),
+    (["--no-such-flag"], "--no-such-flag"),
+    (["-p", "num_slots:=0"], "num_slots: value 0 is not allowed"),
+    (["-p", "num_slots:=2.5"], "num_slots: value 2.5 is not allowed"),
+])
+def test_bad_ros_args_exit_2_with_one_line(procs, args, what):
+    proc = procs("planner", *args)
+    out, _ = proc.communicate(timeout=30)
+    assert proc.returncode == 2, out
+    errors = [line for line in out.splitlines() if "ERROR" in line]
+    assert len(errors) == 1 and what in errors[0], out
+    assert "Traceback" not in out
+
+
+def test_domain_id_out_of_range_exits_2(ros_domain, monkeypatch):
+    monkeypatch.setenv("ROS_DOMAIN_ID", "999")
+    proc = start_node("planner", [], dict(os.environ))
+    out, _ = proc.communicate(timeout=30)
+    assert proc.returncode == 2 and "ROS_DOMAIN_ID: value '999'" in out, out
+    assert "0..232" in out
+
+
+def test_domains_are_isolated(ros_context, procs, another_domain):
+    import rclpy
+
+    planner = procs("planner", "-p", f"num_slots:={N}")
+    other = rclpy.Context()
+    rclpy.init(context=other, domain_id=another_domain)
+    try:
+        stranger = Probe(other)
+        mine = Probe(ros_context)
+        assert mine.spin_until(lambda: mine.formations, 30.0)
+        end = time.monotonic() + 3.0
+        stranger.spin_until(lambda: time.monotonic() > end, 4.0)
+        assert stranger.formations == []
+    finally:
+        other.try_shutdown()
+    assert stop_node(planner) == 0
