@@ -94,3 +94,22 @@ def spin_until(executor: Any, done: Callable[[], Any], timeout: float) -> bool:
     while not done() and time.monotonic() < end:
         executor.spin_once(timeout_sec=0.05)
     return bool(done())
+
+
+@pytest.fixture
+def procs(ros_domain: int):
+    """`procs(name, *ros_args)` starts executable `name` (planner, agent, mavlink_bridge) with
+    `--ros-args ros_args` on the test's domain, as `ros2 run` would; leftovers are killed."""
+    from uav_insar_planner.demo import start_node
+
+    started: list[subprocess.Popen] = []
+
+    def start(name: str, *ros_args: str) -> subprocess.Popen:
+        started.append(start_node(name, ros_args, dict(os.environ)))
+        return started[-1]
+
+    yield start
+    for proc in started:
+        if proc.poll() is None:
+            proc.kill()
+        proc.communicate(timeout=10)

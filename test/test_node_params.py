@@ -4,7 +4,7 @@ and `ros2 service call` send). Every node runs on real rclpy, on the test's priv
 from __future__ import annotations
 
 import os
-import subprocess
+import signal
 import time
 from pathlib import Path
 
@@ -67,21 +67,6 @@ def integer(v: int) -> ParameterValue:
 
 def xz(msg) -> np.ndarray:
     return np.array([[p.position.x, p.position.z] for p in msg.poses])
-
-
-@pytest.fixture
-def procs(ros_domain):
-    started: list[subprocess.Popen] = []
-
-    def start(name, *ros_args):
-        started.append(start_node(name, ros_args, dict(os.environ)))
-        return started[-1]
-
-    yield start
-    for proc in started:
-        if proc.poll() is None:
-            proc.kill()
-        proc.communicate(timeout=10)
 
 
 def test_runtime_sets_replan_refuse_or_convert_as_ros2_param_set_would(ros_context, procs):
@@ -206,3 +191,15 @@ def test_domains_are_isolated(ros_context, procs, another_domain):
     finally:
         other.try_shutdown()
     assert stop_node(planner) == 0
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+@pytest.mark.parametrize("name", ["planner", "agent", "mavlink_bridge"])
+def test_sigint_and_sigterm_stop_every_node_cleanly(ros_context, procs, name, sig):
+    proc = procs(name, "-p", f"num_slots:={N}")
+    probe = Probe(ros_context)
+    assert probe.spin_until(lambda: name in probe.node.get_node_names(), 20.0), f"{name} not up"
+    proc.send_signal(sig)
+    out, _ = proc.communicate(timeout=15)
+    assert proc.returncode == 0, out
+    assert "Traceback" not in out and "[ERROR]" not in out, out

@@ -2,7 +2,6 @@
 started as `ros2 run` would, watched from this process over real rclpy."""
 from __future__ import annotations
 
-import os
 import signal
 from pathlib import Path
 
@@ -16,7 +15,7 @@ from rclpy.node import Node
 from std_msgs.msg import Float64, Float64MultiArray
 
 from uav_insar_planner import load_params, model, solve
-from uav_insar_planner.demo import start_node, stop_node
+from uav_insar_planner.demo import stop_node
 from uav_insar_planner.nodes.planner import LATCHED
 from uav_insar_planner.nodes.planner_report import rate_tolerance_bps
 
@@ -50,21 +49,6 @@ class Watcher:
 
     def spin_until(self, done, timeout: float) -> bool:
         return spin_until(self.executor, done, timeout)
-
-
-@pytest.fixture
-def procs(ros_domain):
-    started = []
-
-    def start(name, *ros_args):
-        started.append(start_node(name, ros_args, dict(os.environ)))
-        return started[-1]
-
-    yield start
-    for proc in started:
-        if proc.poll() is None:
-            proc.kill()
-        proc.communicate(timeout=10)
 
 
 def test_planner_and_three_agent_processes_survive_a_planner_restart(ros_context, procs):
