@@ -43,9 +43,9 @@ setup(
     license="Apache-2.0",
     entry_points={
         "console_scripts": [
-            "planner = uav_insar_planner.nodes.planner:main",
+            "planner = uav_insar_planner.ros.planner:main",
             "agent = uav_insar_sim.agent_node:main",
-            "mavlink_bridge = uav_insar_planner.nodes.mavlink_bridge:main",
+            "mavlink_bridge = uav_insar_planner.ros.mavlink_bridge:main",
             "uav-insar = uav_insar_planner.cli:main",
         ],
     },

@@ -14,8 +14,9 @@ from rclpy.parameter import Parameter
 from std_msgs.msg import Float64
 
 from uav_insar_planner import load_params, model, solve
-from uav_insar_planner.nodes.mavlink_bridge import MavlinkBridgeNode
-from uav_insar_planner.nodes.planner import LATCHED, PlannerNode
+from uav_insar_planner.ros.mavlink_bridge import MavlinkBridgeNode
+from uav_insar_planner.ros.planner import PlannerNode
+from uav_insar_planner.ros.topics import LATCHED
 from uav_insar_sim.agent_node import AgentNode
 from uav_insar_sim.observed_mission import ObservedMission, interpolate
 

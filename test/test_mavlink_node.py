@@ -47,7 +47,7 @@ def finish(proc: subprocess.Popen) -> str:
 @pytest.mark.parametrize("param", ["setpoint_rate_hz:=1.0", "autopilot:=inav",
                                    "target_sysids:=[2, 2, 3]", "connections:=['nowhere']"])
 def test_bad_parameter_exits_2_with_one_line(param, ros_domain):
-    proc = start("uav_insar_planner.nodes.mavlink_bridge", ros_env(), param)
+    proc = start("uav_insar_planner.ros.mavlink_bridge", ros_env(), param)
     try:
         assert proc.wait(timeout=30) == 2
     finally:
@@ -69,9 +69,9 @@ def test_planner_bridge_vehicles_end_to_end(ros_domain):
     for v in vehicles:
         v.start()
     ports = ", ".join(f"'udpout:127.0.0.1:{v.port}'" for v in vehicles)
-    bridge = start("uav_insar_planner.nodes.mavlink_bridge", env, f"connections:=[{ports}]",
+    bridge = start("uav_insar_planner.ros.mavlink_bridge", env, f"connections:=[{ports}]",
                    "target_sysids:=[2, 3, 4]", "speed_mps:=2.0", "velocity_feedforward:=true")
-    planner = start("uav_insar_planner.nodes.planner", env)
+    planner = start("uav_insar_planner.ros.planner", env)
     context = rclpy.Context()
     rclpy.init(context=context)
     node = Node("mavlink_e2e_probe", context=context)

@@ -21,7 +21,7 @@ from std_srvs.srv import Trigger
 
 from uav_insar_planner import load_params, solve
 from uav_insar_planner.demo import start_node, stop_node
-from uav_insar_planner.nodes.common import LATCHED
+from uav_insar_planner.ros.topics import LATCHED
 
 CONFIG = str(Path(__file__).resolve().parents[1] / "config" / "params.yaml")
 N = 8

@@ -16,8 +16,9 @@ from std_msgs.msg import Float64, Float64MultiArray
 from std_srvs.srv import Trigger
 
 from uav_insar_planner import load_params, model, solve
-from uav_insar_planner.nodes.planner import LATCHED, PlannerNode
-from uav_insar_planner.nodes.planner_report import rate_tolerance_bps
+from uav_insar_planner.evaluate import rate_tolerance_bps
+from uav_insar_planner.ros.planner import PlannerNode
+from uav_insar_planner.ros.topics import LATCHED
 from uav_insar_sim.agent_node import AgentNode
 
 N = 6

@@ -16,8 +16,8 @@ from std_msgs.msg import Float64, Float64MultiArray
 
 from uav_insar_planner import load_params, model, solve
 from uav_insar_planner.demo import stop_node
-from uav_insar_planner.nodes.planner import LATCHED
-from uav_insar_planner.nodes.planner_report import rate_tolerance_bps
+from uav_insar_planner.evaluate import rate_tolerance_bps
+from uav_insar_planner.ros.topics import LATCHED
 
 CONFIG = str(Path(__file__).resolve().parents[1] / "config" / "params.yaml")
 N = 30

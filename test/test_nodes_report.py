@@ -5,11 +5,11 @@ import threading
 import numpy as np
 import pytest
 
-from uav_insar_planner.evaluate import evaluate
-from uav_insar_planner.nodes import planner_report as report
-from uav_insar_planner.nodes.solve_worker import SolveWorker
+from uav_insar_planner.evaluate import evaluate, rate_tolerance_bps
 from uav_insar_planner.params import SPEC_BY_NAME, ParamSpec, load_params
 from uav_insar_planner.plan import Plan
+from uav_insar_planner.ros import diagnostics as report
+from uav_insar_planner.ros.solve_worker import SolveWorker
 from uav_insar_planner.solver.power import schedules
 
 FORMATION = np.array([[-40.0, 60.0], [-35.0, 58.0], [-45.0, 62.0]])
@@ -67,7 +67,7 @@ def test_uav_status_stale_ok_warn():
     rep = report.UavReport()
     assert report.uav_status(1, (-35.0, 58.0), rate_min, rep).level == report.STALE
     rep.position = (-35.0, 12.0, 62.0)
-    rep.record_rate(16.95e6 + 0.5 * report.rate_tolerance_bps(rate_min) * -1, rate_min[1])
+    rep.record_rate(16.95e6 + 0.5 * rate_tolerance_bps(rate_min) * -1, rate_min[1])
     ok = report.uav_status(1, (-35.0, 58.0), rate_min, rep)
     assert ok.level == report.OK
     assert float(dict(ok.values)["position_error_m"]) == pytest.approx(4.0)
@@ -107,7 +107,7 @@ def test_solve_worker_coalesces_requests_and_reports_errors():
 
 
 def test_descriptor_ranges_and_scalar_checks():
-    from uav_insar_planner.nodes.parameters import as_double, check_scalars, descriptor_for
+    from uav_insar_planner.ros.parameters import as_double, check_scalars, descriptor_for
 
     rng = descriptor_for(SPEC_BY_NAME["num_slots"], False).integer_range[0]
     assert (rng.from_value, rng.to_value) == (1, 100000)

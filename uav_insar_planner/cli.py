@@ -150,7 +150,7 @@ def _cmd_plot_formation(args: argparse.Namespace) -> int:
 def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv and argv[0] == "echo":
-        from uav_insar_planner.echo import main as echo_main
+        from uav_insar_planner.ros.echo import main as echo_main
 
         return echo_main(argv[1:])
     if argv and argv[0] == "vehicle":

@@ -36,8 +36,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from uav_insar_planner.nodes.planner_report import ERROR, PLAN_STATUS_NAME
 from uav_insar_planner.params import Params
+from uav_insar_planner.ros.diagnostics import ERROR, PLAN_STATUS_NAME
 
 REPO_CONFIG = Path(__file__).resolve().parents[1] / "config" / "params.yaml"
 STOP_TIMEOUT_S = 5.0
@@ -47,8 +47,8 @@ CAPTURE_RADIUS_M = 0.2
 SETTLE_S = 3.0  # after the pass: the vehicles brake past its end and return; then the final error
 MAVLINK_TIMEOUT_S = 30.0  # for the approach and the pass, after the agents are done
 FIRST_SYSID = 2  # vehicles sysid 2, 3, 4: the bridge's default target_sysids
-MODULES = {"planner": "uav_insar_planner.nodes.planner", "agent": "uav_insar_sim.agent_node",
-           "mavlink_bridge": "uav_insar_planner.nodes.mavlink_bridge",
+MODULES = {"planner": "uav_insar_planner.ros.planner", "agent": "uav_insar_sim.agent_node",
+           "mavlink_bridge": "uav_insar_planner.ros.mavlink_bridge",
            "uav-insar": "uav_insar_planner.cli"}
 # Held while the demo prints a block (echo, table), so node log lines do not cut into it.
 PRINT_LOCK = threading.Lock()
@@ -214,7 +214,7 @@ class Watcher:
         from geometry_msgs.msg import PoseArray, PoseStamped
         from std_msgs.msg import Float64, Float64MultiArray
 
-        from uav_insar_planner.nodes.common import LATCHED
+        from uav_insar_planner.ros.topics import LATCHED
 
         self.node = node
         self.formation = None
@@ -315,7 +315,7 @@ def mavlink_table(mavlink_pass: MavlinkPass, ports: Sequence[int]) -> list[str]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from uav_insar_planner.nodes.planner_report import rate_tolerance_bps
+    from uav_insar_planner.evaluate import rate_tolerance_bps
     from uav_insar_planner.params import ParamError, load_params, parse_override
 
     try:
@@ -332,7 +332,7 @@ def run(args: argparse.Namespace) -> int:
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.node import Node
 
-    from uav_insar_planner.msg_yaml import message_to_yaml
+    from uav_insar_planner.ros.msg_yaml import message_to_yaml
 
     common = ["--params-file", str(args.params_file)] if args.params_file else []
     common += ["-p", f"num_slots:={params.num_slots}", *(a for text in args.param

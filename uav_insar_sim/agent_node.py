@@ -32,9 +32,11 @@ from geometry_msgs.msg import PoseArray, PoseStamped
 from rclpy.node import Node
 from std_msgs.msg import Float64, Float64MultiArray
 
+from uav_insar_planner.evaluate import rate_tolerance_bps
 from uav_insar_planner.mavlink.frames import TrackFrame
-from uav_insar_planner.nodes.common import LATCHED, run_node
-from uav_insar_planner.nodes.parameters import (
+from uav_insar_planner.params import ParamError, params_from_mapping
+from uav_insar_planner.ros import topics
+from uav_insar_planner.ros.parameters import (
     AGENT_SPECS,
     MAVLINK_SPECS,
     agent_scenario_specs,
@@ -44,16 +46,13 @@ from uav_insar_planner.nodes.parameters import (
     spec_values,
     unknown_overrides,
 )
-from uav_insar_planner.nodes.planner_report import rate_tolerance_bps
-from uav_insar_planner.params import ParamError, params_from_mapping
+from uav_insar_planner.ros.run import run_node
 from uav_insar_sim.mission import Mission, home_position
 from uav_insar_sim.observed_mission import ObservedMission
 from uav_insar_sim.vehicle import SimVehicle
 
 SCENARIO_SPECS = agent_scenario_specs()
-RATE_HISTORY_DEPTH = 100
 TICK_PERIOD_S = 0.05  # wall clock; the mission clock advances time_scale times faster
-FRAME_ID = "insar_track"
 # MAVLink mode: the embedded vehicle starts airborne (no arming needed) above the agent's home.
 MAVLINK_START_HEIGHT_M = 10.0
 
@@ -97,13 +96,12 @@ class AgentNode(Node):
         self._power = None
         self._wall_t0: float | None = None
         self._phase = self.mission.phase
-        self._pose_pub = self.create_publisher(PoseStamped, f"uav{self.k}/pose", 10)
-        # One rate per slot, each one counts: a history deep enough that a subscriber stalled
-        # for a few seconds (a busy 2-core host, a planner restarting) still gets them all.
-        self._rate_pub = self.create_publisher(Float64, f"uav{self.k}/achieved_rate",
-                                               RATE_HISTORY_DEPTH)
-        self.create_subscription(PoseArray, "formation", self._on_formation, LATCHED)
-        self.create_subscription(Float64MultiArray, "formation/power", self._on_power, LATCHED)
+        self._pose_pub = self.create_publisher(PoseStamped, topics.pose(self.k), topics.DEPTH)
+        self._rate_pub = self.create_publisher(Float64, topics.achieved_rate(self.k),
+                                               topics.RATE_DEPTH)
+        self.create_subscription(PoseArray, topics.FORMATION, self._on_formation,
+                                 topics.LATCHED)
+        self.create_subscription(Float64MultiArray, topics.POWER, self._on_power, topics.LATCHED)
         self.create_timer(TICK_PERIOD_S, self._tick)
         if self.vehicle is not None:
             self.vehicle.start()
@@ -168,7 +166,7 @@ class AgentNode(Node):
     def _publish_pose(self, position: tuple[float, float, float]) -> None:
         msg = PoseStamped()
         msg.header.stamp = self.get_clock().now().to_msg()
-        msg.header.frame_id = FRAME_ID
+        msg.header.frame_id = topics.FRAME_ID
         msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = position
         msg.pose.orientation.w = 1.0
         self._pose_pub.publish(msg)

@@ -10,14 +10,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from uav_insar_planner.evaluate import FEAS_TOL
+from uav_insar_planner.evaluate import rate_tolerance_bps
 from uav_insar_planner.plan import UAV_NAMES, Plan
 
 # diagnostic_msgs/DiagnosticStatus levels.
 OK, WARN, ERROR, STALE = 0, 1, 2, 3
 LEVEL_NAMES = {OK: "OK", WARN: "WARN", ERROR: "ERROR", STALE: "STALE"}
 
-FRAME_ID = "insar_track"
 HARDWARE_ID = "uav_insar_planner"
 PLAN_STATUS_NAME = "planner: plan"
 
@@ -109,11 +108,6 @@ class UavReport:
         self.rate_bps = rate_bps
         self.rate_count += 1
         self.min_margin_bps = min(self.min_margin_bps, rate_bps - rate_min_bps)
-
-
-def rate_tolerance_bps(rate_min_bps: tuple[float, ...]) -> float:
-    """Shortfall still counted as meeting R_min: the constraint checker's C10 tolerance."""
-    return FEAS_TOL * max(max(rate_min_bps), 1.0)
 
 
 def uav_status(k: int, target_xz: tuple[float, float], rate_min_bps: tuple[float, ...],

@@ -28,16 +28,6 @@ from rclpy.parameter import Parameter
 from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension
 from std_srvs.srv import Trigger
 
-from uav_insar_planner.nodes import planner_report as report
-from uav_insar_planner.nodes.common import LATCHED, run_node
-from uav_insar_planner.nodes.parameters import (
-    declare_specs,
-    guard_sets,
-    shown,
-    spec_values,
-    unknown_overrides,
-)
-from uav_insar_planner.nodes.solve_worker import SolveWorker
 from uav_insar_planner.params import (
     PARAM_SPECS,
     SPEC_BY_NAME,
@@ -46,6 +36,17 @@ from uav_insar_planner.params import (
     params_from_mapping,
 )
 from uav_insar_planner.plan import Plan
+from uav_insar_planner.ros import diagnostics as report
+from uav_insar_planner.ros import topics
+from uav_insar_planner.ros.parameters import (
+    declare_specs,
+    guard_sets,
+    shown,
+    spec_values,
+    unknown_overrides,
+)
+from uav_insar_planner.ros.run import run_node
+from uav_insar_planner.ros.solve_worker import SolveWorker
 from uav_insar_planner.solver import solve
 
 DIAGNOSTICS_PERIOD_S = 1.0
@@ -71,15 +72,17 @@ class PlannerNode(Node):
         self._scenario: Params = params
         self._reports = [report.UavReport() for _ in range(3)]
 
-        self._formation_pub = self.create_publisher(PoseArray, "formation", LATCHED)
-        self._power_pub = self.create_publisher(Float64MultiArray, "formation/power", LATCHED)
-        self._diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
+        self._formation_pub = self.create_publisher(PoseArray, topics.FORMATION,
+                                                    topics.LATCHED)
+        self._power_pub = self.create_publisher(Float64MultiArray, topics.POWER, topics.LATCHED)
+        self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS,
+                                               topics.DEPTH)
         for k in range(3):
-            self.create_subscription(PoseStamped, f"uav{k}/pose",
-                                     lambda msg, k=k: self._on_pose(k, msg), 10)
-            self.create_subscription(Float64, f"uav{k}/achieved_rate",
-                                     lambda msg, k=k: self._on_rate(k, msg), 10)
-        self.create_service(Trigger, "~/replan", self._on_replan)
+            self.create_subscription(PoseStamped, topics.pose(k),
+                                     lambda msg, k=k: self._on_pose(k, msg), topics.DEPTH)
+            self.create_subscription(Float64, topics.achieved_rate(k),
+                                     lambda msg, k=k: self._on_rate(k, msg), topics.RATE_DEPTH)
+        self.create_service(Trigger, topics.REPLAN, self._on_replan)
         self._pending: tuple[Params, str] | None = None
         guard_sets(self)
         self.add_on_set_parameters_callback(self._on_set_parameters)
@@ -159,7 +162,7 @@ class PlannerNode(Node):
         stamp = self.get_clock().now().to_msg()
         msg = PoseArray()
         msg.header.stamp = stamp
-        msg.header.frame_id = report.FRAME_ID
+        msg.header.frame_id = topics.FRAME_ID
         msg.poses = [Pose(position=Point(x=x, y=y, z=z), orientation=Quaternion(w=1.0))
                      for x, y, z in report.formation_points(plan)]
         rows, cols, data = report.power_rows(plan)

@@ -1,4 +1,4 @@
-"""What every node of the suite shares: the latched plan QoS and the run-until-stopped loop.
+"""The run-until-stopped loop every node of the suite shares, with its start-up checks.
 
 `run_node` checks what rcl would otherwise turn into a traceback before it initialises
 rclpy: ROS_DOMAIN_ID, and each `--params-file` (readable, YAML, sections that name a node
@@ -22,15 +22,9 @@ import yaml
 from rclpy.executors import ExternalShutdownException
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from uav_insar_planner.params import yaml_load
 
-# /formation and /formation/power: a late joiner (an agent started after the planner, or a
-# planner restarted) still gets the last plan.
-LATCHED = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
-                     reliability=ReliabilityPolicy.RELIABLE,
-                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
 EXIT_BAD_PARAMS = 2
 # Fast DDS derives its ports from the domain id; above 232 they pass 65535 and the process
 # aborts inside the middleware.

@@ -27,16 +27,16 @@ from geometry_msgs.msg import PoseArray, PoseStamped
 from rclpy.node import Node
 
 from uav_insar_planner.mavlink.bridge import Bridge, BridgeConfig, VehicleStatus
-from uav_insar_planner.nodes.common import LATCHED, run_node
-from uav_insar_planner.nodes.parameters import (
+from uav_insar_planner.ros import topics
+from uav_insar_planner.ros.parameters import (
     BRIDGE_SPECS,
     declare_specs,
     guard_sets,
     spec_values,
     unknown_overrides,
 )
+from uav_insar_planner.ros.run import run_node
 
-FRAME_ID = "insar_track"
 POSE_PERIOD_S = 0.05  # poll the bridge at 20 Hz: vehicles report at ~10 Hz
 DIAGNOSTICS_PERIOD_S = 1.0
 
@@ -61,11 +61,13 @@ class MavlinkBridgeNode(Node):
             self.problems.append(str(exc))
             return
         n = len(config.target_sysids)
-        self._pose_pubs = [self.create_publisher(PoseStamped, f"uav{k}/mavlink/pose", 10)
+        self._pose_pubs = [self.create_publisher(PoseStamped, topics.mavlink_pose(k),
+                                                   topics.DEPTH)
                            for k in range(n)]
-        self._diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
+        self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, topics.DEPTH)
         self._last_pose_age: list[float | None] = [None] * n
-        self.create_subscription(PoseArray, "formation", self._on_formation, LATCHED)
+        self.create_subscription(PoseArray, topics.FORMATION, self._on_formation,
+                                 topics.LATCHED)
         self.create_timer(POSE_PERIOD_S, self._publish_poses)
         self.create_timer(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)
         guard_sets(self)
@@ -106,7 +108,7 @@ class MavlinkBridgeNode(Node):
                 continue
             msg = PoseStamped()
             msg.header.stamp = stamp
-            msg.header.frame_id = FRAME_ID
+            msg.header.frame_id = topics.FRAME_ID
             msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = s.position_track
             msg.pose.orientation.w = 1.0
             self._pose_pubs[s.uav].publish(msg)

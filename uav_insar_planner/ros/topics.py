@@ -1,0 +1,39 @@
+"""The suite's ROS interface in one place: topic names, the frame id and the QoS of each.
+
+Names are relative (a namespace moves the whole swarm) except /diagnostics. Frame
+`insar_track`: x = range / across-track, y = azimuth / along-track, z = up; SI on every topic.
+"""
+from __future__ import annotations
+
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+FRAME_ID = "insar_track"
+FORMATION = "formation"  # geometry_msgs/PoseArray, LATCHED
+POWER = "formation/power"  # std_msgs/Float64MultiArray, LATCHED
+DIAGNOSTICS = "/diagnostics"  # diagnostic_msgs/DiagnosticArray, depth 10
+REPLAN = "~/replan"  # std_srvs/Trigger
+
+# /formation and /formation/power: a late joiner (an agent started after the planner, or a
+# planner restarted) still gets the last plan.
+LATCHED = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
+                     reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+# One rate per slot, each one counts: a history deep enough that a subscriber stalled for a
+# few seconds (a busy 2-core host, a planner restarting) still gets them all.
+RATE_DEPTH = 100
+DEPTH = 10
+
+
+def pose(k: int) -> str:
+    """geometry_msgs/PoseStamped: agent k's actual position."""
+    return f"uav{k}/pose"
+
+
+def achieved_rate(k: int) -> str:
+    """std_msgs/Float64: bit/s agent k achieved in the slot just flown (RATE_DEPTH)."""
+    return f"uav{k}/achieved_rate"
+
+
+def mavlink_pose(k: int) -> str:
+    """geometry_msgs/PoseStamped: vehicle k's LOCAL_POSITION_NED in the track frame (bridge)."""
+    return f"uav{k}/mavlink/pose"
