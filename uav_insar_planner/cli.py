@@ -1,4 +1,4 @@
-"""`uav-insar`: solve, sweep and plot the planning problem; echo topics; run a MAVLink vehicle.
+"""`uav-insar`: solve, sweep and plot the planning problem; echo topics.
 
 Exit codes: 0 solved, 3 infeasible (solve), 2 bad input (one line per problem, no traceback).
 """
@@ -66,9 +66,8 @@ def _build_parser() -> argparse.ArgumentParser:
     f.add_argument("--scheme", choices=SCHEMES)
     f.add_argument("--out", default="formation.png", metavar="FILE.png")
 
-    sub.add_parser("echo", help="print a topic like `ros2 topic echo` (see --help)",
-                   add_help=False)
-    sub.add_parser("vehicle", help="run a SITL-style MAVLink vehicle (see --help)",
+    # echo parses its own options (uav_insar_planner/ros/echo.py): they pass through.
+    sub.add_parser("echo", help="print a topic like `ros2 topic echo` (see echo --help)",
                    add_help=False)
     return parser
 
@@ -149,15 +148,14 @@ def _cmd_plot_formation(args: argparse.Namespace) -> int:
 
 def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
-    if argv and argv[0] == "echo":
+    parser = _build_parser()
+    args, rest = parser.parse_known_args(argv)
+    if args.command == "echo":
         from uav_insar_planner.ros.echo import main as echo_main
 
-        return echo_main(argv[1:])
-    if argv and argv[0] == "vehicle":
-        from uav_insar_sim.vehicle import main as vehicle_main
-
-        return vehicle_main(argv[1:])
-    args = _build_parser().parse_args(argv)
+        return echo_main(rest)
+    if rest:
+        parser.error("unrecognized arguments: " + " ".join(rest))
     commands = {"solve": _cmd_solve, "sweep": _cmd_sweep, "plot-formation": _cmd_plot_formation}
     try:
         return commands[args.command](args)

@@ -3,7 +3,7 @@
 Starts three `agent` executables and the `planner` as separate processes, as `ros2 run` would,
 on a private ROS_DOMAIN_ID with discovery kept on this host; this process watches the topics
 like `ros2 topic echo` would. Unless `--no-mavlink`, it also closes the MAVLink loop: three
-`uav-insar vehicle` processes (SITL-style, sysid 2..4, airborne, on free loopback UDP ports)
+`uav-insar-vehicle` processes (SITL-style, sysid 2..4, airborne, on free loopback UDP ports)
 and the `mavlink_bridge` node wired to them, which flies the planned formation through real
 MAVLink bytes; the vehicles' positions come back on /uavK/mavlink/pose. The vehicles fly in
 wall-clock time (no time_scale): they gather at their start points, then fly a short pass of
@@ -49,7 +49,7 @@ MAVLINK_TIMEOUT_S = 30.0  # for the approach and the pass, after the agents are 
 FIRST_SYSID = 2  # vehicles sysid 2, 3, 4: the bridge's default target_sysids
 MODULES = {"planner": "uav_insar_planner.ros.planner", "agent": "uav_insar_sim.agent_node",
            "mavlink_bridge": "uav_insar_planner.ros.mavlink_bridge",
-           "uav-insar": "uav_insar_planner.cli"}
+           "uav-insar-vehicle": "uav_insar_sim.vehicle"}
 # Held while the demo prints a block (echo, table), so node log lines do not cut into it.
 PRINT_LOCK = threading.Lock()
 
@@ -140,7 +140,7 @@ def start_mavlink(ports: Sequence[int], pass_s: float, common: Sequence[str],
                   env: dict[str, str]) -> list[subprocess.Popen]:
     """Three vehicles (sysid 2..4, airborne 20 m up, listening on 127.0.0.1:ports[k]) and the
     bridge sending to them; the vehicles first, so the bridge's first datagrams find them."""
-    procs = [start_process([*executable("uav-insar"), "vehicle", "--sysid",
+    procs = [start_process([*executable("uav-insar-vehicle"), "--sysid",
                             str(FIRST_SYSID + k), "--listen", f"udpin:127.0.0.1:{port}",
                             "--airborne", "--start-ned", "0", str(3 * k), "-20"],
                            env, f"[vehicle{FIRST_SYSID + k}]")

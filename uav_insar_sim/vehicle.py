@@ -1,8 +1,8 @@
 """A SITL-style MAVLink multicopter: enough of ArduCopter or PX4 to fly the bridge against.
 
-Command line (the `uav-insar vehicle` subcommand, or `python -m uav_insar_sim.vehicle`):
+Command line (the `uav-insar-vehicle` console script, or `python -m uav_insar_sim.vehicle`):
 
-    uav-insar vehicle --sysid 2 --listen udpin:127.0.0.1:14552 [--autopilot ardupilot|px4]
+    uav-insar-vehicle --sysid 2 --listen udpin:127.0.0.1:14552 [--autopilot ardupilot|px4]
                       [--start-ned N E D] [--speed 10] [--accel 5] [--airborne]
 
 In-process (a background thread; what tests and an agent node use):
@@ -447,7 +447,7 @@ class SimVehicle:
 
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
-        prog="uav-insar vehicle",
+        prog="uav-insar-vehicle",
         description="A SITL-style MAVLink multicopter (ArduPilot-like or PX4-like).")
     p.add_argument("--sysid", type=int, required=True, help="MAVLink system id, 1..255")
     p.add_argument("--listen", required=True,
@@ -473,7 +473,7 @@ def main(argv: list[str] | None = None) -> int:
         vehicle = SimVehicle(args.sysid, args.listen, args.autopilot, tuple(args.start_ned),
                              args.speed, args.accel, args.airborne, args.offboard_timeout)
     except ValueError as exc:
-        print(f"uav-insar vehicle: error: {exc}", file=sys.stderr)
+        print(f"uav-insar-vehicle: error: {exc}", file=sys.stderr)
         return 2
     import signal
 

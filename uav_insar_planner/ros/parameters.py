@@ -55,7 +55,7 @@ AGENT_SCENARIO_NAMES = ("num_slots", "slot_duration_s", "speed_mps", "ground_sta
                         "comm_bandwidth_hz", "ref_snr_db", "rate_min_mbps")
 
 # The bridge's full rules live in BridgeConfig.validate; these carry the descriptors. Defaults
-# pair with `uav-insar vehicle --sysid 2..4 --listen udpin:127.0.0.1:14552/14562/14572`.
+# pair with `uav-insar-vehicle --sysid 2..4 --listen udpin:127.0.0.1:14552/14562/14572`.
 BRIDGE_SPECS = (
     ParamSpec("connections", list, ["udpout:127.0.0.1:14552", "udpout:127.0.0.1:14562",
                                     "udpout:127.0.0.1:14572"],
