@@ -17,7 +17,6 @@ setup(
     python_requires=">=3.10",
     install_requires=[
         "numpy>=1.24",
-        "scipy>=1.10",
         "cvxpy>=1.4",
         "clarabel>=0.6",
         "pyyaml>=6",
@@ -34,7 +33,7 @@ setup(
             "ros-jazzy-std-srvs>=5.3",
             "ros-jazzy-rcl-interfaces>=2.0",
         ],
-        "test": ["pytest>=7", "pytest-timeout>=2", "ruff>=0.4"],
+        "test": ["pytest>=7", "pytest-timeout>=2", "ruff>=0.4", "scipy>=1.10"],
     },
     zip_safe=True,
     maintainer="uav_insar_planner developers",

@@ -1,4 +1,4 @@
-"""Benchmark of the certified global solver (issue 5), side by side with the paper's AO.
+"""Benchmark of the certified global solver, side by side with the paper's AO.
 
 Prints: the default scenario's median solve time (exact objective, proposed scheme) for the
 global solver and, in the same run, for paper-ao, with their ratio; then both figure sweeps

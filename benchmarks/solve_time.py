@@ -1,6 +1,6 @@
 """Wall time of the default solve per scheme, and of a 16-point h_amb_min sweep (0.5..2.0 m).
 
-paper-ao always; the global solver (solver/global_opt.py) side by side when it is importable and
+paper-ao always; the global solver (solver/global_opt/) side by side when it is importable and
 solves, with the ratio global / paper-ao of the medians. Not a test: prints a table.
 
 Run: .venv/bin/python benchmarks/solve_time.py [--runs 5]
@@ -35,7 +35,7 @@ def timed(fn: Callable[[], object], runs: int) -> tuple[float, float, float]:
 def global_available() -> str:
     """'' when the global back end can solve the default scenario, else why not."""
     if importlib.util.find_spec("uav_insar_planner.solver.global_opt") is None:
-        return "solver/global_opt.py not present"
+        return "solver/global_opt/ not present"
     try:
         plan = solve(default_params(), scheme="proposed", solver="global")
     except Exception as exc:  # noqa: BLE001 - report any failure of the other back end

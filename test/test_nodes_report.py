@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from uav_insar_planner.evaluate import evaluate, rate_tolerance_bps
-from uav_insar_planner.params import SPEC_BY_NAME, ParamSpec, load_params
+from uav_insar_planner.params import SPEC_BY_NAME, ParamSpec
+from uav_insar_planner.params_file import load_params
 from uav_insar_planner.plan import Plan
 from uav_insar_planner.ros import diagnostics as report
 from uav_insar_planner.ros.solve_worker import SolveWorker
@@ -107,7 +108,7 @@ def test_solve_worker_coalesces_requests_and_reports_errors():
 
 
 def test_descriptor_ranges_and_scalar_checks():
-    from uav_insar_planner.ros.parameters import as_double, check_scalars, descriptor_for
+    from uav_insar_planner.ros.parameters import as_double, check_values, descriptor_for
 
     rng = descriptor_for(SPEC_BY_NAME["num_slots"], False).integer_range[0]
     assert (rng.from_value, rng.to_value) == (1, 100000)
@@ -122,8 +123,8 @@ def test_descriptor_ranges_and_scalar_checks():
     assert as_double(True) is None and as_double(2.5) is None and as_double("4") is None
     specs = (ParamSpec("time_scale", float, 1.0, "x", 0.0, 1000.0, True),
              ParamSpec("uav_id", int, 0, "k", 0, 2))
-    assert check_scalars({"time_scale": 20.0, "uav_id": 2}, specs) == []
-    problems = check_scalars({"time_scale": 0.0, "uav_id": 3}, specs)
+    assert check_values({"time_scale": 20.0, "uav_id": 2}, specs) == []
+    problems = check_values({"time_scale": 0.0, "uav_id": 3}, specs)
     assert problems == ["time_scale: value 0.0 is not allowed; expected a finite number in "
                         "(0, 1000]",
                         "uav_id: value 3 is not allowed; expected an integer in [0, 2]"]

@@ -6,13 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from uav_insar_planner.params import (
-    PARAM_SPECS,
-    ParamError,
-    default_params,
-    load_params,
-    read_params_file,
-)
+from uav_insar_planner.params import PARAM_SPECS, ParamError, default_params
+from uav_insar_planner.params_file import load_params, read_params_file
 
 ROOT = Path(__file__).resolve().parent.parent
 CONFIG = ROOT / "config" / "params.yaml"

@@ -4,8 +4,8 @@ import math
 import pytest
 
 from uav_insar_planner import model
-from uav_insar_planner.params import load_params
-from uav_insar_sim.link import achieved_rate
+from uav_insar_planner.params_file import load_params
+from uav_insar_sim.radio import achieved_rate
 
 
 def test_rate_is_the_free_space_fdma_formula():

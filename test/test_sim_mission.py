@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from uav_insar_planner.evaluate import FEAS_TOL
-from uav_insar_planner.params import load_params
+from uav_insar_planner.params_file import load_params
 from uav_insar_planner.solver.power import schedules
 from uav_insar_sim.mission import Mission
 

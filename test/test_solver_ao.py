@@ -7,17 +7,14 @@ import numpy as np
 import pytest
 
 from uav_insar_planner import model
-from uav_insar_planner.evaluate import evaluate, static_power_w
+from uav_insar_planner.evaluate import evaluate
+from uav_insar_planner.model import slave_range_max
 from uav_insar_planner.params import default_params
+from uav_insar_planner.schemes import static_power_w
 from uav_insar_planner.solver import solve
-from uav_insar_planner.solver.ao_common import (
-    c4_surrogate,
-    c7_slopes,
-    master_range_max,
-    slave_range_max,
-)
-from uav_insar_planner.solver.ao_start import find_start
+from uav_insar_planner.solver.ao.closed_forms import c4_surrogate, c7_slopes, master_range_max
 from uav_insar_planner.solver.power import schedules
+from uav_insar_planner.solver.start_grid import find_start
 
 SCHEMES = ("proposed", "single-baseline", "fixed-master", "static-power")
 

@@ -1,4 +1,4 @@
-"""Certified global solver (issue 5): certificate, cross-check, symmetry, feasibility edges."""
+"""Certified global solver: certificate, cross-check, symmetry, feasibility edges."""
 from __future__ import annotations
 
 import math
@@ -8,12 +8,15 @@ import pytest
 from scipy.optimize import minimize
 
 from uav_insar_planner import model
-from uav_insar_planner.evaluate import evaluate, static_power_w
+from uav_insar_planner.evaluate import evaluate
 from uav_insar_planner.params import SCHEMES, default_params
-from uav_insar_planner.solver import blocking, pairs, power, rays, solve
-from uav_insar_planner.solver.ao_start import find_start
-from uav_insar_planner.solver.global_opt import bound_minimizer_band, solve_global
+from uav_insar_planner.schemes import static_power_w
+from uav_insar_planner.solver import blocking, power, rays, solve
+from uav_insar_planner.solver.global_opt import infeasibility, slave_ranges
+from uav_insar_planner.solver.global_opt.band import bound_minimizer_band
+from uav_insar_planner.solver.global_opt.optimum import solve_global
 from uav_insar_planner.solver.power import schedules
+from uav_insar_planner.solver.start_grid import find_start
 
 FIG3 = {"master_fixed_xz_m": [-54.0, 74.0], "p_com_max_db": 10.1}
 FIG4 = {"master_fixed_xz_m": [-41.0, 61.0], "p_com_max_db": 9.0}
@@ -34,23 +37,6 @@ def sweep_points():
 
 
 # --- structural claims the solver relies on --------------------------------------------------
-
-def test_station_disk_is_exact():
-    """C9-C11 with the cheapest schedule hold exactly inside power.station_radius_sq."""
-    p = default_params()
-    gx, _, gz = p.ground_station
-    for scheme in ("proposed", "static-power"):
-        for k in range(3):
-            rad = math.sqrt(power.station_radius_sq(p, k, scheme))
-            for scale, ok in ((1 - 1e-6, True), (1 + 1e-4, False)):
-                x, z = gx - rad * scale * 0.6, gz + rad * scale * 0.8
-                sched = power.power_schedule(p, k, x, z, scheme)
-                d = model.distance_to_station(x, p.y_track, z, p.ground_station)
-                rate = model.fdma_rate(sched, d, p.comm_bandwidth_hz, p.beta_c)
-                met = (sched.max() <= p.p_max_w and sched.sum() * p.slot_duration_s
-                       <= p.e_max_j * (1 + 1e-12) and rate.min() >= p.rate_min_bps[k] * (1 - 1e-9))
-                assert met == ok
-
 
 def test_c7_interval_and_ray_model():
     p = default_params()
@@ -73,7 +59,7 @@ def test_weight_increases_with_slave_range():
     r = np.linspace(5.0, 400.0, 2000)
     for r0 in (60.0, 90.0, 130.0):
         for t in (0.66, 0.75, 0.84):
-            w = pairs._slave_weight(sc, r0, t, r)
+            w = slave_ranges._slave_weight(sc, r0, t, r)
             assert np.all(np.diff(w) > 0)
 
 
@@ -154,7 +140,7 @@ def test_feasibility_edge_in_rate():
         # dropping any one member as well gives a formation that the independent checker
         # finds meets every remaining blocking family
         others = frozenset(blocking.FAMILIES) - set(above.blocking)
-        assert not blocking.feasible_without(p_hi, scheme, others)
+        assert not infeasibility.feasible_without(p_hi, scheme, others)
         for family in above.blocking:
             rest = set(above.blocking) - {family}
             start = find_start(p_hi, scheme, rest | {"C2"}, first=True)
@@ -163,8 +149,8 @@ def test_feasibility_edge_in_rate():
             ev = evaluate(p_hi, q, schedules(p_hi, q, scheme), scheme)
             assert all(ev.constraints[c].ok for c in rest if c not in ("C9", "C10", "C11"))
         # the message names the single relaxations that would help, each proven
-        fixes, _ = blocking.blocking_sets(p_hi, scheme)
-        assert fixes and blocking.feasible_without(p_hi, scheme, frozenset(fixes))
+        fixes, _ = infeasibility.blocking_sets(p_hi, scheme)
+        assert fixes and infeasibility.feasible_without(p_hi, scheme, frozenset(fixes))
         # a local search on the original variables finds no feasible point above the edge
         assert _multistart(p_hi, scheme, 30, seed=3)[0] == math.inf
 

@@ -4,7 +4,8 @@ Library use:
     >>> from uav_insar_planner import load_params, solve
     >>> plan = solve(load_params(), scheme="proposed")
 """
-from uav_insar_planner.params import ParamError, Params, load_params
+from uav_insar_planner.params import ParamError, Params
+from uav_insar_planner.params_file import load_params
 from uav_insar_planner.plan import Plan
 from uav_insar_planner.solver import solve
 

@@ -11,15 +11,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from uav_insar_planner.params import (
-    OBJECTIVES,
-    SCHEMES,
-    SOLVERS,
-    ParamError,
-    Params,
-    load_params,
-    parse_override,
-)
+from uav_insar_planner.params import OBJECTIVES, SCHEMES, SOLVERS, ParamError, Params
+from uav_insar_planner.params_file import load_params, parse_override
 
 EXIT_OK, EXIT_BAD_INPUT, EXIT_INFEASIBLE = 0, 2, 3
 
@@ -29,12 +22,14 @@ class _Parser(argparse.ArgumentParser):
         self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")
 
 
-def _add_scenario_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--params", metavar="FILE", help="ROS 2 params file (default: Table I)")
-    p.add_argument("--set", metavar="NAME=VALUE", action="append", default=[],
-                   help="override a parameter (repeatable), e.g. --set h_amb_min_m=0.9")
-    p.add_argument("--objective", choices=OBJECTIVES, help="exact sigma_h or Prop. 1 bound")
-    p.add_argument("--solver", choices=SOLVERS, help="global (certified) or paper-ao")
+def _add_scenario_args(command: argparse.ArgumentParser) -> None:
+    command.add_argument("--params", metavar="FILE",
+                         help="ROS 2 params file (default: Table I)")
+    command.add_argument("--set", metavar="NAME=VALUE", action="append", default=[],
+                         help="override a parameter (repeatable), e.g. --set h_amb_min_m=0.9")
+    command.add_argument("--objective", choices=OBJECTIVES,
+                         help="exact sigma_h or Prop. 1 bound")
+    command.add_argument("--solver", choices=SOLVERS, help="global (certified) or paper-ao")
 
 
 def _build_parser() -> argparse.ArgumentParser:
@@ -84,7 +79,7 @@ def _scenario(args: argparse.Namespace) -> Params:
 
 
 def _cmd_solve(args: argparse.Namespace) -> int:
-    from uav_insar_planner.report import format_plan
+    from uav_insar_planner.plan_text import format_plan
     from uav_insar_planner.solver import solve
 
     plan = solve(_scenario(args))

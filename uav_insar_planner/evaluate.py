@@ -1,8 +1,9 @@
 """Independent evaluation of a formation and power schedule: metrics and constraints C1..C11.
 
 Built only from `model` (the paper's equations), never from a solver's convex surrogates, so
-it can judge any plan. Which UAVs count depends on the scheme: single-baseline flies U0 and
-U1 only; static-power requires P_com,k[n] = E_max / (N delta_t) in every slot.
+it can judge any plan. Which UAVs count and what they pay is the scheme's rule (`schemes`):
+single-baseline flies U0 and U1 only; static-power requires P_com,k[n] = E_max / (N delta_t)
+in every slot.
 """
 from __future__ import annotations
 
@@ -14,21 +15,12 @@ import numpy as np
 from uav_insar_planner import model
 from uav_insar_planner.params import Params
 from uav_insar_planner.plan import ConstraintStatus
+from uav_insar_planner.schemes import active_uavs, slave_uavs, static_power_w
 
 CONSTRAINT_NAMES = tuple(f"C{i}" for i in range(1, 12))
 # Relative feasibility tolerance: a constraint counts as met when its slack is at least
 # -FEAS_TOL times the constraint's own scale (numerical solvers stop at ~1e-8 accuracy).
 FEAS_TOL = 1e-6
-
-
-def active_uavs(scheme: str) -> tuple[int, ...]:
-    """The UAVs a scheme flies: benchmark 1 (single-baseline) has no U2."""
-    return (0, 1) if scheme == "single-baseline" else (0, 1, 2)
-
-
-def static_power_w(p: Params) -> float:
-    """Benchmark 3's constant power: the energy budget spread evenly, E_max / (N delta_t)."""
-    return p.e_max_j / (p.num_slots * p.slot_duration_s)
 
 
 @dataclass
@@ -84,7 +76,7 @@ def evaluate(p: Params, formation: np.ndarray, p_com: np.ndarray, scheme: str) -
     q = np.asarray(formation, dtype=float)
     power = np.asarray(p_com, dtype=float)
     uavs = active_uavs(scheme)
-    slaves = [k for k in uavs if k > 0]
+    slaves = slave_uavs(scheme)
     pairs = {k: pair_metrics(p, q[0], q[k]) for k in slaves}
 
     sig = [pairs[k]["sigma_h_m"] for k in slaves]

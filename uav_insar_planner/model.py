@@ -7,6 +7,8 @@ numpy arrays and broadcast.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from uav_insar_planner.params import BOLTZMANN, SPEED_OF_LIGHT, Params
@@ -54,9 +56,9 @@ def perpendicular_baseline(x0: ArrayLike, z0: ArrayLike, xk: ArrayLike, zk: Arra
 def perpendicular_baseline_fixed_look(xk: ArrayLike, zk: ArrayLike, x_t: float,
                                       theta0: float) -> ArrayLike:
     """b_perp,k = |(x_t - x_k) - tan(theta_0) z_k| / sqrt(tan^2(theta_0) + 1)  (eq. 16),
-    valid when the master satisfies C2."""
-    t = np.tan(theta0)
-    return np.abs(np.subtract(x_t, xk) - t * np.asarray(zk)) / np.sqrt(t * t + 1.0)
+    valid when the master satisfies C2 (it then depends on the slave alone)."""
+    t = math.tan(theta0)
+    return np.abs(np.subtract(x_t, xk) - t * np.asarray(zk)) / math.sqrt(t * t + 1.0)
 
 
 def gamma_m(p: Params) -> float:
@@ -77,6 +79,19 @@ def snr_monostatic(r0: ArrayLike, gm: float) -> ArrayLike:
 def snr_bistatic(r0: ArrayLike, rk: ArrayLike, gm: float) -> ArrayLike:
     """SNR_k ~ gamma_m / (r_0^2 r_k)  (eq. 9, small bistatic angle)."""
     return gm / (np.power(r0, 2) * np.asarray(rk))
+
+
+def slave_range_max(p: Params, r0: ArrayLike) -> ArrayLike:
+    """C6 as a range limit: the largest r_k with gamma_SNR,k >= gamma_SNR^min at master range r_0,
+    (1 + r_0^3/gamma_m)(1 + r_0^2 r_k/gamma_m) = 1/gamma_SNR^min^2 solved for r_k (eqs. 7-9):
+    r_k,max = gamma_m / r_0^2 (1 / (gamma_SNR^min^2 (1 + r_0^3/gamma_m)) - 1).
+
+    Exact, not a relaxation: gamma_SNR,k decreases in r_k (and in r_0, so the limit decreases
+    in r_0). Negative when the master alone is too far.
+    """
+    gm = gamma_m(p)
+    r0 = np.asarray(r0, dtype=float)
+    return gm / r0**2 * (1.0 / (p.coherence_snr_min**2 * (1.0 + r0**3 / gm)) - 1.0)
 
 
 def coherence_snr(snr0: ArrayLike, snrk: ArrayLike) -> ArrayLike:
@@ -140,18 +155,27 @@ def worst_case_coherence(p: Params) -> float:
     return p.coherence_rg_min * p.coherence_snr_min * p.coherence_other
 
 
+def bound_constant(wavelength: float, theta0: float, worst_coherence: float,
+                   looks: int) -> float:
+    """K = sqrt(lambda^2 sin^2(theta_0) (1 - A^2) / (8 pi^2 A^2 n_L)), the constant of
+    Proposition 1: sigma_h_bar = K r_0 / sqrt(b_perp,1^2 + b_perp,2^2)  (eq. 19)."""
+    a = worst_coherence
+    return math.sqrt(wavelength**2 * math.sin(theta0) ** 2 * (1.0 - a * a)
+                     / (8.0 * math.pi**2 * a * a * looks))
+
+
 def height_error_bound(wavelength: float, r0: ArrayLike, theta0: float, b_perp_sq_sum: ArrayLike,
                        worst_coherence: float, looks: int) -> ArrayLike:
     """Proposition 1: sigma_h <= sqrt(lambda^2 r_0^2 sin^2(theta_0) (1 - A^2) /
-    (8 pi^2 A^2 n_L (b_perp,1^2 + b_perp,2^2))).
+    (8 pi^2 A^2 n_L (b_perp,1^2 + b_perp,2^2))) = K r_0 / sqrt(b_perp,1^2 + b_perp,2^2);
+    +inf when both perpendicular baselines vanish.
 
     Single-baseline (benchmark 1) is the same expression with b_perp,2 = 0, i.e. the bound on
     sigma_h1 (eq. 27 of the appendix).
     """
-    a = worst_coherence
+    k = bound_constant(wavelength, theta0, worst_coherence, looks)
     with np.errstate(divide="ignore"):
-        return np.sqrt(wavelength**2 * np.asarray(r0) ** 2 * np.sin(theta0) ** 2 * (1.0 - a * a)
-                       / (8.0 * np.pi**2 * a * a * looks * np.asarray(b_perp_sq_sum)))
+        return k * np.asarray(r0, dtype=float) / np.sqrt(np.asarray(b_perp_sq_sum, dtype=float))
 
 
 def distance_to_station(x: ArrayLike, y: ArrayLike, z: ArrayLike,

@@ -2,19 +2,16 @@
 
 `PARAM_SPECS` is the single table of every parameter: name, type, default (Table I), allowed
 range, unit and description. The planner node declares its ROS parameters from it; the CLI
-and `load_params` validate against it. `Params` holds the values converted to SI.
+and `params_file.load_params` validate against it. `Params` holds the values converted to SI.
+Reading params files and `NAME=VALUE` overrides is `params_file`'s job.
 """
 from __future__ import annotations
 
 import difflib
 import math
-import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
-
-import yaml
 
 SCHEMES = ("proposed", "single-baseline", "fixed-master", "static-power")
 OBJECTIVES = ("exact", "bound")
@@ -22,23 +19,6 @@ SOLVERS = ("global", "paper-ao")
 
 SPEED_OF_LIGHT = 299_792_458.0
 BOLTZMANN = 1.380649e-23
-
-
-class _RosYamlLoader(yaml.SafeLoader):
-    """YAML 1.1 safe loader that also reads `1e9` and `1.0e9` as floats, as ROS 2's params
-    parser does (PyYAML's 1.1 resolver wants a signed exponent)."""
-
-
-_RosYamlLoader.add_implicit_resolver(
-    "tag:yaml.org,2002:float",
-    re.compile(r"^[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)$"),
-    list("-+0123456789."),
-)
-
-
-def yaml_load(text: str) -> Any:
-    """Parse YAML the way ROS 2 params files are read (see _RosYamlLoader)."""
-    return yaml.load(text, Loader=_RosYamlLoader)  # noqa: S506 - a SafeLoader subclass
 
 
 def db_to_linear(db: float) -> float:
@@ -206,10 +186,20 @@ class Params:
         return np.arange(self.num_slots) * self.speed * self.slot_duration_s
 
 
-def _check_value(spec: ParamSpec, value: Any) -> tuple[Any, str | None]:
-    """Coerce one value to the spec's type; return (value, problem or None)."""
-    shown = repr(value)
-    bad = f"{spec.name}: value {shown} is not allowed; expected {spec.allowed()}"
+VALUE_SHOWN_CHARS = 60
+
+
+def shown(value: Any) -> str:
+    """repr(value) for an error line, cut to VALUE_SHOWN_CHARS."""
+    text = repr(list(value) if isinstance(value, tuple) else value)
+    return text if len(text) <= VALUE_SHOWN_CHARS else text[:VALUE_SHOWN_CHARS - 3] + "..."
+
+
+def check_value(spec: ParamSpec, value: Any) -> tuple[Any, str | None]:
+    """Coerce one value to the spec's type (int, float, str, or a list of `length` floats);
+    return (value, problem or None), the problem one line naming the value and what is
+    allowed. The one value check of every node and the CLI."""
+    bad = f"{spec.name}: value {shown(value)} is not allowed; expected {spec.allowed()}"
     if spec.kind is str:
         if not isinstance(value, str) or (spec.choices and value not in spec.choices):
             return value, bad
@@ -256,7 +246,7 @@ def validate(values: Mapping[str, Any]) -> tuple[dict[str, Any], list[str]]:
                             "config/params.yaml")
     bad: set[str] = set()
     for spec in PARAM_SPECS:
-        value, problem = _check_value(spec, values.get(spec.name, spec.default))
+        value, problem = check_value(spec, values.get(spec.name, spec.default))
         clean[spec.name] = value
         if problem:
             problems.append(problem)
@@ -327,61 +317,6 @@ def params_from_mapping(values: Mapping[str, Any]) -> Params:
         objective=v["objective"],
         solver=v["solver"],
     )
-
-
-def read_params_file(path: str | Path, node_name: str = "planner") -> dict[str, Any]:
-    """Read a ROS 2 params file: the "/**" section, then the node's own section on top.
-
-    Node sections may be keyed by the node name with or without a leading slash or namespace
-    (rclpy matches the fully qualified name; we accept `planner`, `/planner`, `/ns/planner`).
-    Raises ParamError with one line when the file is unreadable or not in that format.
-    """
-    path = Path(path)
-    try:
-        doc = yaml_load(path.read_text())
-    except OSError as exc:
-        raise ParamError([f"params file: {str(path)!r} cannot be read ({exc.strerror})"]) from None
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}" if mark else ""
-        raise ParamError([f"params file: {str(path)!r} is not valid YAML{where}"]) from None
-    if not isinstance(doc, dict):
-        raise ParamError([f"params file: {str(path)!r} must map node names to "
-                          "{ros__parameters: {...}}"])
-    for key, body in doc.items():
-        if not isinstance(body, dict) or not isinstance(body.get("ros__parameters"), dict):
-            raise ParamError([f"params file: section {key!r} in {str(path)!r} must hold a "
-                              "'ros__parameters' mapping"])
-    values: dict[str, Any] = {}
-    sections = [k for k in doc if k == "/**"] + [
-        k for k in doc if isinstance(k, str) and k != "/**"
-        and k.lstrip("/").split("/")[-1] == node_name]
-    for key in sections:
-        values.update(doc[key]["ros__parameters"])
-    return values
-
-
-def parse_override(text: str) -> tuple[str, Any]:
-    """`NAME=VALUE` (CLI --set) or `NAME:=VALUE` (ROS -p), VALUE parsed as YAML."""
-    sep = ":=" if ":=" in text else "="
-    name, eq, raw = text.partition(sep)
-    if not eq or not name.strip():
-        raise ParamError([f"--set: value {text!r} is not allowed; expected NAME=VALUE"])
-    try:
-        value = yaml_load(raw)
-    except yaml.YAMLError:
-        value = raw
-    return name.strip(), value
-
-
-def load_params(path: str | Path | None = None, overrides: Mapping[str, Any] | None = None,
-                node_name: str = "planner") -> Params:
-    """Load a params file (none: Table I defaults, as in config/params.yaml), apply overrides,
-    validate everything at once and convert to SI. Raises ParamError listing every problem."""
-    values = read_params_file(path, node_name) if path is not None else {}
-    if overrides:
-        values.update(overrides)
-    return params_from_mapping(values)
 
 
 def default_params() -> Params:

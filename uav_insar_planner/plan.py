@@ -78,7 +78,7 @@ class Plan:
             "optimality_gap": num(self.optimality_gap),
             "certificate": self.certificate,
             "formation": formation,
-            "p_com_w": [[float(p) for p in row] for row in self.p_com_w],
+            "p_com_w": [[float(watts) for watts in row] for row in self.p_com_w],
             "iterations": int(self.iterations),
             "solve_time_s": float(self.solve_time_s),
             "constraints": {

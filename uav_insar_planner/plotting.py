@@ -16,6 +16,7 @@ import numpy as np  # noqa: E402
 from uav_insar_planner import model  # noqa: E402
 from uav_insar_planner.params import Params  # noqa: E402
 from uav_insar_planner.plan import Plan  # noqa: E402
+from uav_insar_planner.solver import rays  # noqa: E402
 from uav_insar_planner.solver.power import station_radius_sq  # noqa: E402
 from uav_insar_planner.sweep import SweepRow  # noqa: E402
 
@@ -67,26 +68,22 @@ def plot_sweep(rows: Sequence[SweepRow], name: str, path: str | Path) -> None:
 
 
 def _slave_region(p: Params, plan: Plan, k: int, xs: np.ndarray, zs: np.ndarray) -> np.ndarray:
-    """Mask of the x-z grid where slave k alone meets C1, C3-C11 with the master at its plan."""
+    """Mask of the x-z grid where slave k alone meets C1, C3-C11 with the master at its plan.
+
+    The feasible set is the ray model of solver/rays.py (the one the global back end searches),
+    read at each grid point's look angle and slant range: the angle in the C3/C7 domain, the
+    range inside the ray's C1/C5/C6/C8/C9-C11 limits and outside the master's C4 hole.
+    """
     x, z = np.meshgrid(xs, zs)
-    x0, z0 = plan.formation[0]
-    r0 = float(model.slant_range(x0, z0, p.x_t))
+    sc = rays.make_scenario(p, plan.scheme, plan.objective)
+    r0 = float(model.slant_range(plan.formation[0, 0], plan.formation[0, 1], p.x_t))
     r = model.slant_range(x, z, p.x_t)
     th = model.look_angle(x, z, p.x_t)
-    gm = model.gamma_m(p)
-    bp = p.radar_bandwidth_hz / p.center_frequency_hz
-    b_perp = model.perpendicular_baseline(x0, z0, x, z, p.theta0)
-    gx, _, gz = p.ground_station
-    ok = (z >= p.z_min) & (z <= p.z_max) & (th >= p.theta_min) & (th <= p.theta_max)
-    ok &= np.hypot(x - x0, z - z0) >= p.d_min
-    ok &= model.swath_width(r, th, p.beamwidth) >= p.swath_min
-    ok &= model.coherence_snr(model.snr_monostatic(r0, gm),
-                              model.snr_bistatic(r0, r, gm)) >= p.coherence_snr_min
-    ok &= model.coherence_baseline(model.chi(p.theta0, th), bp) >= p.coherence_rg_min
-    with np.errstate(divide="ignore"):
-        ok &= model.height_of_ambiguity(p.wavelength, r0, p.theta0, b_perp) >= p.h_amb_min
-    ok &= (x - gx) ** 2 + (z - gz) ** 2 <= station_radius_sq(p, k, plan.scheme)
-    return ok
+    with np.errstate(divide="ignore", invalid="ignore"):
+        lo, up = rays.ray_limits(sc, k, r0, th)
+        h1, h2 = rays.master_hole(sc, r0, th)
+    return ((th >= sc.th_lo) & (th <= sc.th_hi) & (r >= lo) & (r <= up)
+            & ~((r > h1) & (r < h2)))
 
 
 def plot_formation(p: Params, plan: Plan, path: str | Path) -> None:

@@ -72,7 +72,7 @@ def run_sweep(params: Params, name: str, values: Iterable[float], schemes: Seque
             plan = solve(p, scheme=scheme, objective=objective, solver=solver)
             bound_opt = lo = hi = float("nan")
             if band and plan.feasible:
-                from uav_insar_planner.solver.global_opt import bound_minimizer_band
+                from uav_insar_planner.solver.global_opt.band import bound_minimizer_band
 
                 bound_opt = solve(p, scheme=scheme, objective="bound",
                                   solver="global").sigma_h_bound_m

@@ -23,7 +23,7 @@ from rclpy.executors import ExternalShutdownException
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 
-from uav_insar_planner.params import yaml_load
+from uav_insar_planner.params_file import yaml_load
 
 EXIT_BAD_PARAMS = 2
 # Fast DDS derives its ports from the domain id; above 232 they pass 65535 and the process

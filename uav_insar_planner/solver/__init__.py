@@ -1,7 +1,9 @@
 """solve(params) -> Plan: run a back end, then check its answer independently.
 
-Back ends: `global` (solver/global_opt.py, certified optimum of the exact or bound objective)
-and `paper-ao` (solver/ao.py, Algorithm 2 of the paper with SCA on CVXPY + Clarabel).
+Back ends: `global` (solver/global_opt/, certified optimum of the exact or bound objective)
+and `paper-ao` (solver/ao/, Algorithm 2 of the paper with SCA on CVXPY + Clarabel). They never
+import each other; what both need (the station disk in power.py, the start grid, the deletion
+filter in blocking.py, SolverResult) lives here in solver/.
 """
 from __future__ import annotations
 
@@ -16,10 +18,10 @@ from uav_insar_planner.plan import Plan
 
 def _backend(name: str):
     if name == "global":
-        from uav_insar_planner.solver.global_opt import solve_global
+        from uav_insar_planner.solver.global_opt.optimum import solve_global
 
         return solve_global
-    from uav_insar_planner.solver.ao import solve_ao
+    from uav_insar_planner.solver.ao.algorithm2 import solve_ao
 
     return solve_ao
 

@@ -5,15 +5,18 @@ P_k[n] = c_k d_k,n^2 with c_k = (2^(R_min,k / B_c) - 1) / beta_c. With
 d_k,n^2 = rho_k^2 + (y[n] - g_y)^2 (rho_k the x-z distance to the station), C9 and C11 hold
 for that schedule iff rho_k^2 <= station_radius_sq(k); any other feasible schedule uses at least
 as much power in every slot, so this disk is exact, not a relaxation. For the static-power scheme
-P = E_max/(N delta_t) is fixed and C10 alone gives the disk.
+P = E_max/(N delta_t) is fixed and C10 alone gives the disk. Both back ends, the start grid and
+the formation plot take the disk from here.
 """
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
 from uav_insar_planner import model
-from uav_insar_planner.evaluate import static_power_w
 from uav_insar_planner.params import Params
+from uav_insar_planner.schemes import static_power_w
 
 
 def rate_cost(p: Params, k: int) -> float:
@@ -21,20 +24,27 @@ def rate_cost(p: Params, k: int) -> float:
     return float(model.power_for_rate(p.rate_min_bps[k], 1.0, p.comm_bandwidth_hz, p.beta_c))
 
 
-def station_radius_sq(p: Params, k: int, scheme: str) -> float:
-    """Largest rho_k^2 (x-z distance to the station, squared) for which C9-C11 can hold;
-    -inf when no position can (e.g. static power above P_max)."""
+def station_radius_sq(p: Params, k: int, scheme: str, off: frozenset[str] = frozenset()) -> float:
+    """Largest rho_k^2 (x-z distance to the station, squared) for which C9-C11 can hold for
+    UAV k, with the constraint families in `off` dropped; +inf when nothing limits it, -inf
+    when no position can (e.g. static power above P_max).
+
+    With dy2[n] = (y[n] - g_y)^2: rho^2 <= min(P_max / c_k - max dy2,
+    E_max / (N delta_t c_k) - mean dy2); static power P: rho^2 <= P / c_k - max dy2 (C10 alone)
+    and P <= P_max (C9, independent of the position).
+    """
     dy2 = (p.y_track - p.ground_station[1]) ** 2
-    c = rate_cost(p, k)
+    c = 0.0 if "C10" in off else rate_cost(p, k)
     if scheme == "static-power":
         power = static_power_w(p)
-        if power > p.p_max_w:
-            return -np.inf
-        return np.inf if c == 0 else power / c - float(dy2.max())
+        if power > p.p_max_w and "C9" not in off:
+            return -math.inf  # the fixed schedule itself breaks C9, wherever the UAV is
+        return math.inf if c == 0 else power / c - float(dy2.max())
     if c == 0:
-        return np.inf
-    peak = p.p_max_w / c - float(dy2.max())
-    energy = p.e_max_j / (p.slot_duration_s * p.num_slots * c) - float(dy2.mean())
+        return math.inf
+    peak = math.inf if "C9" in off else p.p_max_w / c - float(dy2.max())
+    energy = (math.inf if "C11" in off
+              else p.e_max_j / (p.slot_duration_s * p.num_slots * c) - float(dy2.mean()))
     return min(peak, energy)
 
 

@@ -8,15 +8,17 @@ constraint family allows an interval of ranges:
 
 - C1: z_min / cos(theta) <= r <= z_max / cos(theta);
 - C5: r >= S_min cos(theta) / Theta_3dB;
-- C6: r <= gamma_m / r_0^2 (1 / (gamma_SNR^min^2 (1 + r_0^3 / gamma_m)) - 1)  (eqs. 7-9);
+- C6: r <= gamma_m / r_0^2 (1 / (gamma_SNR^min^2 (1 + r_0^3 / gamma_m)) - 1)  (eqs. 7-9,
+  model.slave_range_max);
 - C8: r |sin(theta - theta_0)| <= lambda r_0 sin(theta_0) / h_amb^min  (eq. 12);
 - C9-C11: the cheapest schedule turns them into a disk about the ground station in the x-z
-  plane (solver/power.py), i.e. an interval [r_a, r_b] of the ray;
+  plane (power.station_radius_sq), i.e. an interval [r_a, r_b] of the ray;
 - C4 to the master removes an open interval (a hole) around the master's nearest point;
 - C3 and C7 depend on theta only; C7 is the interval of Proposition 2 around theta_0.
 
 Every function broadcasts over numpy arrays. `Scenario.off` disables constraint families,
-which is how the blocking set of an infeasible scenario is found.
+which is how the blocking set of an infeasible scenario is found. The global back end
+(solver/global_opt/) searches this model; plotting draws the slaves' feasible regions from it.
 """
 from __future__ import annotations
 
@@ -26,31 +28,13 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from uav_insar_planner import model
-from uav_insar_planner.evaluate import static_power_w
 from uav_insar_planner.params import Params
-from uav_insar_planner.solver.power import rate_cost
+from uav_insar_planner.schemes import slave_uavs
+from uav_insar_planner.solver.power import station_radius_sq
 
 HALF_PI = 0.5 * math.pi
 # Look angles are kept strictly inside (-pi/2, pi/2) so that z = r cos(theta) > 0.
 THETA_EDGE = HALF_PI - 1e-9
-
-
-def disk_radius_sq(p: Params, k: int, scheme: str, off: frozenset[str] = frozenset()) -> float:
-    """Squared x-z radius about the station within which C9-C11 can hold for UAV k, with the
-    families in `off` dropped (power.station_radius_sq when nothing is dropped)."""
-    dy2 = (p.y_track - p.ground_station[1]) ** 2
-    c = 0.0 if "C10" in off else rate_cost(p, k)
-    if scheme == "static-power":
-        power = static_power_w(p)
-        if power > p.p_max_w and "C9" not in off:
-            return -math.inf
-        return math.inf if c == 0 else power / c - float(dy2.max())
-    if c == 0:
-        return math.inf
-    peak = math.inf if "C9" in off else p.p_max_w / c - float(dy2.max())
-    energy = (math.inf if "C11" in off
-              else p.e_max_j / (p.slot_duration_s * p.num_slots * c) - float(dy2.mean()))
-    return min(peak, energy)
 
 
 @dataclass(frozen=True)
@@ -84,9 +68,9 @@ def make_scenario(p: Params, scheme: str, objective: str,
     th0 = p.theta0
     bp = p.radar_bandwidth_hz / p.center_frequency_hz
     ox, oz = p.ground_station[0] - p.x_t, p.ground_station[2]
-    disk = tuple(disk_radius_sq(p, k, scheme, off) for k in range(3))
+    disk = tuple(station_radius_sq(p, k, scheme, off) for k in range(3))
     sc = Scenario(p=p, scheme=scheme, objective=objective, off=off,
-                  slaves=(1,) if scheme == "single-baseline" else (1, 2),
+                  slaves=slave_uavs(scheme),
                   gm=model.gamma_m(p), th0=th0, sin0=math.sin(th0), bp=bp, disk_r2=disk,
                   station_dist=math.hypot(ox, oz), station_angle=math.atan2(-ox, oz),
                   r0_lo=0.0, r0_hi=0.0, th_lo=0.0, th_hi=0.0,
@@ -162,9 +146,7 @@ def snr_limit(sc: Scenario, r0):
     """C6's largest slave range at master range r0 (decreasing in r0); +inf when C6 is off."""
     if not sc.on("C6"):
         return np.full(np.shape(r0), math.inf)
-    r0 = np.asarray(r0, dtype=float)
-    g2 = sc.p.coherence_snr_min**2
-    return sc.gm / r0**2 * (1.0 / (g2 * (1.0 + r0**3 / sc.gm)) - 1.0)
+    return model.slave_range_max(sc.p, r0)
 
 
 def baseline_limit(sc: Scenario, r0):

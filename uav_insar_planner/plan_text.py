@@ -1,4 +1,4 @@
-"""Human-readable rendering of a Plan for the terminal (`uav-insar solve`)."""
+"""A Plan as text for the terminal (`uav-insar solve`); ros/diagnostics.py is the ROS view."""
 from __future__ import annotations
 
 import numpy as np

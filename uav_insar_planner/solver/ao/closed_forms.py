@@ -1,13 +1,16 @@
 """Closed-form pieces shared by the paper-faithful AO sub-problems (SI units, radians).
 
-- Proposition 1's bound and its constant,
+- Proposition 1's bound of a formation with its master on C2 (model.height_error_bound with
+  b_perp,k from eq. 16),
 - Proposition 2's C7a/C7b slopes alpha_a, alpha_b (None when the side is unconstrained),
-- C6 rewritten as range limits (exact: gamma_SNR is monotone in each slant range),
+- C6 as the master's range limit (exact: gamma_SNR is monotone in each slant range; the
+  slaves' limit is model.slave_range_max),
 - the C4 surrogate (eq. 18) as a number, for tests and diagnostics.
 """
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -15,18 +18,19 @@ from uav_insar_planner import model
 from uav_insar_planner.params import Params
 
 
-def bound_constant(p: Params) -> float:
-    """K with sigma_h_bar = K r_0 / sqrt(b_perp,1^2 + b_perp,2^2)  (Proposition 1, eq. 19)."""
-    a = model.worst_case_coherence(p)
-    return math.sqrt(p.wavelength**2 * math.sin(p.theta0) ** 2 * (1.0 - a * a)
-                     / (8.0 * math.pi**2 * a * a * p.looks))
+def b_perp_on_c2(p: Params, qk: np.ndarray) -> float:
+    """b_perp,k of the slave at qk = (x_k, z_k) with the master on its C2 line (eq. 16)."""
+    return float(model.perpendicular_baseline_fixed_look(qk[0], qk[1], p.x_t, p.theta0))
 
 
-def bound_value(p: Params, r0: float, b_perp_sq_sum: float) -> float:
-    """Proposition 1's bound; +inf when both perpendicular baselines vanish."""
-    if b_perp_sq_sum <= 0.0:
-        return math.inf
-    return bound_constant(p) * r0 / math.sqrt(b_perp_sq_sum)
+def formation_bound(p: Params, q0: np.ndarray, formation: np.ndarray,
+                    slaves: Sequence[int]) -> float:
+    """Proposition 1's bound K r_0 / sqrt(sum_k b_perp,k^2) for master q0 (on its C2 line) and
+    the slaves' rows of `formation`; +inf when every b_perp,k is 0."""
+    r0 = float(np.hypot(q0[0] - p.x_t, q0[1]))
+    bsq = sum(b_perp_on_c2(p, formation[k]) ** 2 for k in slaves)
+    return float(model.height_error_bound(p.wavelength, r0, p.theta0, bsq,
+                                          model.worst_case_coherence(p), p.looks))
 
 
 def c7_slopes(p: Params) -> tuple[float | None, float | None]:
@@ -44,14 +48,6 @@ def c7_slopes(p: Params) -> tuple[float | None, float | None]:
     alpha_a = math.tan(math.asin(arg_a)) if 0.0 < arg_a < 1.0 else None
     alpha_b = math.tan(math.asin(arg_b)) if 0.0 < arg_b < 1.0 else None
     return alpha_a, alpha_b
-
-
-def slave_range_max(p: Params, r0: float) -> float:
-    """Largest r_k meeting C6 for master slant range r_0:
-    (1 + r_0^3/g_m)(1 + r_0^2 r_k/g_m) <= 1/gamma_SNR^min^2 solved for r_k (eqs. 7-9).
-    Negative when the master alone is too far."""
-    gm = model.gamma_m(p)
-    return gm / r0**2 * (1.0 / (p.coherence_snr_min**2 * (1.0 + r0**3 / gm)) - 1.0)
 
 
 def master_range_max(p: Params, slave_ranges: list[float]) -> float:

@@ -9,45 +9,28 @@ so each SCA step only updates numbers:
        C2   x_0 = x_t - z_0 tan(theta_0)
        C4~  2 q_0^T (q_0^(i) - q_k) - ||q_0^(i)||^2 + ||q_k||^2 >= d_min^2   (eq. 18)
        C5   Theta_3dB r_0 / cos(theta_0) >= S_min   (linear on the C2 line)
-       C6   r_0 <= r_0,max(r_k)   (gamma_SNR,k decreases in r_0: exact, see ao_common)
+       C6   r_0 <= r_0,max(r_k)   (gamma_SNR,k decreases in r_0: exact, see closed_forms)
        C8   lambda r_0 sin(theta_0) >= h_amb^min b_perp,k
-       C9-C11 with P_com,0 a variable (ao_comm).
+       C9-C11 with P_com,0 a variable (comm_constraints).
 With r_0 = z_0 / cos(theta_0) on the C2 line. Benchmark 2 pins z_0 (and x_0) to q0_fixed and
 uses the same programme only to allocate P_com,0.
 """
 from __future__ import annotations
 
 import math
-import warnings
 
 import cvxpy as cp
 import numpy as np
 
+from uav_insar_planner import model
 from uav_insar_planner.params import Params
-from uav_insar_planner.solver.ao_comm import comm_constraints
-from uav_insar_planner.solver.ao_common import bound_constant, bound_value, master_range_max
-
-SOLVER_OPTS = {"solver": cp.CLARABEL}
-MAX_INNER = 50
-
-
-INACCURATE_MAX_VIOLATION = 1e-7  # SI units of each constraint; far below the checker's margin
-
-
-def solve_convex(problem: cp.Problem) -> bool:
-    """Solve with Clarabel; True when the point may be taken as an SCA step: a certified optimum,
-    or an "inaccurate" one whose constraints all hold to INACCURATE_MAX_VIOLATION. Otherwise the
-    caller keeps its last feasible point (so cvxpy's "may be inaccurate" warning is not shown)."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)
-        try:
-            problem.solve(**SOLVER_OPTS)
-        except cp.SolverError:
-            return False
-    if problem.status == cp.OPTIMAL:
-        return True
-    return problem.status == cp.OPTIMAL_INACCURATE and all(
-        float(np.max(c.violation())) <= INACCURATE_MAX_VIOLATION for c in problem.constraints)
+from uav_insar_planner.solver.ao.closed_forms import (
+    b_perp_on_c2,
+    formation_bound,
+    master_range_max,
+)
+from uav_insar_planner.solver.ao.comm_constraints import comm_constraints
+from uav_insar_planner.solver.ao.convex import MAX_INNER, solve_convex
 
 
 class MasterProblem:
@@ -79,8 +62,10 @@ class MasterProblem:
 
     def _set(self, q0_ref: np.ndarray, formation: np.ndarray) -> None:
         p = self.p
-        b = [_b_perp(p, formation[k]) for k in self.slaves]
-        self.scale.value = bound_constant(p) / math.sqrt(max(sum(v * v for v in b), 1e-300))
+        b = [b_perp_on_c2(p, formation[k]) for k in self.slaves]
+        k_bound = model.bound_constant(p.wavelength, p.theta0, model.worst_case_coherence(p),
+                                       p.looks)
+        self.scale.value = k_bound / math.sqrt(max(sum(v * v for v in b), 1e-300))
         ranges = [float(np.hypot(formation[k, 0] - p.x_t, formation[k, 1])) for k in self.slaves]
         self.r0_max.value = master_range_max(p, ranges)
         self.r0_min.value = p.h_amb_min * max(b) / (p.wavelength * math.sin(p.theta0))
@@ -98,26 +83,15 @@ class MasterProblem:
         p = self.p
         q = formation[0].copy()
         power = None
-        prev = _bound(p, q, formation, self.slaves)
+        prev = formation_bound(p, q, formation, self.slaves)
         for step in range(1, MAX_INNER + 1):
             self._set(q, formation)
             if not solve_convex(self.problem):
                 return q, power, step, str(self.problem.status)
             q = np.asarray(self.q.value, dtype=float)
             power = np.asarray(self.power.value, dtype=float)
-            cur = _bound(p, q, formation, self.slaves)
+            cur = formation_bound(p, q, formation, self.slaves)
             if abs(cur - prev) <= p.tolerance * cur:
                 return q, power, step, "converged"
             prev = cur
         return q, power, MAX_INNER, "step limit"
-
-
-def _b_perp(p: Params, qk: np.ndarray) -> float:
-    """Eq. (16), master on its C2 line."""
-    t = math.tan(p.theta0)
-    return abs((p.x_t - qk[0]) - t * qk[1]) / math.sqrt(t * t + 1.0)
-
-
-def _bound(p: Params, q0: np.ndarray, formation: np.ndarray, slaves: list[int]) -> float:
-    r0 = float(np.hypot(q0[0] - p.x_t, q0[1]))
-    return bound_value(p, r0, sum(_b_perp(p, formation[k]) ** 2 for k in slaves))

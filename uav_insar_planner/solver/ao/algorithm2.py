@@ -1,20 +1,22 @@
 """The paper-faithful solver: Algorithm 2 (AO) over Algorithm 1 for (P.0) and the SCA for
 (P.1)/(P.2), on CVXPY + Clarabel, minimising Proposition 1's bound.
 
-One AO outer iteration solves (P.0) (ao_master), then (P.1) and (P.2) (ao_slave, both halves
+One AO outer iteration solves (P.0) (master.py), then (P.1) and (P.2) (slave.py, both halves
 I_a/I_b each), every sub-problem with its own UAV's P_com,k as a variable and C9-C11. It stops
 when the bound's relative change is at most eps_2 = params.tolerance (eps_0 = eps_1 likewise).
 
-Interpretations (see docs/solver_ao.md):
+Interpretations of the paper's listing:
 - Gauss-Seidel order: each sub-problem sees the newest positions of the others. Algorithm 2's
   listing fixes the other blocks at iteration m-1 (Jacobi); through the coupling constraints
   C4, C6 and C8 two individually feasible Jacobi updates can combine into an infeasible
   formation, while the Gauss-Seidel order keeps every iterate feasible and the bound
   non-increasing.
-- The start is the deterministic feasible formation of `ao_start` (median feasible master
-  altitude on its C2 line, slaves mid-way on their look-angle rays, U1 in I_a, U2 in I_b).
+- The start is the deterministic feasible formation of solver/start_grid.py (median feasible
+  master altitude on its C2 line, slaves mid-way on their look-angle rays, U1 in I_a, U2 in
+  I_b). Without one, the blocking families are the deletion filter of solver/blocking.py over
+  that grid.
 - objective "exact" is not what the paper optimises: the algorithm still minimises the bound
-  and says so in the message (the certified exact solver is solver/global_opt.py).
+  and says so in the message (the certified exact solver is solver/global_opt/).
 
 Schemes: "proposed"; "single-baseline" (benchmark 1: U0 and U1 only, bound with b_perp,2 = 0,
 two-block AO); "fixed-master" (benchmark 2: q_0 = q0_fixed, (P.0) only allocates P_com,0);
@@ -26,27 +28,31 @@ import math
 
 import numpy as np
 
-from uav_insar_planner.evaluate import active_uavs
 from uav_insar_planner.params import Params
-from uav_insar_planner.solver.ao_common import bound_value
-from uav_insar_planner.solver.ao_master import MasterProblem, _b_perp
-from uav_insar_planner.solver.ao_slave import SlaveProblem
-from uav_insar_planner.solver.ao_start import blocking_families, find_start
+from uav_insar_planner.schemes import slave_uavs
+from uav_insar_planner.solver import blocking
+from uav_insar_planner.solver.ao.closed_forms import formation_bound
+from uav_insar_planner.solver.ao.master import MasterProblem
+from uav_insar_planner.solver.ao.slave import SlaveProblem
 from uav_insar_planner.solver.power import schedules
 from uav_insar_planner.solver.result import SolverResult
+from uav_insar_planner.solver.start_grid import find_start
 
 MAX_OUTER = 50
 
 
-def formation_bound(p: Params, formation: np.ndarray, slaves: list[int]) -> float:
-    """Proposition 1's bound of a formation whose master is on its C2 line."""
-    r0 = float(np.hypot(formation[0, 0] - p.x_t, formation[0, 1]))
-    return bound_value(p, r0, sum(_b_perp(p, formation[k]) ** 2 for k in slaves))
+def blocking_families(p: Params, scheme: str) -> list[str]:
+    """The deletion filter over C1..C11 with the start grid as the feasibility test: an
+    irreducible set of families that is infeasible on the grid. C2 is only a family for the
+    fixed master (elsewhere it defines the grid)."""
+    families = blocking.FAMILIES + (("C2",) if scheme == "fixed-master" else ())
+    return blocking.irreducible_set(
+        families, lambda fam: find_start(p, scheme, fam, first=True) is not None)
 
 
 def solve_ao(p: Params, scheme: str, objective: str) -> SolverResult:
     """Algorithm 2 for `scheme`; see the module docstring. Deterministic."""
-    slaves = [k for k in active_uavs(scheme) if k > 0]
+    slaves = list(slave_uavs(scheme))
     note = ("objective 'exact' requested: paper-ao minimises Proposition 1's bound, as the paper "
             "does; " if objective == "exact" else "")
     start = find_start(p, scheme)
@@ -64,7 +70,7 @@ def solve_ao(p: Params, scheme: str, objective: str) -> SolverResult:
                       for k in slaves}
     inner: dict[str, list[int]] = {"P.0": []} | {f"P.{k}": [] for k in slaves}
     halves: dict[int, str] = {}
-    bound = formation_bound(p, formation, slaves)
+    bound = formation_bound(p, formation[0], formation, slaves)
     start_bound = bound
     status = "step limit"
     outer = 0
@@ -83,7 +89,7 @@ def solve_ao(p: Params, scheme: str, objective: str) -> SolverResult:
             halves[k] = half
             if power is not None:
                 p_com[k] = power
-        new = formation_bound(p, formation, slaves)
+        new = formation_bound(p, formation[0], formation, slaves)
         done = abs(new - bound) <= p.tolerance * new
         bound = new
         if done:

@@ -5,7 +5,7 @@ with d_k,n^2 = ||q_k - g_xz||^2 + (y[n] - g_y)^2 (section II-B); the x-z part en
 epigraph variable t >= ||q_k - g_xz||^2 so the N slot constraints stay linear. Benchmark 3 fixes
 P_com,k[n] = E_max / (N delta_t) instead of making it a variable; C10 is then the disk
 ||q_k - g_xz||^2 <= beta_c P / (2^(R/B) - 1) - max_n (y[n] - g_y)^2 (C9, C11 hold by choice
-of P when P <= P_max, which ao_start checks).
+of P when P <= P_max, which the start grid checks).
 """
 from __future__ import annotations
 
@@ -14,8 +14,8 @@ import math
 import cvxpy as cp
 import numpy as np
 
-from uav_insar_planner.evaluate import static_power_w
 from uav_insar_planner.params import Params
+from uav_insar_planner.schemes import static_power_w
 
 
 def comm_constraints(p: Params, k: int, q: cp.Expression, scheme: str
@@ -36,7 +36,7 @@ def comm_constraints(p: Params, k: int, q: cp.Expression, scheme: str
         # fixed power: C10 in every slot is one disk around the station (worst slot binds);
         # one cone instead of N parallel cuts keeps the interior-point solve well conditioned
         rho2 = p.beta_c * static_power_w(p) / spectral - float(dy2.max())
-        # (rho2 < 0 never reaches here: ao_start finds no start and reports C10)
+        # (rho2 < 0 never reaches here: the start grid finds no start and C10 is reported)
         cons.append(cp.norm(q - gxz) <= math.sqrt(max(rho2, 0.0)))
     elif spectral > 0.0:
         t = cp.Variable(name=f"d2_{k}")

@@ -11,10 +11,10 @@ I_b. The convex approximation (P.k.a~) / (P.k.b~) around q_k^(j), built once per
        C3   tan(theta_min) z_k <= x_t - x_k <= tan(theta_max) z_k
        C4~~ 2 q_k^T (q_k^(j) - q_i) - ||q_k^(j)||^2 + ||q_i||^2 >= d_min^2, i = master, other slave
        C5~  r_k^2(q^(j)) + grad r_k^2(q^(j))^T (q_k - q^(j)) >= S_min z_k / Theta_3dB   (eq. 20)
-       C6   ||q_k - (x_t, 0)|| <= r_k,max(r_0)   (exact, see ao_common)
+       C6   ||q_k - (x_t, 0)|| <= r_k,max(r_0)   (exact, model.slave_range_max)
        C7a  alpha_a z_k <= x_t - x_k  (I_a)  /  C7b  x_t - x_k <= alpha_b z_k  (I_b)  (Prop. 2)
        C8   b_perp,k <= lambda r_0 sin(theta_0) / h_amb^min
-       C9-C11 with P_com,k a variable (ao_comm).
+       C9-C11 with P_com,k a variable (comm_constraints).
 Both halves are run to convergence (eps_1 = params.tolerance) and the larger b_perp,k is kept.
 """
 from __future__ import annotations
@@ -24,10 +24,11 @@ import math
 import cvxpy as cp
 import numpy as np
 
+from uav_insar_planner import model
 from uav_insar_planner.params import Params
-from uav_insar_planner.solver.ao_comm import comm_constraints
-from uav_insar_planner.solver.ao_common import c7_slopes, slave_range_max
-from uav_insar_planner.solver.ao_master import MAX_INNER, _b_perp, solve_convex
+from uav_insar_planner.solver.ao.closed_forms import b_perp_on_c2, c7_slopes
+from uav_insar_planner.solver.ao.comm_constraints import comm_constraints
+from uav_insar_planner.solver.ao.convex import MAX_INNER, solve_convex
 
 
 class SlaveProblem:
@@ -79,20 +80,20 @@ class SlaveProblem:
         self.c5_grad.value = grad
         self.c5_const.value = float(r2 - grad @ q_ref)
         r0 = float(np.hypot(formation[0, 0] - p.x_t, formation[0, 1]))
-        self.r_max.value = max(slave_range_max(p, r0), 0.0)
+        self.r_max.value = max(float(model.slave_range_max(p, r0)), 0.0)
         self.b_max.value = p.wavelength * r0 * math.sin(p.theta0) / p.h_amb_min
 
     def _sca(self, half: str, formation: np.ndarray):
         """SCA on one half from the current slave position: (q, P, b_perp, steps) or None."""
         q_var, power, problem = self.halves[half]
         q = formation[self.k].copy()
-        prev, out = _b_perp(self.p, q), None
+        prev, out = b_perp_on_c2(self.p, q), None
         for step in range(1, MAX_INNER + 1):
             self._set(q, formation)
             if not solve_convex(problem):
                 break
             q = np.asarray(q_var.value, dtype=float)
-            cur = _b_perp(self.p, q)
+            cur = b_perp_on_c2(self.p, q)
             out = (q, np.asarray(power.value, dtype=float), cur, step)
             # b_perp's relative change is the bound's for fixed q_0, q_j (eps_1 = eps_0)
             if abs(cur - prev) <= self.p.tolerance * max(cur, 1e-300):

@@ -1,25 +1,26 @@
-"""Deterministic feasible starting formation for the AO, and the blocking-constraint report.
+"""A deterministic feasible formation from a closed-form grid, and a feasibility test by it.
 
-The AO's SCA steps are inner approximations, so they need a feasible start. We build one from
-the constraints of (P) themselves (exact model, no surrogate):
+The AO's SCA steps are inner approximations, so they need a feasible start; the global back
+end's infeasibility report falls back to the same grid when its search cannot decide a family
+set. We build the start from the constraints of (P) themselves (exact model, no surrogate):
 
 - the master lies on its C2 line, x_0 = x_t - z_0 tan(theta_0), z_0 on a uniform grid of
   `Z_GRID` altitudes over [z_min, z_max] (benchmark 2: the single point q0_fixed);
 - each slave lies on a look-angle ray from the target, q_k = (x_t - r sin(theta), r cos(theta)),
   theta on a uniform grid of `THETA_GRID` angles over [theta_min, theta_max] (C3). On a ray every
   other constraint is an interval of r in closed form: C1, C5 (r >= S_min cos(theta)/Theta_3dB),
-  C6 (r <= r_max(r_0)), C8 (|b_perp| affine in r), C9-C11 (the station disk of `power.py`,
-  a quadratic in r) and C4 against the master (an excluded interval). C7 is checked on theta.
+  C6 (r <= model.slave_range_max(r_0)), C8 (|b_perp| affine in r), C9-C11
+  (power.station_radius_sq, a quadratic in r) and C4 against the master (an excluded interval).
+  C7 is checked on theta.
 
 The start is the middle of what is feasible: z_0 = the median feasible grid altitude; U1 on the
 middle feasible ray with theta < theta_0 (I_a), U2 on the middle one with theta > theta_0 (I_b)
 (either side when one is empty), each at the midpoint of the longest feasible r-interval on its
 ray. Same input, same grid, same start.
 
-When no grid point is feasible, `blocking_families` runs the deletion filter (Chinneck): drop
-one constraint family at a time and keep it dropped while the rest stays infeasible. What is
-left is an irreducible infeasible set of families, e.g. ["C1", "C5"] for z_max below the
-swath's altitude.
+`families` restricts the constraints to a subset of C1..C11, which is how the deletion filter
+(solver/blocking.py) tests a family set; e.g. ["C1", "C5"] alone are infeasible for z_max below
+the swath's altitude.
 """
 from __future__ import annotations
 
@@ -30,15 +31,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from uav_insar_planner import model
-from uav_insar_planner.evaluate import active_uavs, static_power_w
 from uav_insar_planner.params import Params
-from uav_insar_planner.solver.ao_common import slave_range_max
-from uav_insar_planner.solver.power import rate_cost
+from uav_insar_planner.schemes import slave_uavs
+from uav_insar_planner.solver.blocking import ALL_FAMILIES
+from uav_insar_planner.solver.power import station_radius_sq
 
 Z_GRID = 801
 THETA_GRID = 181
 RAY_WINDOW = 1000.0  # metres searched along a ray beyond its lower limit
-ALL_FAMILIES = frozenset(f"C{i}" for i in range(1, 12))
 
 
 @dataclass
@@ -46,27 +46,6 @@ class Start:
     """A feasible formation ((3, 2), NaN row for an unflown UAV)."""
 
     formation: np.ndarray
-
-
-def _disk_radius_sq(p: Params, k: int, scheme: str, fam: frozenset[str]) -> float:
-    """rho_k^2 limit (x-z distance to the station) from C9-C11 as far as they are in `fam`;
-    +inf when no limit, -inf when no position works."""
-    if scheme == "static-power" and "C9" in fam and static_power_w(p) > p.p_max_w:
-        return -math.inf  # the fixed schedule itself breaks C9, wherever the UAV is
-    if "C10" not in fam:
-        return math.inf
-    dy2 = (p.y_track - p.ground_station[1]) ** 2
-    c = rate_cost(p, k)
-    if c == 0.0:
-        return math.inf
-    if scheme == "static-power":
-        return static_power_w(p) / c - float(dy2.max())
-    limit = math.inf
-    if "C9" in fam:
-        limit = min(limit, p.p_max_w / c - float(dy2.max()))
-    if "C11" in fam:
-        limit = min(limit, p.e_max_j / (p.slot_duration_s * p.num_slots * c) - float(dy2.mean()))
-    return limit
 
 
 def _ray_interval(point: np.ndarray, u: np.ndarray, centre: np.ndarray, rad_sq) -> tuple:
@@ -97,7 +76,7 @@ def _master_grid(p: Params, scheme: str, fam: frozenset[str]) -> tuple[np.ndarra
     r0 = model.slant_range(x0, z0, p.x_t)
     if "C5" in fam:
         ok &= model.swath_width(r0, p.theta0, p.beamwidth) >= p.swath_min
-    rho2 = _disk_radius_sq(p, 0, scheme, fam)
+    rho2 = station_radius_sq(p, 0, scheme, ALL_FAMILIES - fam)
     gxz = np.array([p.ground_station[0], p.ground_station[2]])
     ok &= (x0 - gxz[0]) ** 2 + (z0 - gxz[1]) ** 2 <= rho2
     return np.stack([x0, z0], axis=1), ok
@@ -122,7 +101,7 @@ def _slave_pieces(p: Params, k: int, scheme: str, fam: frozenset[str], q0: np.nd
     if "C5" in fam:
         lo = np.maximum(lo, p.swath_min * np.cos(thetas) / p.beamwidth)
     if "C6" in fam:
-        hi = np.minimum(hi, slave_range_max(p, r0))
+        hi = np.minimum(hi, model.slave_range_max(p, r0))
     if "C7" in fam:
         bp = p.radar_bandwidth_hz / p.center_frequency_hz
         g_rg = model.coherence_baseline(model.chi(p.theta0, thetas), bp)
@@ -138,7 +117,7 @@ def _slave_pieces(p: Params, k: int, scheme: str, fam: frozenset[str], q0: np.nd
         lo = np.maximum(lo, np.where(flat, np.where(abs(c0) <= bmax, -np.inf, np.inf),
                                      np.minimum(a, b)))
         hi = np.minimum(hi, np.where(flat, np.inf, np.maximum(a, b)))
-    rho2 = _disk_radius_sq(p, k, scheme, fam)
+    rho2 = station_radius_sq(p, k, scheme, ALL_FAMILIES - fam)
     if rho2 < math.inf:
         gxz = np.array([p.ground_station[0], p.ground_station[2]])
         dlo, dhi = _ray_interval(target[:, None], u, gxz[:, None], rho2)
@@ -174,7 +153,8 @@ def _middle(indices: np.ndarray) -> int:
     return int(indices[(indices.size - 1) // 2])
 
 
-def _pick_slaves(p: Params, slaves: list[int], q0: np.ndarray, candidates: dict) -> dict | None:
+def _pick_slaves(p: Params, slaves: tuple[int, ...], q0: np.ndarray,
+                 candidates: dict) -> dict | None:
     """Slave positions for master q0, or None. Preferred sides: U1 in I_a, U2 in I_b."""
     chosen: dict[int, np.ndarray] = {}
     for k in slaves:
@@ -204,7 +184,7 @@ def find_start(p: Params, scheme: str, families: Iterable[str] = ALL_FAMILIES,
     `first` stops at the first feasible master altitude (an existence test)."""
     fam = frozenset(families)
     masters, mok = _master_grid(p, scheme, fam)
-    slaves = [k for k in active_uavs(scheme) if k > 0]
+    slaves = slave_uavs(scheme)
     if "C4" not in fam:
         p = p.replace(d_min_m=0.0)
     feasible: list[tuple[int, dict]] = []
@@ -228,18 +208,3 @@ def find_start(p: Params, scheme: str, families: Iterable[str] = ALL_FAMILIES,
     for k, q in chosen.items():
         formation[k] = q
     return Start(formation)
-
-
-def blocking_families(p: Params, scheme: str) -> list[str]:
-    """Deletion filter over the families C1..C11: an irreducible set that is infeasible on the
-    start grid. C2 is only a family for the fixed master (elsewhere it defines the grid)."""
-    keep = set(ALL_FAMILIES)
-    if scheme != "fixed-master":
-        keep.discard("C2")
-    # from C11 down, so the geometric families (C1, C5, ...) are the ones kept when both an
-    # altitude and a communication explanation exist
-    for name in sorted(keep, key=lambda n: -int(n[1:])):
-        trial = keep - {name}
-        if find_start(p, scheme, trial, first=True) is None:
-            keep = trial
-    return sorted(keep, key=lambda n: int(n[1:]))

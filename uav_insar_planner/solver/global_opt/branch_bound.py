@@ -1,12 +1,12 @@
 """Branch and bound over boxes of (r0, theta_1, theta_2): the global optimum and its proof.
 
-After C2 (master on the ray theta_0) and the Pareto reduction of the slave ranges (pairs.py),
-problem (P) is a minimisation over r0 in the master interval and the slave look angles in the
-C3/C7 domain. Each box gets
+After C2 (master on the ray theta_0) and the Pareto reduction of the slave ranges
+(slave_ranges.py), problem (P) is a minimisation over r0 in the master interval and the slave
+look angles in the C3/C7 domain. Each box gets
 
-- an upper bound: the exact objective of a feasible point (pairs.best_ranges at the box's
-  angle centre and smallest r0), which also supplies the returned plan;
-- a lower bound (pairs.box_lower_bound): every factor of the objective is monotone in r0,
+- an upper bound: the exact objective of a feasible point (slave_ranges.best_ranges at the
+  box's angle centre and smallest r0), which also supplies the returned plan;
+- a lower bound (slave_ranges.box_lower_bound): every factor of the objective is monotone in r0,
   in |theta - theta_0| or in the slave range, and every range limit is monotone in r0 and in
   an angle, so replacing each by its most favourable value over the box bounds the objective
   from below over all feasible points of the box (+inf proves the box empty).
@@ -23,7 +23,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from uav_insar_planner.solver import pairs
+from uav_insar_planner.solver.global_opt import slave_ranges
 from uav_insar_planner.solver.rays import Scenario
 
 R0A, R0B, T1A, T1B, T2A, T2B = range(6)
@@ -43,7 +43,7 @@ class SearchResult:
 
 
 def _lower(sc: Scenario, b: np.ndarray) -> np.ndarray:
-    return pairs.box_lower_bound(sc, b[:, R0A], b[:, R0B], b[:, T1A], b[:, T1B],
+    return slave_ranges.box_lower_bound(sc, b[:, R0A], b[:, R0B], b[:, T1A], b[:, T1B],
                                  b[:, T2A], b[:, T2B])
 
 
@@ -112,7 +112,7 @@ def search(sc: Scenario, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch:
         r0 = boxes[:, R0A]
         t1 = 0.5 * (boxes[:, T1A] + boxes[:, T1B])
         t2 = 0.5 * (boxes[:, T2A] + boxes[:, T2B])
-        f, r1, r2 = pairs.best_ranges(sc, r0, t1, t2 if two else None)
+        f, r1, r2 = slave_ranges.best_ranges(sc, r0, t1, t2 if two else None)
         if len(f) and f.min() < best_val:
             i = int(np.argmin(f))
             best_val = float(f[i])
@@ -157,11 +157,12 @@ def polish(sc: Scenario, point, steps, iterations: int = 80):
     if not two:
         step[2] = 0.0
     grid = np.array(np.meshgrid([-1, 0, 1], [-1, 0, 1], [-1, 0, 1])).reshape(3, -1).T
-    f0, r1, r2 = pairs.best_ranges(sc, x[:1], x[1:2], x[2:3] if two else None)
+    f0, r1, r2 = slave_ranges.best_ranges(sc, x[:1], x[1:2], x[2:3] if two else None)
     best = (float(f0[0]), tuple(x) + (float(r1[0]), float(r2[0])))
     for _ in range(iterations):
         cand = np.clip(x + grid * step, lo, hi)
-        f, r1, r2 = pairs.best_ranges(sc, cand[:, 0], cand[:, 1], cand[:, 2] if two else None)
+        f, r1, r2 = slave_ranges.best_ranges(sc, cand[:, 0], cand[:, 1],
+                                             cand[:, 2] if two else None)
         i = int(np.argmin(f))
         if f[i] < best[0]:
             x = cand[i]

@@ -1,0 +1,87 @@
+"""Params files and overrides: ROS 2 params YAML and `NAME=VALUE` text to a validated Params.
+
+`load_params` is the entry point: the file's "/**" section, then the node's own section, then
+the overrides, all validated at once by `params.params_from_mapping`.
+"""
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from uav_insar_planner.params import ParamError, Params, params_from_mapping
+
+
+class _RosYamlLoader(yaml.SafeLoader):
+    """YAML 1.1 safe loader that also reads `1e9` and `1.0e9` as floats, as ROS 2's params
+    parser does (PyYAML's 1.1 resolver wants a signed exponent)."""
+
+
+_RosYamlLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)$"),
+    list("-+0123456789."),
+)
+
+
+def yaml_load(text: str) -> Any:
+    """Parse YAML the way ROS 2 params files are read (see _RosYamlLoader)."""
+    return yaml.load(text, Loader=_RosYamlLoader)  # noqa: S506 - a SafeLoader subclass
+
+
+def read_params_file(path: str | Path, node_name: str = "planner") -> dict[str, Any]:
+    """Read a ROS 2 params file: the "/**" section, then the node's own section on top.
+
+    Node sections may be keyed by the node name with or without a leading slash or namespace
+    (rclpy matches the fully qualified name; we accept `planner`, `/planner`, `/ns/planner`).
+    Raises ParamError with one line when the file is unreadable or not in that format.
+    """
+    path = Path(path)
+    try:
+        doc = yaml_load(path.read_text())
+    except OSError as exc:
+        raise ParamError([f"params file: {str(path)!r} cannot be read ({exc.strerror})"]) from None
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}" if mark else ""
+        raise ParamError([f"params file: {str(path)!r} is not valid YAML{where}"]) from None
+    if not isinstance(doc, dict):
+        raise ParamError([f"params file: {str(path)!r} must map node names to "
+                          "{ros__parameters: {...}}"])
+    for key, body in doc.items():
+        if not isinstance(body, dict) or not isinstance(body.get("ros__parameters"), dict):
+            raise ParamError([f"params file: section {key!r} in {str(path)!r} must hold a "
+                              "'ros__parameters' mapping"])
+    values: dict[str, Any] = {}
+    sections = [k for k in doc if k == "/**"] + [
+        k for k in doc if isinstance(k, str) and k != "/**"
+        and k.lstrip("/").split("/")[-1] == node_name]
+    for key in sections:
+        values.update(doc[key]["ros__parameters"])
+    return values
+
+
+def parse_override(text: str) -> tuple[str, Any]:
+    """`NAME=VALUE` (CLI --set) or `NAME:=VALUE` (ROS -p), VALUE parsed as YAML."""
+    sep = ":=" if ":=" in text else "="
+    name, eq, raw = text.partition(sep)
+    if not eq or not name.strip():
+        raise ParamError([f"--set: value {text!r} is not allowed; expected NAME=VALUE"])
+    try:
+        value = yaml_load(raw)
+    except yaml.YAMLError:
+        value = raw
+    return name.strip(), value
+
+
+def load_params(path: str | Path | None = None, overrides: Mapping[str, Any] | None = None,
+                node_name: str = "planner") -> Params:
+    """Load a params file (none: Table I defaults, as in config/params.yaml), apply overrides,
+    validate everything at once and convert to SI. Raises ParamError listing every problem."""
+    values = read_params_file(path, node_name) if path is not None else {}
+    if overrides:
+        values.update(overrides)
+    return params_from_mapping(values)

@@ -1,0 +1,25 @@
+"""What each scheme flies and pays: the rules that the solvers and the checker share.
+
+- "proposed": U0, U1, U2, every position and every P_com,k[n] free;
+- "single-baseline" (benchmark 1): U0 and U1 only;
+- "fixed-master" (benchmark 2): q_0 = q0_fixed, the master only allocates P_com,0;
+- "static-power" (benchmark 3): P_com,k[n] = E_max / (N delta_t) in every slot.
+"""
+from __future__ import annotations
+
+from uav_insar_planner.params import Params
+
+
+def active_uavs(scheme: str) -> tuple[int, ...]:
+    """The UAVs a scheme flies: benchmark 1 (single-baseline) has no U2."""
+    return (0, 1) if scheme == "single-baseline" else (0, 1, 2)
+
+
+def slave_uavs(scheme: str) -> tuple[int, ...]:
+    """The slaves a scheme flies: (1,) for single-baseline, else (1, 2)."""
+    return tuple(k for k in active_uavs(scheme) if k > 0)
+
+
+def static_power_w(p: Params) -> float:
+    """Benchmark 3's constant power: the energy budget spread evenly, E_max / (N delta_t)."""
+    return p.e_max_j / (p.num_slots * p.slot_duration_s)

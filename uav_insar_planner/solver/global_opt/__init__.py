@@ -1,0 +1,7 @@
+"""The certified global back end (solver="global"): the proven optimum of (P) or its bound.
+
+`optimum.solve_global` searches the ray model of solver/rays.py with the branch and bound of
+`branch_bound`, whose inner problem (the slaves' ranges for given angles) `slave_ranges` solves
+exactly; `infeasibility` explains an infeasible scenario; `band` gives sigma_h's spread over the
+minimisers of Proposition 1's bound. It imports nothing from the AO back end (solver/ao/).
+"""

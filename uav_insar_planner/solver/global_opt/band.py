@@ -1,0 +1,89 @@
+"""The spread of the true sigma_h over the minimisers of Proposition 1's bound.
+
+The paper minimises the bound; when its minimum is reached by a whole set of formations (every
+C8 tight), sigma_h differs across that set. `bound_minimizer_band` reports its range, which the
+sweeps draw as a band (see its docstring).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from uav_insar_planner.evaluate import evaluate
+from uav_insar_planner.params import Params
+from uav_insar_planner.solver import rays
+from uav_insar_planner.solver.global_opt.optimum import solve_global
+from uav_insar_planner.solver.result import SolverResult
+
+
+def bound_minimizer_band(p: Params, scheme: str, samples: int = 160) -> tuple[float, float]:
+    """(lo, hi): the least and largest true sigma_h over the formations minimising Proposition
+    1's bound.
+
+    The bound is C r0 / sqrt(sum_k b_perp,k^2) and C8 caps each b_perp,k at
+    lambda r0 sin(theta_0) / h_amb^min, so it is at least the r0-free value
+    C h_amb^min / (lambda sin(theta_0) sqrt(n_slaves)), reached exactly by the feasible
+    formations with every C8 tight. When the bound's global minimum equals that value (Table I
+    and the figure sweeps), the minimisers are that whole set: each slave on the curve
+    r_k = b_max(r0) / |sin(theta_k - theta_0)|, any r0 and angles keeping C1-C11. The band is
+    sampled on a (r0, theta_1, theta_2) grid and polished; otherwise the minimiser found by
+    the global solver is reported as a zero-width band. (nan, nan) if infeasible.
+    """
+    res = solve_global(p, scheme, "bound")
+    if not res.feasible:
+        return math.nan, math.nan
+    sc = rays.make_scenario(p, scheme, "exact")
+    n = len(sc.slaves)
+    sigma_phi_a = sc.sigma_phi_bound
+    c8_value = p.h_amb_min * sigma_phi_a / (2.0 * math.pi * math.sqrt(n))
+    bound_value = _objective(p, res, scheme)
+    if not (sc.on("C8") and bound_value <= c8_value * (1.0 + 1e-6)):
+        s = _exact_sigma(p, res, scheme)
+        return s, s
+    r0s = (np.array([sc.r0_lo]) if sc.r0_lo == sc.r0_hi
+           else np.linspace(sc.r0_lo, sc.r0_hi, samples // 2))
+    th = np.linspace(sc.th_lo, sc.th_hi, samples)
+    lo, hi = _band_on_grid(sc, r0s, th)
+    return lo, hi
+
+
+def _objective(p: Params, res: SolverResult, scheme: str) -> float:
+    return evaluate(p, res.formation, res.p_com, scheme).sigma_h_bound
+
+
+def _exact_sigma(p: Params, res: SolverResult, scheme: str) -> float:
+    return evaluate(p, res.formation, res.p_com, scheme).sigma_h
+
+
+def _c8_tight_sigma(sc: rays.Scenario, k: int, r0, th):
+    """Per slave on its C8-tight curve: (feasible mask, range, 1/sigma_h,k^2)."""
+    b = rays.baseline_limit(sc, r0)
+    with np.errstate(divide="ignore"):
+        r = b / np.abs(np.sin(th - sc.th0))
+    lo, up = rays.ray_limits(sc, k, r0, th)
+    h1, h2 = rays.master_hole(sc, r0, th)
+    ok = (r >= lo) & (r <= up * (1 + 1e-12)) & ~((r > h1) & (r < h2)) & np.isfinite(r)
+    w = rays.weight(sc, b, rays.coherence_rg(sc, th), rays.snr_factor(sc, r0, r))
+    return ok, r, w
+
+
+def _band_on_grid(sc: rays.Scenario, r0s, th):
+    r0 = r0s[:, None]
+    ok1, ra, w1 = _c8_tight_sigma(sc, 1, r0, th[None, :])
+    if len(sc.slaves) == 1:
+        s = np.where(ok1, rays.objective_from_weights(sc, r0, w1), np.nan)
+        return float(np.nanmin(s)), float(np.nanmax(s))
+    ok2, rb, w2 = _c8_tight_sigma(sc, 2, r0, th[None, :])
+    r0 = r0s[:, None, None]
+    c = np.cos(th[:, None] - th[None, :])[None]
+    r1, r2 = ra[:, :, None], rb[:, None, :]
+    sep = r1 * r1 + r2 * r2 - 2 * c * r1 * r2 >= sc.p.d_min**2 if sc.on("C4") else True
+    ok = ok1[:, :, None] & ok2[:, None, :] & sep
+    with np.errstate(invalid="ignore"):
+        s = np.where(ok, rays.objective_from_weights(sc, r0, w1[:, :, None] + w2[:, None, :]),
+                     np.nan)
+    if not np.isfinite(s).any():
+        return math.nan, math.nan
+    return float(np.nanmin(s)), float(np.nanmax(s))
+
