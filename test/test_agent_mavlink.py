@@ -6,17 +6,11 @@ from __future__ import annotations
 import math
 
 import pytest
-from conftest import spin_until
-from geometry_msgs.msg import PoseArray, PoseStamped
-from rclpy.executors import SingleThreadedExecutor
-from rclpy.node import Node
 from rclpy.parameter import Parameter
-from std_msgs.msg import Float64
 
 from uav_insar_planner import load_params, model, solve
 from uav_insar_planner.ros.mavlink_bridge import MavlinkBridgeNode
 from uav_insar_planner.ros.planner import PlannerNode
-from uav_insar_planner.ros.topics import LATCHED
 from uav_insar_sim.agent_node import AgentNode
 from uav_insar_sim.observed_mission import ObservedMission, interpolate
 
@@ -46,9 +40,9 @@ def test_slots_start_where_the_vehicle_crosses_their_lines():
 
 @pytest.mark.parametrize("bearing_deg, origin", [(0.0, [0.0, 0.0, 0.0]),
                                                  (90.0, [5.0, -3.0, 0.0])])
-def test_agents_in_mavlink_mode_fly_the_plan_through_the_bridge(ros_context, bearing_deg,
-                                                                origin):
+def test_agents_in_mavlink_mode_fly_the_plan_through_the_bridge(watcher, bearing_deg, origin):
     """Also with a rotated, offset track frame, given alike to the bridge and the agents."""
+    ros_context = watcher.node.context
     params = load_params(overrides=SCENARIO)
     plan = solve(params)
     frame = [Parameter("track_bearing_deg", value=bearing_deg),
@@ -66,25 +60,17 @@ def test_agents_in_mavlink_mode_fly_the_plan_through_the_bridge(ros_context, bea
         Parameter("capture_radius_m", value=0.2),
         Parameter("velocity_feedforward", value=True), *frame])
     assert not bridge.problems, bridge.problems
-    watcher = Node("watcher", context=ros_context)
-    formation, poses, rates = [], {k: [] for k in range(3)}, {k: [] for k in range(3)}
-    watcher.create_subscription(PoseArray, "/formation",
-                                formation.append, LATCHED)
-    for k in range(3):
-        watcher.create_subscription(PoseStamped, f"/uav{k}/pose",
-                                    lambda m, k=k: poses[k].append(m.pose.position), 100)
-        watcher.create_subscription(Float64, f"/uav{k}/achieved_rate",
-                                    lambda m, k=k: rates[k].append(m.data), 100)
-    executor = SingleThreadedExecutor(context=ros_context)
-    nodes = [planner, bridge, *agents, watcher]
+    nodes = [planner, bridge, *agents]
     for node in nodes:
-        executor.add_node(node)
+        watcher.add_node(node)
+    formation, rates = watcher.formations, watcher.rates
 
     n = params.num_slots
     try:
-        assert spin_until(executor, lambda: formation, 30.0), "no /formation"
-        assert spin_until(executor, lambda: all(len(rates[k]) >= n for k in range(3)), 30.0), rates
-        spin_until(executor, lambda: False, 0.5)
+        assert watcher.spin_until(lambda: formation, 30.0), "no /formation"
+        assert watcher.spin_until(lambda: all(len(rates[k]) >= n for k in range(3)),
+                                  30.0), rates
+        watcher.spin_until(lambda: False, 0.5)
     finally:
         bridge.stop()
         planner.stop()
@@ -95,7 +81,7 @@ def test_agents_in_mavlink_mode_fly_the_plan_through_the_bridge(ros_context, bea
         params.ground_station), params.comm_bandwidth_hz, params.beta_c)
     for k in range(3):
         x_k, z_k = plan.formation[k]
-        last = poses[k][-1]
+        last = watcher.poses[k][-1].pose.position
         # the embedded vehicle, flown by the bridge, holds the planned across-track position
         assert math.hypot(last.x - x_k, last.z - z_k) < 0.5, (k, last)
         assert last.y > (n - 0.5) * params.speed * params.slot_duration_s  # flew the slots

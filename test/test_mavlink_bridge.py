@@ -6,12 +6,9 @@ import time
 import pytest
 from mavlink_fakes import MAV, FakePeer, wait_until
 
-from uav_insar_planner.mavlink.bridge import (
-    MASK_POSITION,
-    MASK_POSITION_VELOCITY,
-    Bridge,
-    BridgeConfig,
-)
+from uav_insar_planner.mavlink.bridge import Bridge, BridgeConfig
+from uav_insar_planner.mavlink.setpoints import MASK_POSITION, MASK_POSITION_VELOCITY
+from uav_insar_planner.mavlink.trajectory import BRAKE_MPS2, braked_pass
 
 pytestmark = pytest.mark.timeout(60)
 SYSIDS = (2, 3, 4)
@@ -170,19 +167,23 @@ def test_bad_configuration_is_one_line(change, words):
     assert words in str(err.value) and "\n" not in str(err.value)
 
 
-def test_along_track_target_brakes_to_the_pass_end():
+def test_braked_pass_target_brakes_to_the_pass_end():
     """Cruise, then a constant deceleration that stops exactly at speed * duration."""
-    from uav_insar_planner.mavlink.bridge import BRAKE_MPS2, along_track
-
     v, d = 4.3, 5.0
-    assert along_track(1.0, v, 0.0) == (4.3, 4.3)  # endless pass: pure cruise
-    assert along_track(2.0, v, d) == pytest.approx((8.6, 4.3))  # cruising
+    assert braked_pass(1.0, v, 0.0) == (4.3, 4.3)  # endless pass: pure cruise
+    assert braked_pass(2.0, v, d) == pytest.approx((8.6, 4.3))  # cruising
     t_brake = d - v / BRAKE_MPS2 / 2
     ts = [t_brake + i * 0.01 for i in range(400)]
-    pts = [along_track(t, v, d) for t in ts]
+    pts = [braked_pass(t, v, d) for t in ts]
     steps = list(zip(pts[:-1], pts[1:], strict=True))
     assert all(b[0] >= a[0] for a, b in steps)  # never backwards
     assert all(abs(b[1] - a[1]) <= BRAKE_MPS2 * 0.01 + 1e-9 for a, b in steps)
     assert pts[-1] == pytest.approx((v * d, 0.0))  # stops at the pass end
     # a pass too short to brake at BRAKE_MPS2 brakes harder and still ends at speed * d
-    assert along_track(10.0, 3.0, 1.0) == pytest.approx((3.0, 0.0))
+    assert braked_pass(10.0, 3.0, 1.0) == pytest.approx((3.0, 0.0))
+
+
+def test_type_masks_are_the_named_ignore_bits_mavros_uses():
+    """Built from MAV_POSITION_TARGET_TYPEMASK bits; the values autopilots expect."""
+    assert MASK_POSITION == 3576
+    assert MASK_POSITION_VELOCITY == 3520

@@ -4,7 +4,7 @@ import pytest
 
 from uav_insar_sim.kinematics import (
     PointMass,
-    along_track,
+    runup_and_cruise,
     runup_distance,
     slot_start,
     step_toward,
@@ -53,10 +53,10 @@ def test_follows_a_moving_target_with_its_velocity():
 
 @pytest.mark.parametrize("speed,accel", [(4.3, 3.0), (1.0, 0.5)])
 def test_run_up_reaches_speed_at_y0_and_slots_start_on_the_model_grid(speed, accel):
-    y, vy = along_track(0.0, speed, accel)
+    y, vy = runup_and_cruise(0.0, speed, accel)
     assert (y, vy) == (-runup_distance(speed, accel), 0.0)
-    assert along_track(speed / accel, speed, accel) == pytest.approx((0.0, speed))
+    assert runup_and_cruise(speed / accel, speed, accel) == pytest.approx((0.0, speed))
     for n in range(5):
-        y, vy = along_track(slot_start(n, speed, accel, 1.5), speed, accel)
+        y, vy = runup_and_cruise(slot_start(n, speed, accel, 1.5), speed, accel)
         assert y == pytest.approx(n * speed * 1.5)
         assert vy == speed

@@ -1,21 +1,21 @@
 """The simulated UAV agent (`ros2 run uav_insar_planner agent --ros-args -p uav_id:=1`).
 
 Waits for the latched `formation` and `formation/power`, flies to its across-track target
-(x_k, z_k), then runs the stripmap track slot by slot (mission.Mission), applying P_com[k][n]
+(x_k, z_k), then runs the stripmap track slot by slot (slots.SlotSchedule), applying P_com[k][n]
 in slot n and computing the rate it achieves from where it actually is. Publishes
 `uav{K}/pose` (PoseStamped, every tick and at each slot start) and `uav{K}/achieved_rate`
 (Float64, bit/s, one message per slot, at the slot start). A new plan re-targets the UAV
 without restarting the slot clock, so a planner restart (same latched plan) changes nothing.
 
-MAVLink mode (`mavlink_listen` set, e.g. `udpin:127.0.0.1:14552`): the agent does not fly
-itself. It embeds a SITL-style vehicle (`vehicle.SimVehicle`, sysid `mavlink_sysid`, 0 = 2 +
-uav_id like the bridge's default target_sysids) on that endpoint, which `mavlink_bridge` flies;
-the agent reads the vehicle's position (converted to the track frame with `track_bearing_deg`
-and `origin_ned_m`, which must match the bridge's; default N = y, E = x, D = -z) and runs the
-schedule on it (observed_mission.ObservedMission: slot n starts when the
-vehicle crosses y = n v_y delta_t). `time_scale` and the position noise do not apply then.
+How the UAV flies is chosen once at start-up (`flight.choose_flight`): by itself on the
+mission clock, or, in MAVLink mode (`mavlink_listen` set, e.g. `udpin:127.0.0.1:14552`), as an
+embedded SITL-style vehicle (sysid `mavlink_sysid`, 0 = 2 + uav_id like the bridge's default
+target_sysids) that `mavlink_bridge` flies; the agent then reads the vehicle's position
+(converted to the track frame with `track_bearing_deg` and `origin_ned_m`, which must match
+the bridge's; default N = y, E = x, D = -z) and slot n starts when the vehicle crosses
+y = n v_y delta_t. `time_scale` and the position noise do not apply then.
 
-Parameters (nodes/parameters.py, all read-only: a mission is set up once): uav_id, time_scale
+Parameters (ros/parameters.py, all read-only: a mission is set up once): uav_id, time_scale
 (mission seconds per wall second), position_noise_std_m, noise_seed, max_speed_mps,
 max_accel_mps2 (AGENT_SPECS), mavlink_listen, mavlink_sysid, track_bearing_deg, origin_ned_m
 (MAVLINK_SPECS) and the scenario parameters of AGENT_SCENARIO_NAMES from params.PARAM_SPECS, so
@@ -24,77 +24,64 @@ with code 2.
 """
 from __future__ import annotations
 
-import math
 import sys
-import time
 
 from geometry_msgs.msg import PoseArray, PoseStamped
 from rclpy.node import Node
 from std_msgs.msg import Float64, Float64MultiArray
 
 from uav_insar_planner.evaluate import rate_tolerance_bps
-from uav_insar_planner.mavlink.frames import TrackFrame
 from uav_insar_planner.params import ParamError, params_from_mapping
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.parameters import (
     AGENT_SPECS,
     MAVLINK_SPECS,
     agent_scenario_specs,
-    check_scalars,
+    check_values,
     declare_specs,
     guard_sets,
     spec_values,
     unknown_overrides,
 )
 from uav_insar_planner.ros.run import run_node
-from uav_insar_sim.mission import Mission, home_position
-from uav_insar_sim.observed_mission import ObservedMission
+from uav_insar_sim.flight import choose_flight
 from uav_insar_sim.vehicle import SimVehicle
 
 SCENARIO_SPECS = agent_scenario_specs()
 TICK_PERIOD_S = 0.05  # wall clock; the mission clock advances time_scale times faster
-# MAVLink mode: the embedded vehicle starts airborne (no arming needed) above the agent's home.
-MAVLINK_START_HEIGHT_M = 10.0
 
 
 class AgentNode(Node):
-    """See the module docstring. `problems` is non-empty (nothing created) on bad parameters."""
+    """See the module docstring. `problems` is non-empty (nothing created) on bad parameters.
+
+    `vehicle` is the embedded MAVLink vehicle in MAVLink mode, else None."""
 
     def __init__(self, node_name: str = "agent", **kwargs):
         super().__init__(node_name, **kwargs)
         self.vehicle: SimVehicle | None = None
+        self.flight = None
         self.problems = declare_specs(self, AGENT_SPECS + MAVLINK_SPECS + SCENARIO_SPECS,
                                       read_only=True) + unknown_overrides(self)
         own = spec_values(self, AGENT_SPECS + MAVLINK_SPECS)
-        self.problems += check_scalars(own, AGENT_SPECS + MAVLINK_SPECS[1:3])
-        origin = own["origin_ned_m"]
-        if len(origin) != 3 or not all(math.isfinite(v) for v in origin):
-            self.problems.append(f"origin_ned_m: value {list(origin)!r} is not allowed; "
-                                 "expected 3 finite numbers (N, E, D)")
+        self.problems += check_values(own, AGENT_SPECS + MAVLINK_SPECS)
         try:
             params = params_from_mapping(spec_values(self, SCENARIO_SPECS))
         except ParamError as exc:
             self.problems += exc.problems
         if self.problems:
             return
-        try:  # Mission also checks max_speed_mps against speed_mps, which both modes need
-            self.mission = Mission(own["uav_id"], params, own["max_speed_mps"],
-                                   own["max_accel_mps2"], own["position_noise_std_m"],
-                                   own["noise_seed"])
-            # The embedded vehicle's local NED relates to the track as the bridge's does.
-            self.frame = TrackFrame.from_degrees(own["track_bearing_deg"], own["origin_ned_m"])
-            if own["mavlink_listen"]:
-                self.vehicle = embedded_vehicle(own, self.frame)
-                self.mission = ObservedMission(own["uav_id"], params)
+        try:
+            self.flight = choose_flight(own, params)
         except ValueError as exc:
             self.problems.append(str(exc))
             return
         guard_sets(self)
+        self.vehicle = self.flight.vehicle
+        self.mission = self.flight.mission
         self.k = own["uav_id"]
-        self.time_scale = own["time_scale"]
         self._formation = None
         self._power = None
-        self._wall_t0: float | None = None
+        self._announced = False
         self._phase = self.mission.phase
         self._pose_pub = self.create_publisher(PoseStamped, topics.pose(self.k), topics.DEPTH)
         self._rate_pub = self.create_publisher(Float64, topics.achieved_rate(self.k),
@@ -103,16 +90,14 @@ class AgentNode(Node):
                                  topics.LATCHED)
         self.create_subscription(Float64MultiArray, topics.POWER, self._on_power, topics.LATCHED)
         self.create_timer(TICK_PERIOD_S, self._tick)
-        if self.vehicle is not None:
-            self.vehicle.start()
-            self.get_logger().info(f"uav{self.k}: MAVLink mode, vehicle sysid "
-                                   f"{self.vehicle.sysid} on {own['mavlink_listen']} (port "
-                                   f"{self.vehicle.port})")
+        note = self.flight.start()
+        if note:
+            self.get_logger().info(f"uav{self.k}: {note}")
         self.get_logger().info(f"uav{self.k}: waiting for the formation")
 
     def destroy_node(self) -> None:
-        if self.vehicle is not None:
-            self.vehicle.stop()
+        if self.flight is not None:
+            self.flight.stop()
         super().destroy_node()
 
     # --- plan ----------------------------------------------------------------------------
@@ -137,25 +122,15 @@ class AgentNode(Node):
         if n != self.mission.params.num_slots:
             self.get_logger().warning(f"uav{self.k}: plan has {n} slots, num_slots is "
                                       f"{self.mission.params.num_slots}; flying the plan's {n}")
-        if self.vehicle is None:
-            self.mission.set_plan((p.x, p.z), powers)
-        else:
-            self.mission.set_plan((p.x, p.z), powers, y_start=p.y)
-        if self._wall_t0 is None and self.mission.phase == "transit":
-            self._wall_t0 = time.monotonic()
-            how = "flying" if self.vehicle is None else "the bridge flies it"
-            self.get_logger().info(f"uav{self.k}: plan received, {how} to x={p.x:.3f} m, "
-                                   f"z={p.z:.3f} m for {n} slots")
+        self.flight.set_plan(p.x, p.y, p.z, powers)
+        if not self._announced and self.mission.phase == "transit":
+            self._announced = True
+            self.get_logger().info(f"uav{self.k}: plan received, {self.flight.how} to "
+                                   f"x={p.x:.3f} m, z={p.z:.3f} m for {n} slots")
 
     # --- flight --------------------------------------------------------------------------
     def _tick(self) -> None:
-        if self.vehicle is not None:
-            started = self.mission.observe(self.frame.from_ned(*self.vehicle.position_ned))
-        elif self._wall_t0 is not None:
-            started = self.mission.advance((time.monotonic() - self._wall_t0) * self.time_scale)
-        else:
-            started = []
-        for sample in started:
+        for sample in self.flight.tick():
             self._publish_pose(sample.position)
             self._rate_pub.publish(Float64(data=sample.rate_bps))
         self._publish_pose(self.mission.actual_position())
@@ -173,10 +148,8 @@ class AgentNode(Node):
 
     def _log_phase(self) -> None:
         log = self.get_logger()
-        if self._phase == "track" and self.vehicle is not None:
-            log.info(f"uav{self.k}: slot 0 started at y = {self.mission.y_start:g} m")
-        elif self._phase == "track":
-            log.info(f"uav{self.k}: on the run-up, slot 0 starts at y = 0")
+        if self._phase == "track":
+            log.info(f"uav{self.k}: {self.flight.track_started_text()}")
         elif self._phase == "idle":
             log.info(f"uav{self.k}: this scheme does not fly uav{self.k}; holding at home")
         elif self._phase == "done":
@@ -186,21 +159,6 @@ class AgentNode(Node):
             worst = min(s.margin_bps for s in samples) / 1e6 if samples else float("nan")
             log.info(f"uav{self.k}: mission complete: {len(samples)} slots flown, rate met in "
                      f"{met}, worst margin {worst:+.4g} Mbit/s")
-
-
-def embedded_vehicle(own: dict, frame: TrackFrame) -> SimVehicle:
-    """The MAVLink-mode vehicle for the agent parameters `own` (not started): ArduPilot-like,
-    airborne in GUIDED at MAVLINK_START_HEIGHT_M above the agent's home, with the agent's
-    speed and acceleration limits. ValueError (one line) for a bad connection string."""
-    x, y, _ = home_position(own["uav_id"])
-    sysid = own["mavlink_sysid"] or 2 + own["uav_id"]
-    start = frame.to_ned(float(x), float(y), MAVLINK_START_HEIGHT_M)
-    try:
-        return SimVehicle(sysid, own["mavlink_listen"], "ardupilot", start_ned=start,
-                          max_speed=own["max_speed_mps"], max_accel=own["max_accel_mps2"],
-                          airborne=True)
-    except ValueError as exc:
-        raise ValueError(f"mavlink_listen: {' '.join(str(exc).split())}") from None
 
 
 def main(args: list[str] | None = None) -> int:

@@ -1,64 +1,29 @@
-"""One UAV's mission when something else flies it (a MAVLink vehicle under the bridge).
+"""Position source for a UAV that something else flies (a MAVLink vehicle under the bridge).
 
 The agent only watches: it is given the UAV's actual position (`observe`) and applies the
 schedule where the plan puts it. Slot n starts when the UAV crosses, moving forward along the
-track, the line y = y_start + n v_y delta_t (where the model's y[n] is), so the slots follow
+track, the line y = y_start + n v_y delta_t (`SlotSchedule.slot_line`), so the slots follow
 the vehicle's real progress whatever its clock or speed. The position at the crossing is
 interpolated between two observations, and the rate is computed there with P_com[k][n].
 A line already behind the UAV when the plan arrives waits until the UAV crosses it forward
-(the bridge brings every vehicle back to y_start before the pass begins).
-
-Phases as in `mission.Mission`: `wait` (no plan) -> `transit` (plan known, before slot 0) ->
-`track` (slots running) -> `done` (the line after the last slot crossed); `idle` when the plan
-does not fly this UAV.
+(the bridge brings every vehicle back to y_start before the pass begins). The mission is
+`done` once the line after the last slot is crossed.
 """
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 
+from uav_insar_planner.mavlink.frames import Vec3
 from uav_insar_planner.params import Params
-from uav_insar_sim.link import achieved_rate
-from uav_insar_sim.mission import SlotSample
-
-Vec3 = tuple[float, float, float]
+from uav_insar_sim.slots import SlotSample, SlotSchedule
 
 
-class ObservedMission:
+class ObservedMission(SlotSchedule):
     """Slots of UAV `uav_id` under `params` (SI), triggered by the observed position."""
 
     def __init__(self, uav_id: int, params: Params):
-        self.uav_id = uav_id
-        self.params = params
-        self.phase = "wait"
-        self.y_start = 0.0
-        self.target_xz: tuple[float, float] | None = None
-        self.powers: list[float] = []
-        self.samples: list[SlotSample] = []
+        super().__init__(uav_id, params)
         self._last: Vec3 | None = None
-
-    @property
-    def num_slots(self) -> int:
-        return len(self.powers)
-
-    def set_plan(self, target_xz: tuple[float, float], powers: Sequence[float],
-                 y_start: float = 0.0) -> None:
-        """Adopt a (new) plan; slots already flown stay flown, later ones use the new
-        schedule. Ignored once the mission is done."""
-        if self.phase == "done":
-            return
-        if not all(math.isfinite(v) for v in target_xz):
-            self.phase = "idle"
-            return
-        self.target_xz = (float(target_xz[0]), float(target_xz[1]))
-        self.powers = [float(p) for p in powers]
-        self.y_start = float(y_start)
-        if self.phase in ("wait", "idle"):
-            self.phase = "transit"
-
-    def slot_line(self, n: int) -> float:
-        """Along-track position y at which slot n starts (n = num_slots: the pass's end)."""
-        return self.y_start + n * self.params.speed * self.params.slot_duration_s
 
     def actual_position(self) -> Vec3 | None:
         """The last observed position (None before the first)."""
@@ -72,24 +37,14 @@ class ObservedMission:
         started: list[SlotSample] = []
         if before is None or self.phase not in ("transit", "track") or here[1] <= before[1]:
             return started
-        while len(self.samples) < self.num_slots:
+        while not self.all_flown:
             line = self.slot_line(len(self.samples))
             if not before[1] < line <= here[1]:
                 break
-            started.append(self._sample(interpolate(before, here, line)))
-            self.phase = "track"
-        if len(self.samples) >= self.num_slots and here[1] >= self.slot_line(self.num_slots):
+            started.append(self.start_slot(interpolate(before, here, line)))
+        if self.all_flown and here[1] >= self.slot_line(self.num_slots):
             self.phase = "done"
         return started
-
-    def _sample(self, position: Vec3) -> SlotSample:
-        p = self.params
-        n = len(self.samples)
-        rate = achieved_rate(position, self.powers[n], p.ground_station, p.comm_bandwidth_hz,
-                             p.beta_c)
-        sample = SlotSample(n, position, self.powers[n], rate, p.rate_min_bps[self.uav_id])
-        self.samples.append(sample)
-        return sample
 
 
 def interpolate(a: Vec3, b: Vec3, y: float) -> Vec3:

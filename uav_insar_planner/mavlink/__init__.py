@@ -1,4 +1,14 @@
-"""MAVLink side of the planner, free of ROS: track-frame <-> NED conversion (`frames`), one
-transport per endpoint with counted, tolerant parsing (`link`), and the swarm bridge that
-streams setpoints and watches the vehicles (`bridge`). The ROS node
-`uav_insar_planner.ros.mavlink_bridge` is a thin adapter over `bridge.Bridge`."""
+"""MAVLink side of the planner, free of ROS, one concern per module:
+
+- `frames`: track frame <-> local NED.
+- `link`: one transport per endpoint with counted, tolerant parsing.
+- `autopilots`: ArduPilot / PX4 names and mode numbers.
+- `config`: `BridgeConfig` and its validation.
+- `trajectory`: the pass each UAV flies and when it starts.
+- `setpoints`: SET_POSITION_TARGET_LOCAL_NED and its type masks.
+- `supervision`: heartbeats, lost and found vehicles, positions read back.
+- `sequencer`: the optional arm-and-take-off sequence with ACK retries.
+- `bridge`: the I/O loop that ties them together (`Bridge`).
+
+The ROS node `uav_insar_planner.ros.mavlink_bridge` is a thin adapter over `bridge.Bridge`.
+"""

@@ -1,4 +1,4 @@
-"""Track frame `insar_track` <-> MAVLink local NED (DESIGN.md section 6).
+"""Track frame `insar_track` <-> MAVLink local NED.
 
 Track frame: x = range / across-track, y = azimuth / along-track, z = up (metres).
 The along-track axis points at bearing psi from north (clockwise, radians inside), and the

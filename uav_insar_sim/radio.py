@@ -1,4 +1,4 @@
-"""The link from a UAV to the ground station: the paper's FDMA free-space rate (eq. 17).
+"""The radio link from a UAV to the ground station: the paper's FDMA free-space rate (eq. 17).
 
 The planner sizes P_com[k][n] for the planned position q_k[n] = (x_k, y[n], z_k); the agent
 calls `achieved_rate` with where it actually is, so any position error shows up as a rate

@@ -1,0 +1,42 @@
+"""SET_POSITION_TARGET_LOCAL_NED as the bridge sends it and the simulated vehicle reads it.
+
+Type masks are built from the named MAV_POSITION_TARGET_TYPEMASK bits (a set bit means
+"ignore this field"). Both autopilots only honour whole groups, so position and velocity are
+ignored or used on all three axes together.
+"""
+from __future__ import annotations
+
+from pymavlink import mavutil
+
+from uav_insar_planner.mavlink.frames import TrackFrame, Vec3
+from uav_insar_planner.mavlink.link import MAV
+
+_T = mavutil.mavlink
+POSITION_BITS = (_T.POSITION_TARGET_TYPEMASK_X_IGNORE | _T.POSITION_TARGET_TYPEMASK_Y_IGNORE
+                 | _T.POSITION_TARGET_TYPEMASK_Z_IGNORE)
+VELOCITY_BITS = (_T.POSITION_TARGET_TYPEMASK_VX_IGNORE | _T.POSITION_TARGET_TYPEMASK_VY_IGNORE
+                 | _T.POSITION_TARGET_TYPEMASK_VZ_IGNORE)
+ACCELERATION_BITS = (_T.POSITION_TARGET_TYPEMASK_AX_IGNORE
+                     | _T.POSITION_TARGET_TYPEMASK_AY_IGNORE
+                     | _T.POSITION_TARGET_TYPEMASK_AZ_IGNORE)
+YAW_BITS = _T.POSITION_TARGET_TYPEMASK_YAW_IGNORE | _T.POSITION_TARGET_TYPEMASK_YAW_RATE_IGNORE
+#: Position + velocity feed-forward (3520): acceleration and yaw ignored.
+MASK_POSITION_VELOCITY = ACCELERATION_BITS | YAW_BITS
+#: Position only (3576): velocity, acceleration and yaw ignored.
+MASK_POSITION = MASK_POSITION_VELOCITY | VELOCITY_BITS
+
+
+def setpoint_message(mav: MAV.MAVLink, frame: TrackFrame, target: tuple[Vec3, Vec3],
+                     boot_ms: int, sysid: int, compid: int,
+                     feedforward: bool) -> MAV.MAVLink_message:
+    """The setpoint for a track-frame (position, velocity) target, in MAV_FRAME_LOCAL_NED.
+
+    With `feedforward` the velocity is sent too (MASK_POSITION_VELOCITY); otherwise the
+    velocity fields are zero and ignored (MASK_POSITION).
+    """
+    n, e, d = frame.to_ned(*target[0])
+    vn, ve, vd = frame.vector_to_ned(*target[1]) if feedforward else (0.0, 0.0, 0.0)
+    mask = MASK_POSITION_VELOCITY if feedforward else MASK_POSITION
+    return mav.set_position_target_local_ned_encode(
+        boot_ms, sysid, compid, MAV.MAV_FRAME_LOCAL_NED, mask,
+        n, e, d, vn, ve, vd, 0.0, 0.0, 0.0, 0.0, 0.0)

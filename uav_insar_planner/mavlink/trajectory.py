@@ -1,0 +1,85 @@
+"""The pass every UAV flies in the track frame, and when it starts.
+
+UAV k's target is (x_k, y_start, z_k) until the track starts, then
+(x_k, y_start + s(t - t_start), z_k) with s from `braked_pass`. The track starts once every
+gating UAV is within `capture_radius_m` of its start point (0: at once), so the formation is
+established before the pass.
+"""
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+from uav_insar_planner.mavlink.frames import Vec3
+
+# Braking at the end of a finite pass, gentle for a multicopter's position controller.
+BRAKE_MPS2 = 1.5
+
+
+def braked_pass(elapsed: float, speed: float, duration: float) -> tuple[float, float]:
+    """(offset, velocity) of the along-track target `elapsed` seconds into the pass.
+
+    duration 0: cruise at `speed` for ever. Otherwise cruise, then brake at BRAKE_MPS2 (less
+    for a short pass) so that the target stops exactly at speed * duration: a target that
+    stopped dead would make every vehicle overshoot by v^2 / (2 a_max) and come back.
+    """
+    if duration <= 0.0:
+        return speed * elapsed, speed
+    if speed <= 0.0:
+        return 0.0, 0.0
+    brake_s = min(speed / BRAKE_MPS2, 2.0 * duration)
+    decel = speed / brake_s
+    t_brake = duration - brake_s / 2.0  # cruise + braking distances add up to speed * duration
+    if elapsed <= t_brake:
+        return speed * elapsed, speed
+    tau = min(elapsed - t_brake, brake_s)
+    return speed * t_brake + speed * tau - 0.5 * decel * tau * tau, speed - decel * tau
+
+
+def clean_formation(poses: Sequence[Vec3 | None], count: int) -> list[Vec3 | None]:
+    """`count` poses as float tuples; a missing or non-finite pose becomes None (not flown)."""
+    clean: list[Vec3 | None] = []
+    for k in range(count):
+        p = poses[k] if k < len(poses) else None
+        ok = p is not None and all(math.isfinite(float(c)) for c in p)
+        clean.append(tuple(float(c) for c in p) if ok else None)
+    return clean
+
+
+class PassTrajectory:
+    """The formation and the track clock. Not thread-safe (the bridge holds its lock)."""
+
+    def __init__(self, speed_mps: float, track_duration_s: float):
+        self.speed_mps = speed_mps
+        self.track_duration_s = track_duration_s
+        self.formation: list[Vec3 | None] | None = None
+        self.t_start: float | None = None
+
+    def set_formation(self, clean: list[Vec3 | None]) -> bool:
+        """Adopt a cleaned formation; True when it restarts a running track (new y_start).
+
+        A formation with the same y_start keeps the track clock running."""
+        old = self.formation
+        same_start = old is not None and all(
+            a is None or b is None or abs(a[1] - b[1]) < 1e-3
+            for a, b in zip(old, clean, strict=True))
+        self.formation = clean
+        if not same_start and self.t_start is not None:
+            self.t_start = None
+            return True
+        return False
+
+    def start_pose(self, uav: int) -> Vec3 | None:
+        """UAV `uav`'s start point (x_k, y_start, z_k), None if it is not flown."""
+        return None if self.formation is None else self.formation[uav]
+
+    def target(self, uav: int, now: float) -> tuple[Vec3, Vec3] | None:
+        """(position, velocity) of UAV `uav` in the track frame at `now`, or None."""
+        start = self.start_pose(uav)
+        if start is None:
+            return None
+        x, y, z = start
+        if self.t_start is None:
+            return (x, y, z), (0.0, 0.0, 0.0)
+        offset, speed = braked_pass(now - self.t_start, self.speed_mps, self.track_duration_s)
+        return (x, y + offset, z), (0.0, speed, 0.0)

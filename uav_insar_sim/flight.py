@@ -1,0 +1,118 @@
+"""How an agent's UAV flies, chosen once at start-up (`choose_flight`).
+
+- `SelfFlight`: the agent flies itself (`mission.Mission`) on the mission clock, which starts
+  when the plan arrives and runs `time_scale` mission seconds per wall second.
+- `MavlinkFlight`: an embedded SITL-style vehicle (`vehicle.SimVehicle`) that the MAVLink
+  bridge flies; the agent reads its position, converted to the track frame, and runs the
+  schedule on it (`observed_mission.ObservedMission`). time_scale and the position noise do
+  not apply then.
+
+Both offer the same calls: `start()` (returns a line to log, or ""), `stop()`,
+`set_plan(x, y, z, powers)`, `tick() -> started slots`, and `mission` (the slot schedule).
+"""
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+
+from uav_insar_planner.mavlink.frames import TrackFrame
+from uav_insar_planner.params import Params
+from uav_insar_sim.mission import Mission, home_position
+from uav_insar_sim.observed_mission import ObservedMission
+from uav_insar_sim.slots import SlotSample
+from uav_insar_sim.vehicle import SimVehicle
+
+# MAVLink mode: the embedded vehicle starts airborne (no arming needed) above the agent's home.
+MAVLINK_START_HEIGHT_M = 10.0
+
+
+class SelfFlight:
+    """The agent flies the UAV itself."""
+
+    how = "flying"
+    vehicle: SimVehicle | None = None
+
+    def __init__(self, mission: Mission, time_scale: float):
+        self.mission = mission
+        self.time_scale = time_scale
+        self._wall_t0: float | None = None
+
+    def start(self) -> str:
+        return ""
+
+    def stop(self) -> None:
+        pass
+
+    def set_plan(self, x: float, y: float, z: float, powers: Sequence[float]) -> None:
+        # The plan's y is not used: the run-up always puts slot 0 at y = 0.
+        self.mission.set_plan((x, z), powers)
+        if self._wall_t0 is None and self.mission.phase == "transit":
+            self._wall_t0 = time.monotonic()
+
+    def tick(self) -> list[SlotSample]:
+        if self._wall_t0 is None:
+            return []
+        return self.mission.advance((time.monotonic() - self._wall_t0) * self.time_scale)
+
+    def track_started_text(self) -> str:
+        return "on the run-up, slot 0 starts at y = 0"
+
+
+class MavlinkFlight:
+    """An embedded MAVLink vehicle, flown by the bridge, whose position the agent watches."""
+
+    how = "the bridge flies it"
+
+    def __init__(self, mission: ObservedMission, vehicle: SimVehicle, frame: TrackFrame,
+                 listen: str):
+        self.mission = mission
+        self.vehicle = vehicle
+        self.frame = frame
+        self.listen = listen
+
+    def start(self) -> str:
+        self.vehicle.start()
+        return (f"MAVLink mode, vehicle sysid {self.vehicle.sysid} on {self.listen} (port "
+                f"{self.vehicle.port})")
+
+    def stop(self) -> None:
+        self.vehicle.stop()
+
+    def set_plan(self, x: float, y: float, z: float, powers: Sequence[float]) -> None:
+        self.mission.set_plan((x, z), powers, y_start=y)
+
+    def tick(self) -> list[SlotSample]:
+        return self.mission.observe(self.frame.from_ned(*self.vehicle.position_ned))
+
+    def track_started_text(self) -> str:
+        return f"slot 0 started at y = {self.mission.y_start:g} m"
+
+
+def choose_flight(own: dict, params: Params) -> SelfFlight | MavlinkFlight:
+    """The flight for the agent parameters `own`: MAVLink when `mavlink_listen` is set.
+
+    ValueError (one line) for a bad value, e.g. max_speed_mps below speed_mps (checked in
+    both modes) or a bad connection string."""
+    mission = Mission(own["uav_id"], params, own["max_speed_mps"], own["max_accel_mps2"],
+                      own["position_noise_std_m"], own["noise_seed"])
+    if not own["mavlink_listen"]:
+        return SelfFlight(mission, own["time_scale"])
+    # The embedded vehicle's local NED relates to the track as the bridge's does.
+    frame = TrackFrame.from_degrees(own["track_bearing_deg"], own["origin_ned_m"])
+    return MavlinkFlight(ObservedMission(own["uav_id"], params), embedded_vehicle(own, frame),
+                         frame, own["mavlink_listen"])
+
+
+def embedded_vehicle(own: dict, frame: TrackFrame) -> SimVehicle:
+    """The MAVLink-mode vehicle for the agent parameters `own` (not started): ArduPilot-like,
+    airborne in GUIDED at MAVLINK_START_HEIGHT_M above the agent's home, with the agent's
+    speed and acceleration limits. ValueError (one line) for a bad connection string."""
+    x, y, _ = home_position(own["uav_id"])
+    sysid = own["mavlink_sysid"] or 2 + own["uav_id"]
+    start = frame.to_ned(float(x), float(y), MAVLINK_START_HEIGHT_M)
+    try:
+        return SimVehicle(sysid, own["mavlink_listen"], "ardupilot", start_ned=start,
+                          max_speed=own["max_speed_mps"], max_accel=own["max_accel_mps2"],
+                          airborne=True)
+    except ValueError as exc:
+        raise ValueError(f"mavlink_listen: {' '.join(str(exc).split())}") from None

@@ -1,0 +1,89 @@
+"""The one slot scheduler of an agent: which P_com[k][n] applies in which slot, and the rate
+achieved there.
+
+Phases: `wait` (no plan yet) -> `transit` (plan known, before the track) -> `track` (slots
+running) -> `done` (every slot flown). `idle` means the plan does not fly this UAV
+(single-baseline's U2). Slot n belongs at the along-track line y = y_start + n v_y delta_t
+(the model's y[n]). A position source decides when the UAV is there and calls `start_slot`
+with where it actually is: `mission.Mission` flies the UAV itself on the mission clock,
+`observed_mission.ObservedMission` watches a vehicle something else flies.
+"""
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from uav_insar_planner.mavlink.frames import Vec3
+from uav_insar_planner.params import Params
+from uav_insar_sim.radio import achieved_rate
+
+
+@dataclass
+class SlotSample:
+    """One flown slot: where the UAV actually was at its start, the power applied, the rate."""
+
+    slot: int
+    position: Vec3
+    power_w: float
+    rate_bps: float
+    rate_min_bps: float
+
+    @property
+    def margin_bps(self) -> float:
+        return self.rate_bps - self.rate_min_bps
+
+
+class SlotSchedule:
+    """The plan and the slots of agent `uav_id` under `params` (SI)."""
+
+    def __init__(self, uav_id: int, params: Params):
+        self.uav_id = uav_id
+        self.params = params
+        self.phase = "wait"
+        self.y_start = 0.0
+        self.target_xz: tuple[float, float] | None = None
+        self.powers: list[float] = []
+        self.samples: list[SlotSample] = []
+
+    @property
+    def num_slots(self) -> int:
+        return len(self.powers)
+
+    @property
+    def all_flown(self) -> bool:
+        return len(self.samples) >= self.num_slots
+
+    def set_plan(self, target_xz: tuple[float, float], powers: Sequence[float],
+                 y_start: float = 0.0) -> None:
+        """Adopt a (new) plan: target (x_k, z_k), schedule P_com[k][:] and the track start.
+
+        Slots already flown stay flown, later ones use the new schedule; a replan during the
+        track re-targets across-track while the slots continue. A non-finite target means
+        the plan does not fly this UAV (`idle`). Ignored once the mission is done.
+        """
+        if self.phase == "done":
+            return
+        if not all(math.isfinite(v) for v in target_xz):
+            self.phase = "idle"
+            return
+        self.target_xz = (float(target_xz[0]), float(target_xz[1]))
+        self.powers = [float(p) for p in powers]
+        self.y_start = float(y_start)
+        if self.phase in ("wait", "idle"):
+            self.phase = "transit"
+
+    def slot_line(self, n: int) -> float:
+        """Along-track position y at which slot n starts (n = num_slots: the pass's end)."""
+        return self.y_start + n * self.params.speed * self.params.slot_duration_s
+
+    def start_slot(self, position: Vec3) -> SlotSample:
+        """Start the next slot with the UAV at `position`: its P_com and the rate there."""
+        p = self.params
+        n = len(self.samples)
+        rate = achieved_rate(position, self.powers[n], p.ground_station, p.comm_bandwidth_hz,
+                             p.beta_c)
+        sample = SlotSample(n, position, self.powers[n], rate, p.rate_min_bps[self.uav_id])
+        self.samples.append(sample)
+        self.phase = "track"
+        return sample
