@@ -6,10 +6,7 @@ import itertools
 import os
 import subprocess
 import sys
-import time
-from collections.abc import Callable
 from pathlib import Path
-from typing import Any
 
 import pytest
 
@@ -78,6 +75,12 @@ def children(ros_domain: int):
 
 
 @pytest.fixture
+def repo() -> Path:
+    """The repository root (the child processes' working directory)."""
+    return REPO
+
+
+@pytest.fixture
 def ros_context(ros_domain: int):
     """An initialized rclpy Context of its own on the test's domain."""
     import rclpy
@@ -88,19 +91,11 @@ def ros_context(ros_domain: int):
     ctx.try_shutdown()
 
 
-def spin_until(executor: Any, done: Callable[[], Any], timeout: float) -> bool:
-    """Spin `executor` in 50 ms steps until `done()` is truthy or `timeout` s have passed."""
-    end = time.monotonic() + timeout
-    while not done() and time.monotonic() < end:
-        executor.spin_once(timeout_sec=0.05)
-    return bool(done())
-
-
 @pytest.fixture
 def procs(ros_domain: int):
     """`procs(name, *ros_args)` starts executable `name` (planner, agent, mavlink_bridge) with
     `--ros-args ros_args` on the test's domain, as `ros2 run` would; leftovers are killed."""
-    from uav_insar_planner.demo import start_node
+    from uav_insar_planner.processes import start_node
 
     started: list[subprocess.Popen] = []
 
@@ -113,3 +108,13 @@ def procs(ros_domain: int):
         if proc.poll() is None:
             proc.kill()
         proc.communicate(timeout=10)
+
+
+@pytest.fixture
+def watcher(ros_context):
+    """The suite's TopicWatcher (uav_insar_planner/ros/watcher.py) in the test's context."""
+    from uav_insar_planner.ros.watcher import TopicWatcher
+
+    w = TopicWatcher(ros_context)
+    yield w
+    w.destroy()

@@ -7,18 +7,17 @@ import subprocess
 import sys
 
 import pytest
-from conftest import REPO
 
 pytestmark = pytest.mark.timeout(90)
 MAVLINK_LINE = re.compile(r"uav(\d) via MAVLink: across-track error max ([\d.]+) m, "
                           r"final ([\d.]+) m; flew ([-\d.]+) m along track \(pass ([\d.]+) m\)")
 
 
-def test_demo_flies_the_whole_chain_and_exits_0(ros_domain):
+def test_demo_flies_the_whole_chain_and_exits_0(ros_domain, repo):
     proc = subprocess.run(
         [sys.executable, "-m", "uav_insar_planner.demo", "--num-slots", "10",
          "--time-scale", "20", "--mavlink-pass-s", "1", "--domain-id", str(ros_domain)],
-        cwd=REPO, capture_output=True, text=True, timeout=60)
+        cwd=repo, capture_output=True, text=True, timeout=60)
     out = proc.stdout
     assert proc.returncode == 0, out + proc.stderr
     summary = out[out.index("\nsummary"):]
@@ -31,18 +30,18 @@ def test_demo_flies_the_whole_chain_and_exits_0(ros_domain):
     assert re.search(r"demo: stopped .* \(exit codes \[(0, ){7}0\]\)", out), out[-500:]
 
 
-def test_demo_without_mavlink_starts_no_bridge(ros_domain):
+def test_demo_without_mavlink_starts_no_bridge(ros_domain, repo):
     proc = subprocess.run(
         [sys.executable, "-m", "uav_insar_planner.demo", "--num-slots", "5",
          "--time-scale", "40", "--no-mavlink", "--domain-id", str(ros_domain)],
-        cwd=REPO, capture_output=True, text=True, timeout=60)
+        cwd=repo, capture_output=True, text=True, timeout=60)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert "[bridge]" not in proc.stdout and "MAVLink" not in proc.stdout
     assert "(exit codes [0, 0, 0, 0])" in proc.stdout
 
 
-def test_bad_demo_option_exits_2():
+def test_bad_demo_option_exits_2(repo):
     proc = subprocess.run([sys.executable, "-m", "uav_insar_planner.demo",
-                           "--mavlink-pass-s", "0"], cwd=REPO, capture_output=True, text=True,
+                           "--mavlink-pass-s", "0"], cwd=repo, capture_output=True, text=True,
                           timeout=30)
     assert proc.returncode == 2 and "--mavlink-pass-s" in proc.stderr

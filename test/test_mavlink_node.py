@@ -7,11 +7,9 @@ import os
 import signal
 import subprocess
 import sys
-import time
 
 import pytest
-from diagnostic_msgs.msg import DiagnosticArray
-from geometry_msgs.msg import PoseArray, PoseStamped
+from diagnostic_msgs.msg import DiagnosticStatus
 
 from uav_insar_sim.vehicle import SimVehicle
 
@@ -57,12 +55,8 @@ def test_bad_parameter_exits_2_with_one_line(param, ros_domain):
     assert param.split(":=")[0].split("_")[0] in errors[0] or "connections" in errors[0]
 
 
-def test_planner_bridge_vehicles_end_to_end(ros_domain):
+def test_planner_bridge_vehicles_end_to_end(watcher):
     env = ros_env()
-    import rclpy
-    from rclpy.node import Node
-    from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
-
     vehicles = [SimVehicle(s, "udpin:127.0.0.1:0", "ardupilot", start_ned=(0.0, 3.0 * k, -40.0),
                            max_speed=20.0, max_accel=10.0, airborne=True)
                 for k, s in enumerate(SYSIDS)]
@@ -72,33 +66,13 @@ def test_planner_bridge_vehicles_end_to_end(ros_domain):
     bridge = start("uav_insar_planner.ros.mavlink_bridge", env, f"connections:=[{ports}]",
                    "target_sysids:=[2, 3, 4]", "speed_mps:=2.0", "velocity_feedforward:=true")
     planner = start("uav_insar_planner.ros.planner", env)
-    context = rclpy.Context()
-    rclpy.init(context=context)
-    node = Node("mavlink_e2e_probe", context=context)
-    executor = rclpy.executors.SingleThreadedExecutor(context=context)
-    executor.add_node(node)
-    latched = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
-                         reliability=ReliabilityPolicy.RELIABLE,
-                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
-    formation, poses, diags = [], {0: [], 1: [], 2: []}, []
-    node.create_subscription(PoseArray, "/formation",
-                             lambda m: formation.append([(p.position.x, p.position.y,
-                                                          p.position.z) for p in m.poses]),
-                             latched)
-    for k in range(3):
-        node.create_subscription(PoseStamped,
-                                 f"/uav{k}/mavlink/pose",
-                                 lambda m, k=k: poses[k].append(m), 10)
-    node.create_subscription(DiagnosticArray, "/diagnostics",
-                             lambda m: diags.append(m), 10)
-
-    def spin_until(predicate, timeout):
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline and not predicate():
-            executor.spin_once(timeout_sec=0.1)
-        return predicate()
+    spin_until, poses, diags = watcher.spin_until, watcher.mavlink_poses, watcher.diagnostics
+    formation = [[(p.position.x, p.position.y, p.position.z) for p in m.poses]
+                 for m in watcher.formations]
 
     def in_formation():
+        formation[:] = [[(p.position.x, p.position.y, p.position.z) for p in m.poses]
+                        for m in watcher.formations]
         if not formation:
             return False
         for k, v in enumerate(vehicles):
@@ -109,7 +83,7 @@ def test_planner_bridge_vehicles_end_to_end(ros_domain):
         return True
 
     try:
-        assert spin_until(lambda: formation, 40.0), "no /formation from the planner"
+        assert spin_until(lambda: watcher.formations, 40.0), "no /formation from the planner"
         assert spin_until(in_formation, 30.0), [v.position_ned for v in vehicles]
         y0 = [v.position_ned[0] for v in vehicles]
         spin_until(lambda: False, 2.0)
@@ -128,10 +102,39 @@ def test_planner_bridge_vehicles_end_to_end(ros_domain):
         last = {s.name: s for s in ours}
         assert all(s.message.startswith("linked") for s in last.values())
     finally:
-        node.destroy_node()
-        context.try_shutdown()
         bridge_out = finish(bridge)
         finish(planner)
         for v in vehicles:
             v.stop()
     assert "formation established" in bridge_out, bridge_out
+
+
+def test_a_dead_mavlink_thread_turns_the_bridge_error(watcher):
+    """Fault injection: a formation x of 1e39 is finite (so it passes as a target) but does not
+    fit MAVLink's float32, and packing it raises inside the bridge's I/O thread. The node must
+    then report every UAV ERROR, never "linked"."""
+    from geometry_msgs.msg import Pose, PoseArray
+
+    from uav_insar_planner.ros.topics import LATCHED
+
+    vehicle = SimVehicle(2, "udpin:127.0.0.1:0", "ardupilot", start_ned=(0.0, 0.0, -10.0),
+                         max_speed=20.0, max_accel=10.0, airborne=True)
+    vehicle.start()
+    bridge = start("uav_insar_planner.ros.mavlink_bridge", ros_env(),
+                   f"connections:=['udpout:127.0.0.1:{vehicle.port}']", "target_sysids:=[2]")
+    try:
+        def bridge_says(level):
+            return [s for m in watcher.diagnostics for s in m.status
+                    if s.name == "mavlink_bridge: uav0" and s.level == level]
+
+        assert watcher.spin_until(lambda: bridge_says(DiagnosticStatus.OK), 20.0), "never linked"
+        poison = PoseArray(poses=[Pose()])
+        poison.poses[0].position.x, poison.poses[0].position.z = 1e39, 10.0
+        watcher.node.create_publisher(PoseArray, "/formation", LATCHED).publish(poison)
+        assert watcher.spin_until(lambda: bridge_says(DiagnosticStatus.ERROR), 10.0), \
+            "the bridge kept reporting OK with its I/O thread dead"
+        assert "thread died" in bridge_says(DiagnosticStatus.ERROR)[-1].message
+    finally:
+        out = finish(bridge)
+        vehicle.stop()
+    assert "MAVLink I/O thread died" in out, out

@@ -10,42 +10,35 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import spin_until
-from geometry_msgs.msg import PoseArray
 from rcl_interfaces.msg import Parameter as ParameterMsg
 from rcl_interfaces.msg import ParameterType, ParameterValue
 from rcl_interfaces.srv import GetParameters, SetParameters
-from rclpy.executors import SingleThreadedExecutor
-from rclpy.node import Node
 from std_srvs.srv import Trigger
 
 from uav_insar_planner import load_params, solve
-from uav_insar_planner.demo import start_node, stop_node
-from uav_insar_planner.ros.topics import LATCHED
+from uav_insar_planner.processes import start_node, stop_node
 
 CONFIG = str(Path(__file__).resolve().parents[1] / "config" / "params.yaml")
 N = 8
 
 
 class Probe:
-    """A node in this process that watches /formation and calls the nodes' services."""
+    """Calls the nodes' services from the test's TopicWatcher node (as ros2 param / ros2
+    service call do) and sees /formation through it."""
 
-    def __init__(self, ctx) -> None:
-        self.node = Node("probe", context=ctx)
-        self.formations: list = []
-        self.node.create_subscription(PoseArray, "/formation", self.formations.append, LATCHED)
-        self.executor = SingleThreadedExecutor(context=ctx)
-        self.executor.add_node(self.node)
+    def __init__(self, watcher) -> None:
+        self.w = watcher
+        self.formations = watcher.formations
 
     def spin_until(self, done, timeout: float) -> bool:
-        return spin_until(self.executor, done, timeout)
+        return self.w.spin_until(done, timeout)
 
     def call(self, srv_type, name: str, request, timeout: float = 10.0):
-        client = self.node.create_client(srv_type, name)
+        client = self.w.node.create_client(srv_type, name)
         assert self.spin_until(client.service_is_ready, 15.0), f"no service {name}"
         future = client.call_async(request)
         assert self.spin_until(future.done, timeout), f"{name}: no answer"
-        self.node.destroy_client(client)
+        self.w.node.destroy_client(client)
         return future.result()
 
     def set(self, node: str, name: str, value: ParameterValue):
@@ -69,10 +62,10 @@ def xz(msg) -> np.ndarray:
     return np.array([[p.position.x, p.position.z] for p in msg.poses])
 
 
-def test_runtime_sets_replan_refuse_or_convert_as_ros2_param_set_would(ros_context, procs):
+def test_runtime_sets_replan_refuse_or_convert_as_ros2_param_set_would(watcher, procs):
     planner = procs("planner", "-p", f"num_slots:={N}")
     agent = procs("agent", "-p", f"num_slots:={N}", "-r", "__node:=agent0")
-    probe = Probe(ros_context)
+    probe = Probe(watcher)
     assert probe.spin_until(lambda: probe.formations, 30.0), "no /formation"
     base = load_params(overrides={"num_slots": N})
     assert np.allclose(xz(probe.formations[0]), solve(base).formation, atol=1e-6)
@@ -111,12 +104,12 @@ def test_runtime_sets_replan_refuse_or_convert_as_ros2_param_set_would(ros_conte
     assert [stop_node(p) for p in (planner, agent)] == [0, 0]
 
 
-def test_integer_in_params_file_is_the_double_meant(ros_context, procs, tmp_path):
+def test_integer_in_params_file_is_the_double_meant(watcher, procs, tmp_path):
     f = tmp_path / "ints.yaml"
     f.write_text(f'"/**":\n  ros__parameters:\n    num_slots: {N}\n    speed_mps: 4\n'
                  "    ground_station_m: [70, 150, 25]\n")
     planner = procs("planner", "--params-file", str(f))
-    probe = Probe(ros_context)
+    probe = Probe(watcher)
     assert probe.spin_until(lambda: probe.formations, 30.0), "no /formation"
     assert probe.get("planner", "speed_mps").double_value == 4.0
     expected = solve(load_params(overrides={"num_slots": N, "speed_mps": 4.0,
@@ -175,19 +168,21 @@ def test_domain_id_out_of_range_exits_2(ros_domain, monkeypatch):
     assert "0..232" in out
 
 
-def test_domains_are_isolated(ros_context, procs, another_domain):
+def test_domains_are_isolated(watcher, procs, another_domain):
     import rclpy
+
+    from uav_insar_planner.ros.watcher import TopicWatcher
 
     planner = procs("planner", "-p", f"num_slots:={N}")
     other = rclpy.Context()
     rclpy.init(context=other, domain_id=another_domain)
     try:
-        stranger = Probe(other)
-        mine = Probe(ros_context)
-        assert mine.spin_until(lambda: mine.formations, 30.0)
+        stranger = TopicWatcher(other, "stranger")
+        assert watcher.spin_until(lambda: watcher.formations, 30.0)
         end = time.monotonic() + 3.0
         stranger.spin_until(lambda: time.monotonic() > end, 4.0)
         assert stranger.formations == []
+        stranger.destroy()
     finally:
         other.try_shutdown()
     assert stop_node(planner) == 0
@@ -195,10 +190,10 @@ def test_domains_are_isolated(ros_context, procs, another_domain):
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
 @pytest.mark.parametrize("name", ["planner", "agent", "mavlink_bridge"])
-def test_sigint_and_sigterm_stop_every_node_cleanly(ros_context, procs, name, sig):
+def test_sigint_and_sigterm_stop_every_node_cleanly(watcher, procs, name, sig):
     proc = procs(name, "-p", f"num_slots:={N}")
-    probe = Probe(ros_context)
-    assert probe.spin_until(lambda: name in probe.node.get_node_names(), 20.0), f"{name} not up"
+    assert watcher.spin_until(lambda: name in watcher.node.get_node_names(), 20.0), \
+        f"{name} not up"
     proc.send_signal(sig)
     out, _ = proc.communicate(timeout=15)
     assert proc.returncode == 0, out

@@ -1,24 +1,18 @@
 """Launch-free bring-up in one process: planner and three agents on one executor (real rclpy
-on Fast DDS, real topics), watched by a test node."""
+on Fast DDS, real topics), watched by the suite's TopicWatcher."""
 from __future__ import annotations
 
 import math
 
 import numpy as np
 import pytest
-from conftest import spin_until
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from geometry_msgs.msg import PoseArray
-from rclpy.executors import SingleThreadedExecutor
-from rclpy.node import Node
+from diagnostic_msgs.msg import DiagnosticStatus
 from rclpy.parameter import Parameter
-from std_msgs.msg import Float64, Float64MultiArray
 from std_srvs.srv import Trigger
 
 from uav_insar_planner import load_params, model, solve
 from uav_insar_planner.evaluate import rate_tolerance_bps
 from uav_insar_planner.ros.planner import PlannerNode
-from uav_insar_planner.ros.topics import LATCHED
 from uav_insar_sim.agent_node import AgentNode
 
 N = 6
@@ -27,48 +21,37 @@ SCENARIO = {"num_slots": N}
 
 
 class Bringup:
-    """Planner + agents + a watcher node on one executor in `ctx`."""
+    """Planner + agents in this process, spun on the test's TopicWatcher executor; the
+    watcher's recordings are this object's."""
 
-    def __init__(self, ctx, noise_std: float = 0.0, agents: bool = True,
+    def __init__(self, watcher, noise_std: float = 0.0, agents: bool = True,
                  scenario: dict | None = None):
+        ctx = watcher.node.context
         overrides = [Parameter(k, value=v) for k, v in (scenario or SCENARIO).items()]
         self.planner = PlannerNode(context=ctx, parameter_overrides=overrides)
         self.agents = [AgentNode(f"agent{k}", context=ctx, parameter_overrides=overrides + [
             Parameter("uav_id", value=k), Parameter("time_scale", value=TIME_SCALE),
             Parameter("position_noise_std_m", value=noise_std),
             Parameter("noise_seed", value=3)]) for k in range(3)] if agents else []
-        self.watcher = Node("watcher", context=ctx)
-        self.formations, self.powers, self.diagnostics = [], [], []
-        self.rates = {k: [] for k in range(3)}
-        w = self.watcher
-        w.create_subscription(PoseArray, "/formation",
-                              self.formations.append, LATCHED)
-        w.create_subscription(Float64MultiArray, "/formation/power",
-                              self.powers.append, LATCHED)
-        w.create_subscription(DiagnosticArray, "/diagnostics",
-                              self.diagnostics.append, 50)
-        for k in range(3):
-            w.create_subscription(Float64, f"/uav{k}/achieved_rate",
-                                  lambda m, k=k: self.rates[k].append(m.data), 100)
-        self.executor = SingleThreadedExecutor(context=ctx)
-        for node in [self.planner, *self.agents, w]:
-            self.executor.add_node(node)
-
-    def spin_until(self, done, timeout: float) -> bool:
-        return spin_until(self.executor, done, timeout)
+        for node in [self.planner, *self.agents]:
+            watcher.add_node(node)
+        self.watcher = watcher.node
+        self.formations, self.powers = watcher.formations, watcher.powers
+        self.diagnostics, self.rates = watcher.diagnostics, watcher.rates
+        self.spin_until = watcher.spin_until
 
     def close(self) -> None:
         self.planner.stop()
-        for node in [self.planner, *self.agents, self.watcher]:
+        for node in [self.planner, *self.agents]:
             node.destroy_node()
 
 
 @pytest.fixture
-def bringup(ros_context):
+def bringup(watcher):
     made = []
 
     def make(**kw):
-        made.append(Bringup(ros_context, **kw))
+        made.append(Bringup(watcher, **kw))
         return made[-1]
 
     yield make

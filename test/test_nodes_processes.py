@@ -7,54 +7,20 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import spin_until
-from diagnostic_msgs.msg import DiagnosticArray
-from geometry_msgs.msg import PoseArray
-from rclpy.executors import SingleThreadedExecutor
-from rclpy.node import Node
-from std_msgs.msg import Float64, Float64MultiArray
 
 from uav_insar_planner import load_params, model, solve
-from uav_insar_planner.demo import stop_node
 from uav_insar_planner.evaluate import rate_tolerance_bps
-from uav_insar_planner.ros.topics import LATCHED
+from uav_insar_planner.processes import stop_node
 
 CONFIG = str(Path(__file__).resolve().parents[1] / "config" / "params.yaml")
 N = 30
 TIME_SCALE = 6.0  # 30 slots of 1 s take 5 s of wall time: room to kill and restart the planner
 
 
-class Watcher:
-    """Records what the nodes publish, on its own node in `ctx`."""
-
-    def __init__(self, ctx):
-        self.node = Node("watcher", context=ctx)
-        self.formations, self.powers, self.diagnostics = [], [], []
-        self.rates = {k: [] for k in range(3)}
-        n = self.node
-        n.create_subscription(PoseArray, "/formation",
-                              self.formations.append, LATCHED)
-        n.create_subscription(Float64MultiArray, "/formation/power",
-                              self.powers.append, LATCHED)
-        n.create_subscription(DiagnosticArray, "/diagnostics",
-                              self.diagnostics.append, 50)
-        for k in range(3):
-            n.create_subscription(Float64, f"/uav{k}/achieved_rate",
-                                  lambda m, k=k: self.rates[k].append(m.data), 100)
-        self.executor = SingleThreadedExecutor(context=ctx)
-        self.executor.add_node(n)
-
-    def agents_matched(self) -> bool:
-        return all(self.node.count_publishers(f"/uav{k}/achieved_rate") for k in range(3))
-
-    def spin_until(self, done, timeout: float) -> bool:
-        return spin_until(self.executor, done, timeout)
-
-
-def test_planner_and_three_agent_processes_survive_a_planner_restart(ros_context, procs):
+def test_planner_and_three_agent_processes_survive_a_planner_restart(watcher, procs):
     params = load_params(CONFIG, {"num_slots": N})
     plan = solve(params)
-    w = Watcher(ros_context)
+    w = watcher
     common = ["--params-file", CONFIG, "-p", f"num_slots:={N}"]
     agents = [procs("agent", *common, "-p", f"uav_id:={k}", "-p", f"time_scale:={TIME_SCALE}",
                     "-r", f"__node:=agent{k}") for k in range(3)]
@@ -94,11 +60,11 @@ def test_planner_and_three_agent_processes_survive_a_planner_restart(ros_context
 
 
 def test_bad_params_file_stops_the_planner_with_code_2_and_publishes_nothing(
-        ros_context, procs, tmp_path):
+        watcher, procs, tmp_path):
     bad = tmp_path / "bad.yaml"
     bad.write_text('"/**":\n  ros__parameters:\n    num_slots: 0\n    scheme: nope\n'
                    "    z_min_m: 150.0\n")
-    w = Watcher(ros_context)
+    w = watcher
     planner = procs("planner", "--params-file", str(bad))
     out, _ = planner.communicate(timeout=30)
     assert planner.returncode == 2, out

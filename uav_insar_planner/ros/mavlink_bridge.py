@@ -1,7 +1,7 @@
 """The MAVLink bridge node (`ros2 run uav_insar_planner mavlink_bridge`): a thin ROS adapter
 over `uav_insar_planner.mavlink.bridge.Bridge`, which does all MAVLink work in its own thread.
 
-Parameters (nodes/parameters.py BRIDGE_SPECS, all read-only: the links are opened once):
+Parameters (mavlink/config.py BRIDGE_SPECS, all read-only: the links are opened once):
   connections (string[]), target_sysids (int[]), source_sysid, track_bearing_deg,
   origin_ned_m (double[3], N E D), setpoint_rate_hz, velocity_feedforward, arm_and_takeoff,
   autopilot (ardupilot|px4), speed_mps, track_duration_s, capture_radius_m,
@@ -122,7 +122,10 @@ class MavlinkBridgeNode(Node):
         self._diag_pub.publish(msg)
 
     def _vehicle_status(self, s: VehicleStatus, link: Any) -> Any:
-        if s.sequence.startswith("failed"):
+        if self.bridge.failure is not None:
+            level, text = DiagnosticStatus.ERROR, ("MAVLink I/O thread died, nothing is sent: "
+                                                   + self.bridge.failure)
+        elif s.sequence.startswith("failed"):
             level, text = DiagnosticStatus.ERROR, f"arming sequence {s.sequence}"
         elif s.link != "linked":
             level = DiagnosticStatus.WARN

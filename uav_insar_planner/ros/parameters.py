@@ -2,8 +2,9 @@
 
 Tables: the planner's are `params.PARAM_SPECS` (Table I, all settable at run time); the
 agent's are AGENT_SPECS, MAVLINK_SPECS and the scenario subset AGENT_SCENARIO_NAMES; the
-bridge's are BRIDGE_SPECS. Agent and bridge parameters are read-only: they shape a mission or
-a MAVLink link that is set up once, so a run-time set is refused, never taken and ignored.
+bridge's are `mavlink.config.BRIDGE_SPECS`. Agent and bridge parameters are read-only: they
+shape a mission or a MAVLink link that is set up once, so a run-time set is refused, never
+taken and ignored.
 
 Each parameter is declared with a descriptor: the description with what is allowed, the closed
 range where the spec has one, and read_only. rclpy checks type, range and read_only; the rest
@@ -28,7 +29,8 @@ from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValu
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
-from uav_insar_planner.params import PARAM_SPECS, SPEC_BY_NAME, ParamSpec
+from uav_insar_planner.mavlink.config import BRIDGE_SPECS
+from uav_insar_planner.params import PARAM_SPECS, SPEC_BY_NAME, ParamSpec, check_value, shown
 
 AGENT_SPECS = (
     ParamSpec("uav_id", int, 0, "which UAV this agent flies: 0 master, 1, 2", 0, 2),
@@ -54,51 +56,10 @@ MAVLINK_SPECS = (
 AGENT_SCENARIO_NAMES = ("num_slots", "slot_duration_s", "speed_mps", "ground_station_m",
                         "comm_bandwidth_hz", "ref_snr_db", "rate_min_mbps")
 
-# The bridge's full rules live in BridgeConfig.validate; these carry the descriptors. Defaults
-# pair with `uav-insar-vehicle --sysid 2..4 --listen udpin:127.0.0.1:14552/14562/14572`.
-BRIDGE_SPECS = (
-    ParamSpec("connections", list, ["udpout:127.0.0.1:14552", "udpout:127.0.0.1:14562",
-                                    "udpout:127.0.0.1:14572"],
-              "pymavlink connection string per UAV (or one shared): udpout:HOST:PORT, "
-              "udpin:HOST:PORT, tcp:HOST:PORT, /dev/ttyUSB0,57600"),
-    ParamSpec("target_sysids", list, [2, 3, 4], "MAVLink system id of UAV 0, 1, 2 (1..255, "
-              "distinct)"),
-    ParamSpec("source_sysid", int, 255, "our own system id (ArduPilot: match SYSID_MYGCS)",
-              1, 255),
-    ParamSpec("track_bearing_deg", float, 0.0, "bearing of the along-track axis y from north "
-              "[deg]", -360.0, 360.0),
-    ParamSpec("origin_ned_m", float, [0.0, 0.0, 0.0], "track origin in local NED (N, E, D) [m]",
-              length=3),
-    ParamSpec("setpoint_rate_hz", float, 10.0, "SET_POSITION_TARGET_LOCAL_NED rate per UAV "
-              "[Hz]", 2.0, 50.0),
-    ParamSpec("velocity_feedforward", bool, False, "send the along-track velocity too "
-              "(type_mask 3520)"),
-    ParamSpec("arm_and_takeoff", bool, False, "set GUIDED/OFFBOARD, arm and take off "
-              "(default: you do)"),
-    ParamSpec("autopilot", str, "ardupilot", "mode numbers and arming sequence",
-              choices=("ardupilot", "px4")),
-    ParamSpec("speed_mps", float, 4.3, "along-track speed v_y [m/s]", 0.0, 1000.0),
-    ParamSpec("track_duration_s", float, 0.0, "length of the pass in time, then hold at its "
-              "end; 0: no end [s]", 0.0, 1e6),
-    ParamSpec("capture_radius_m", float, 1.0, "start the pass when every UAV is this close to "
-              "its start point; 0: start at once [m]", 0.0, 1e4),
-    ParamSpec("heartbeat_timeout_s", float, 5.0, "report a UAV lost after this long without "
-              "heartbeat [s]", 0.0, 3600.0, True),
-)
-
 #: Every parameter name of every node of the suite (a shared `/**` section may hold any).
 SUITE_PARAMETER_NAMES = frozenset(
     [s.name for s in PARAM_SPECS + AGENT_SPECS + MAVLINK_SPECS + BRIDGE_SPECS]
     + ["use_sim_time"])
-VALUE_SHOWN_CHARS = 60
-
-
-def shown(value: Any) -> str:
-    """repr(value), cut to VALUE_SHOWN_CHARS for an error line."""
-    text = repr(list(value) if isinstance(value, tuple) else value)
-    return text if len(text) <= VALUE_SHOWN_CHARS else text[:VALUE_SHOWN_CHARS - 3] + "..."
-
-
 def allowed(spec: ParamSpec) -> str:
     """What `spec` allows, in words (params.ParamSpec.allowed, plus bool and lists)."""
     if spec.kind is bool:
@@ -227,22 +188,10 @@ def spec_values(node: Node, specs: Iterable[ParamSpec],
     return values
 
 
-def check_scalars(values: Mapping[str, Any], specs: Iterable[ParamSpec]) -> list[str]:
-    """Problem lines for scalar numeric specs outside their (possibly open) bounds; for a
-    node's own parameters, which params_from_mapping does not know."""
-    problems = []
-    for spec in specs:
-        value = values[spec.name]
-        ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(
-            value) and (spec.kind is not int or float(value).is_integer())
-        if ok and spec.lo is not None:
-            ok = value > spec.lo if spec.lo_open else value >= spec.lo
-        if ok and spec.hi is not None:
-            ok = value <= spec.hi
-        if not ok:
-            problems.append(f"{spec.name}: value {shown(value)} is not allowed; expected "
-                            f"{allowed(spec)}")
-    return problems
+def check_values(values: Mapping[str, Any], specs: Iterable[ParamSpec]) -> list[str]:
+    """Problem lines for a node's own parameters (params.check_value on each)."""
+    return [problem for spec in specs
+            if (problem := check_value(spec, values[spec.name])[1]) is not None]
 
 
 def agent_scenario_specs() -> tuple[ParamSpec, ...]:

@@ -1,0 +1,107 @@
+"""Start and stop the suite's executables as `ros2 run` would, launch-free (no ROS import).
+
+Used by `make demo` and the tests: each node is a process of its own, found beside this
+Python (what colcon or pip installed) or run with `python -m` on its module; its output is
+either echoed line by line with a prefix, as ros2 launch does, or left in its pipe.
+"""
+from __future__ import annotations
+
+import os
+import random
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+STOP_TIMEOUT_S = 5.0
+MODULES = {"planner": "uav_insar_planner.ros.planner", "agent": "uav_insar_sim.agent_node",
+           "mavlink_bridge": "uav_insar_planner.ros.mavlink_bridge",
+           "uav-insar-vehicle": "uav_insar_sim.vehicle"}
+# Held while a caller prints a block (echo, table), so echoed log lines do not cut into it.
+PRINT_LOCK = threading.Lock()
+
+
+def executable(name: str) -> list[str]:
+    """How to start console script `name` (a key of MODULES): the one installed beside this
+    Python (what `ros2 run` would find), else `python -m` on its module."""
+    script = Path(sys.executable).parent / name
+    if script.exists():
+        return [str(script)]
+    found = shutil.which(name)
+    if found:
+        return [found]
+    return [sys.executable, "-m", MODULES[name]]
+
+
+def ros_env(domain_id: int) -> dict[str, str]:
+    """The environment for nodes on a private domain with discovery kept on this host."""
+    env = dict(os.environ)
+    env.update(ROS_DOMAIN_ID=str(domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
+               PYTHONUNBUFFERED="1")
+    return env
+
+
+def start_node(name: str, ros_args: Sequence[str], env: dict[str, str],
+               echo_prefix: str | None = None) -> subprocess.Popen:
+    """Start executable `name` with `--ros-args ros_args` in `env`. With `echo_prefix`, its
+    output is printed line by line with that prefix (like ros2 launch); otherwise it is left
+    in the pipe `proc.stdout` (stderr merged) for the caller to read."""
+    return start_process([*executable(name), "--ros-args", *ros_args], env, echo_prefix)
+
+
+def start_process(cmd: Sequence[str], env: dict[str, str],
+                  echo_prefix: str | None = None) -> subprocess.Popen:
+    """Start `cmd` in `env`, its output handled as `start_node` says."""
+    proc = subprocess.Popen(list(cmd), env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, text=True, start_new_session=True)
+    if echo_prefix is not None:
+        def pump() -> None:
+            for line in proc.stdout:
+                with PRINT_LOCK:
+                    print(f"{echo_prefix} {line.rstrip()}", flush=True)
+
+        threading.Thread(target=pump, daemon=True).start()
+    return proc
+
+
+def stop_node(proc: subprocess.Popen, timeout: float = STOP_TIMEOUT_S) -> int:
+    """SIGINT (Ctrl-C), then SIGTERM, then SIGKILL, each given `timeout`; returns the exit code."""
+    return stop_nodes([proc], timeout)[0]
+
+
+def stop_nodes(procs: Sequence[subprocess.Popen], timeout: float = STOP_TIMEOUT_S) -> list[int]:
+    """`stop_node` for all of `procs` at once (each signal to all, then one shared wait), so
+    they shut down in parallel; returns their exit codes in order."""
+    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGKILL):
+        alive = [p for p in procs if p.poll() is None]
+        for proc in alive:
+            proc.send_signal(sig)
+        end = time.monotonic() + timeout
+        for proc in alive:
+            try:
+                proc.wait(max(0.0, end - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                continue
+    return [p.wait() for p in procs]
+
+
+def random_domain_id() -> int:
+    """A random domain id in 1..101 (well inside Fast DDS's 0..232)."""
+    return random.randint(1, 101)
+
+
+def free_udp_ports(count: int) -> list[int]:
+    """`count` distinct UDP ports on 127.0.0.1 that are free now (bound together, released)."""
+    socks = [socket.socket(socket.AF_INET, socket.SOCK_DGRAM) for _ in range(count)]
+    try:
+        for sock in socks:
+            sock.bind(("127.0.0.1", 0))
+        return [sock.getsockname()[1] for sock in socks]
+    finally:
+        for sock in socks:
+            sock.close()

@@ -1,0 +1,115 @@
+"""A node that records what the suite publishes: for `make demo` and the tests.
+
+    watcher = TopicWatcher(context)   # its own node and executor in `context` (None: a
+    watcher.spin_until(lambda: watcher.formations, 30.0)   # context of its own, on
+    watcher.destroy()                                      # ROS_DOMAIN_ID)
+
+It subscribes with each topic's own QoS (ros/topics.py) and keeps every message in arrival
+order: `formations`, `powers`, `diagnostics`, and per UAV k `rates[k]` (bit/s), `poses[k]` and
+`mavlink_poses[k]`. An optional `on_mavlink_pose(k, msg)` sees each vehicle position as it
+arrives.
+"""
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from geometry_msgs.msg import PoseArray, PoseStamped
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from std_msgs.msg import Float64, Float64MultiArray
+
+from uav_insar_planner.ros import topics
+from uav_insar_planner.ros.diagnostics import PLAN_STATUS_NAME
+
+UAVS = range(3)
+SPIN_STEP_S = 0.05
+
+
+class TopicWatcher:
+    """See the module docstring. `node` is the rclpy node, for extra subscriptions or clients."""
+
+    def __init__(self, context: Context | None = None, name: str = "watcher",
+                 on_mavlink_pose: Callable[[int, Any], None] | None = None) -> None:
+        self._own_context = context is None
+        if context is None:
+            context = Context()
+            rclpy.init(args=[name], context=context)
+        self.node = Node(name, context=context)
+        self.formations: list[Any] = []
+        self.powers: list[Any] = []
+        self.diagnostics: list[Any] = []
+        self.rates: dict[int, list[float]] = {k: [] for k in UAVS}
+        self.poses: dict[int, list[Any]] = {k: [] for k in UAVS}
+        self.mavlink_poses: dict[int, list[Any]] = {k: [] for k in UAVS}
+        self._on_mavlink_pose = on_mavlink_pose
+        n = self.node
+        n.create_subscription(PoseArray, "/" + topics.FORMATION, self.formations.append,
+                              topics.LATCHED)
+        n.create_subscription(Float64MultiArray, "/" + topics.POWER, self.powers.append,
+                              topics.LATCHED)
+        n.create_subscription(DiagnosticArray, topics.DIAGNOSTICS, self.diagnostics.append,
+                              topics.RATE_DEPTH)
+        for k in UAVS:
+            n.create_subscription(Float64, "/" + topics.achieved_rate(k),
+                                  lambda m, k=k: self.rates[k].append(m.data),
+                                  topics.RATE_DEPTH)
+            n.create_subscription(PoseStamped, "/" + topics.pose(k), self.poses[k].append,
+                                  topics.DEPTH)
+            n.create_subscription(PoseStamped, "/" + topics.mavlink_pose(k),
+                                  lambda m, k=k: self._mavlink_pose(k, m), topics.RATE_DEPTH)
+        self.executor = SingleThreadedExecutor(context=context)
+        self.executor.add_node(n)
+
+    def _mavlink_pose(self, k: int, msg: Any) -> None:
+        self.mavlink_poses[k].append(msg)
+        if self._on_mavlink_pose is not None:
+            self._on_mavlink_pose(k, msg)
+
+    def add_node(self, node: Node) -> None:
+        """Spin `node` (e.g. an in-process planner) on the watcher's executor too."""
+        self.executor.add_node(node)
+
+    def spin_until(self, done: Callable[[], Any], timeout: float,
+                   procs: Sequence[Any] = ()) -> bool:
+        """Spin until done() is truthy or `timeout` s passed; False at once when one of
+        `procs` (Popen) has exited."""
+        end = time.monotonic() + timeout
+        while not done():
+            if time.monotonic() > end or any(p.poll() is not None for p in procs):
+                return False
+            self.executor.spin_once(timeout_sec=SPIN_STEP_S)
+        return True
+
+    def agents_matched(self) -> bool:
+        """True once every agent's achieved_rate publisher has been discovered: a new process
+        can take a discovery announcement period (~3 s) to be seen, and rates sent before
+        that are lost (volatile), so wait for this before a plan starts their slots."""
+        return all(self.node.count_publishers("/" + topics.achieved_rate(k)) for k in UAVS)
+
+    def plan_status(self) -> Any | None:
+        """The planner's latest plan status (the bridge publishes on /diagnostics too)."""
+        found = [s for msg in self.diagnostics for s in msg.status
+                 if s.name == PLAN_STATUS_NAME]
+        return found[-1] if found else None
+
+    def plan_failed(self) -> bool:
+        """True once the plan status is ERROR (infeasible, or the solve failed)."""
+        status = self.plan_status()
+        return status is not None and status.level == DiagnosticStatus.ERROR
+
+    def statuses(self, index: int = -1) -> dict[str, Any]:
+        """The DiagnosticStatus entries of diagnostics[index], by name."""
+        return {s.name: s for s in self.diagnostics[index].status}
+
+    def destroy(self) -> None:
+        """Destroy the node (and the context, when the watcher made it)."""
+        self.executor.shutdown()
+        context = self.node.context
+        self.node.destroy_node()
+        if self._own_context:
+            context.try_shutdown()
