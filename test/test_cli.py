@@ -96,3 +96,16 @@ def test_sweep_band_brackets_the_paper_solution_set(tmp_path):
         sigma, lo, hi = float(r["sigma_h_m"]), float(r["band_lo_m"]), float(r["band_hi_m"])
         assert sigma <= lo * (1 + 1e-3) and lo < hi
         assert float(r["bound_opt_m"]) <= float(r["sigma_h_bound_m"]) * (1 + 1e-9)
+
+
+def test_solve_warns_when_the_plan_needs_better_than_gnss():
+    # Table I's optimum puts the slaves d_min = 1.5 m apart: below standard GNSS accuracy.
+    proc = run("solve", "--json")
+    warning = [line for line in proc.stderr.splitlines() if "warning" in line]
+    assert len(warning) == 1 and "uav1 and uav2 are planned 1.50 m apart" in warning[0]
+    assert json.loads(proc.stdout)["feasible"]  # stdout stays one JSON object
+    wider = run("solve", "--set", "d_min_m=2.5")
+    assert wider.returncode == 0 and "warning" not in wider.stderr, wider.stderr
+    assert "warning" not in run("solve", "--min-separation-m", "0").stderr
+    bad = run("solve", "--min-separation-m", "nan")
+    assert bad.returncode == 2 and "--min-separation-m" in bad.stderr

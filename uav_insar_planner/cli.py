@@ -40,6 +40,9 @@ def _build_parser() -> argparse.ArgumentParser:
     _add_scenario_args(s)
     s.add_argument("--scheme", choices=SCHEMES, help="proposed or benchmark 1-3")
     s.add_argument("--json", action="store_true", help="print one JSON object")
+    s.add_argument("--min-separation-m", type=float, default=None, metavar="M",
+                   help="warn when two planned UAVs are closer than M metres (default 2.0: "
+                        "standard GNSS error; 0 turns the warning off)")
 
     w = sub.add_parser("sweep", help="solve along one parameter for several schemes")
     w.add_argument("name", help="parameter, e.g. h_amb_min_m or rate_min_mbps[1]")
@@ -79,11 +82,22 @@ def _scenario(args: argparse.Namespace) -> Params:
 
 
 def _cmd_solve(args: argparse.Namespace) -> int:
+    from uav_insar_planner.plan import SAFE_SEPARATION_M, closest_pair
     from uav_insar_planner.plan_text import format_plan
     from uav_insar_planner.solver import solve
 
+    limit = SAFE_SEPARATION_M if args.min_separation_m is None else args.min_separation_m
+    if not (limit >= 0.0 and np.isfinite(limit)):
+        raise ParamError([f"--min-separation-m: value {limit!r} is not allowed; expected a "
+                          "finite number >= 0"])
     plan = solve(_scenario(args))
     print(json.dumps(plan.to_dict(), indent=2) if args.json else format_plan(plan))
+    closest = closest_pair(plan.formation) if plan.feasible else None
+    if closest is not None and closest[0] < limit:
+        d, j, k = closest
+        print(f"uav-insar: warning: uav{j} and uav{k} are planned {d:.2f} m apart, closer than "
+              f"{limit:g} m: with standard GNSS (1.5-3 m error) they may collide; fly RTK "
+              "or raise d_min_m", file=sys.stderr)
     return EXIT_OK if plan.feasible else EXIT_INFEASIBLE
 
 

@@ -11,6 +11,19 @@ from typing import Any
 import numpy as np
 
 UAV_NAMES = ("uav0", "uav1", "uav2")
+# Two UAVs planned closer than this may touch once each flies with its own position error:
+# standard GNSS (single frequency, SBAS) is good to about 1.5-3 m horizontally (95 %), RTK to
+# 0.02-0.05 m. Table I's d_min = 1.5 m therefore needs RTK; 2 m is the warning threshold.
+SAFE_SEPARATION_M = 2.0
+
+
+def closest_pair(formation: np.ndarray) -> tuple[float, int, int] | None:
+    """(distance, j, k) of the two flown UAVs closest in the across-track plane, j < k; None
+    with fewer than two flown (rows of NaN are not flown)."""
+    flown = [k for k in range(len(formation)) if np.all(np.isfinite(formation[k]))]
+    pairs = [(float(np.hypot(*(formation[j] - formation[k]))), j, k)
+             for i, j in enumerate(flown) for k in flown[i + 1:]]
+    return min(pairs) if pairs else None
 
 
 @dataclass
