@@ -43,3 +43,10 @@ def test_no_product_file_over_400_lines():
     long = {str(p.relative_to(ROOT)): n for p in product_files()
             if (n := len(p.read_text().splitlines())) > MAX_LINES}
     assert not long, long
+
+
+def test_the_two_solver_back_ends_import_nothing_of_each_other():
+    for own, other in (("ao", "global_opt"), ("global_opt", "ao")):
+        for path in (PLANNER / "solver" / own).glob("*.py"):
+            assert not re.search(rf"^\s*(?:import|from)\s+\S*solver(?:\.|\s+import\s+){other}\b",
+                                 path.read_text(), re.MULTILINE), path
