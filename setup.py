@@ -33,7 +33,7 @@ setup(
             "ros-jazzy-std-srvs>=5.3",
             "ros-jazzy-rcl-interfaces>=2.0",
         ],
-        "test": ["pytest>=7", "pytest-timeout>=2", "ruff>=0.4", "scipy>=1.10"],
+        "test": ["pytest>=7", "pytest-timeout>=2", "ruff>=0.4", "scipy>=1.10", "mavsdk==3.17.4"],
     },
     zip_safe=True,
     maintainer="uav_insar_planner developers",

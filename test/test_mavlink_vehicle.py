@@ -151,3 +151,239 @@ def test_cli_rejects_bad_arguments(capsys):
     assert main(["--sysid", "0", "--listen", "udpin:127.0.0.1:0"]) == 2
     assert "sysid" in capsys.readouterr().err
     assert main(["--sysid", "2", "--listen", "bogus"]) == 2
+
+
+# ------------------------------------------------------------------ ground-station realism
+def gcs_for(vehicle, sysid=255):
+    return FakePeer(sysid, 191, dest=("127.0.0.1", vehicle.port), heartbeat_hz=2.0,
+                    mav_type=MAV.MAV_TYPE_GCS, autopilot=MAV.MAV_AUTOPILOT_INVALID)
+
+
+@pytest.mark.parametrize("autopilot, refused", [
+    ("ardupilot", MAV.MAV_RESULT_FAILED), ("px4", MAV.MAV_RESULT_TEMPORARILY_REJECTED)])
+def test_boot_phase_refuses_arming_with_a_reason_then_arms(autopilot, refused):
+    with SimVehicle(5, "udpin:127.0.0.1:0", autopilot, boot_s=3.0) as vehicle:
+        gcs = gcs_for(vehicle)
+        try:
+            gcs.wait_for("HEARTBEAT", 3.0)
+            if autopilot == "ardupilot":  # accepted while booting, but it does not stick
+                assert command(gcs, MAV.MAV_CMD_DO_SET_MODE, 1, 4) == ACCEPTED
+            t0 = time.monotonic()
+            assert command(gcs, MAV.MAV_CMD_COMPONENT_ARM_DISARM, 1) == refused
+            text = gcs.wait_for("STATUSTEXT", 2.0, t0)
+            assert text.text.startswith(("PreArm:", "Preflight Fail:"))
+            assert not gcs.messages("LOCAL_POSITION_NED") and not gcs.messages("HOME_POSITION")
+            assert command(gcs, MAV.MAV_CMD_REQUEST_MESSAGE,
+                           MAV.MAVLINK_MSG_ID_SYS_STATUS) == ACCEPTED
+            sys_status = gcs.wait_for("SYS_STATUS", 1.0, t0)
+            assert not sys_status.onboard_control_sensors_health & MAV.MAV_SYS_STATUS_PREARM_CHECK
+            assert gcs.wait_for("GPS_RAW_INT", 2.0, t0).fix_type < 3
+            assert not vehicle.booted and wait_until(lambda: vehicle.booted, 4.0)
+            assert vehicle.mode == ("POSCTL" if autopilot == "px4" else "STABILIZE")
+            t1 = time.monotonic()
+            assert gcs.wait_for("GPS_RAW_INT", 2.0, t1).fix_type == 3
+            assert gcs.wait_for("SYS_STATUS", 2.0, t1).onboard_control_sensors_health \
+                & MAV.MAV_SYS_STATUS_PREARM_CHECK
+            gcs.wait_for("LOCAL_POSITION_NED", 2.0, t1)
+            home = gcs.wait_for("HOME_POSITION", 3.0, t1)
+            assert (home.latitude, home.longitude, home.altitude) == (-353632610, 1491652300,
+                                                                     584000)
+            assert command(gcs, MAV.MAV_CMD_COMPONENT_ARM_DISARM, 1) == ACCEPTED
+        finally:
+            gcs.close()
+
+
+@pytest.mark.parametrize("rig", [("px4", False)], indirect=True)
+def test_nan_and_garbage_command_params_never_crash(rig):
+    vehicle, gcs = rig
+    gcs.wait_for("HEARTBEAT", 3.0)
+    nan, inf = float("nan"), float("inf")
+    for cmd, params in [
+            (MAV.MAV_CMD_COMPONENT_ARM_DISARM, (nan,)), (MAV.MAV_CMD_COMPONENT_ARM_DISARM, (inf,)),
+            (MAV.MAV_CMD_COMPONENT_ARM_DISARM, (1, inf)), (MAV.MAV_CMD_COMPONENT_ARM_DISARM, (-3,)),
+            (MAV.MAV_CMD_DO_SET_MODE, (nan, 6)), (MAV.MAV_CMD_DO_SET_MODE, (1, 3e38)),
+            (MAV.MAV_CMD_DO_SET_MODE, (1, 4, -inf)), (MAV.MAV_CMD_DO_SET_MODE, (1, 3.5)),
+            (MAV.MAV_CMD_SET_MESSAGE_INTERVAL, (nan, 1e5)),
+            (MAV.MAV_CMD_SET_MESSAGE_INTERVAL, (32, nan)),
+            (MAV.MAV_CMD_SET_MESSAGE_INTERVAL, (32, -7)),
+            (MAV.MAV_CMD_SET_MESSAGE_INTERVAL, (32, 3e38)),
+            (MAV.MAV_CMD_REQUEST_MESSAGE, (inf,)),
+            (MAV.MAV_CMD_NAV_TAKEOFF, (0, 0, 0, 0, 0, 0, inf))]:
+        assert command(gcs, cmd, *params) in (MAV.MAV_RESULT_DENIED, MAV.MAV_RESULT_FAILED), \
+            (cmd, params)
+    assert vehicle.errors == 0 and not vehicle.armed
+    # NaN where a parameter is unused: PX4 tools fill every unused one with NaN
+    assert command(gcs, MAV.MAV_CMD_COMPONENT_ARM_DISARM, 1, nan, nan, nan, nan, nan,
+                   nan) == ACCEPTED
+    assert command(gcs, MAV.MAV_CMD_NAV_TAKEOFF, nan, nan, nan, nan, nan, nan, nan) == ACCEPTED
+    gcs.mav.send(gcs.mav.command_int_encode(5, 1, 0, MAV.MAV_CMD_DO_SET_MODE, 0, 0, 1, 4,
+                                            nan, nan, 0, 0, nan))
+    assert wait_until(lambda: vehicle.mode == "HOLD", 5.0)
+    setpoint(gcs, nan, 0, -5)
+    setpoint(gcs, 0, inf, -5)
+    time.sleep(0.3)
+    assert vehicle.setpoints_rejected == 2
+    assert all(c == c for c in vehicle.position_ned)  # never NaN
+    t0 = time.monotonic()
+    time.sleep(0.5)
+    assert len(gcs.messages("LOCAL_POSITION_NED", t0)) >= 3  # position reports keep flowing
+
+
+@pytest.mark.parametrize("rig", [("ardupilot", False)], indirect=True)
+def test_request_message_and_message_interval(rig):
+    vehicle, gcs = rig
+    gcs.wait_for("HEARTBEAT", 3.0)
+    t0 = time.monotonic()
+    assert command(gcs, MAV.MAV_CMD_REQUEST_MESSAGE,
+                   MAV.MAVLINK_MSG_ID_AUTOPILOT_VERSION) == ACCEPTED
+    version = gcs.wait_for("AUTOPILOT_VERSION", 2.0, t0)
+    for cap in (MAV.MAV_PROTOCOL_CAPABILITY_MAVLINK2, MAV.MAV_PROTOCOL_CAPABILITY_PARAM_FLOAT,
+                MAV.MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_LOCAL_NED,
+                MAV.MAV_PROTOCOL_CAPABILITY_COMMAND_INT):
+        assert version.capabilities & cap
+    assert command(gcs, MAV.MAV_CMD_REQUEST_MESSAGE, 12345) == MAV.MAV_RESULT_FAILED
+    for name in ("GLOBAL_POSITION_INT", "HOME_POSITION", "GPS_RAW_INT", "ATTITUDE",
+                 "EXTENDED_SYS_STATE", "BATTERY_STATUS", "SYS_STATUS"):
+        since = time.monotonic()
+        assert command(gcs, MAV.MAV_CMD_REQUEST_MESSAGE,
+                       getattr(MAV, f"MAVLINK_MSG_ID_{name}")) == ACCEPTED
+        gcs.wait_for(name, 1.0, since)
+    gpi = gcs.messages("GLOBAL_POSITION_INT")[-1][1]
+    assert (gpi.lat, gpi.lon, gpi.alt, gpi.relative_alt) == (-353632610, 1491652300, 584000, 0)
+    assert command(gcs, MAV.MAV_CMD_SET_MESSAGE_INTERVAL, MAV.MAVLINK_MSG_ID_ATTITUDE,
+                   -1) == ACCEPTED
+    assert command(gcs, MAV.MAV_CMD_SET_MESSAGE_INTERVAL, MAV.MAVLINK_MSG_ID_BATTERY_STATUS,
+                   100000) == ACCEPTED
+    time.sleep(0.2)
+    t1 = time.monotonic()
+    time.sleep(1.0)
+    assert not gcs.messages("ATTITUDE", t1)
+    assert len(gcs.messages("BATTERY_STATUS", t1)) == pytest.approx(10, abs=2)
+    assert gcs.wait_for("EXTENDED_SYS_STATE", 2.0, t1).landed_state == \
+        MAV.MAV_LANDED_STATE_ON_GROUND
+
+
+def param(gcs, name, since, timeout=2.0):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        for _, m in gcs.messages("PARAM_VALUE", since):
+            if m.param_id == name:
+                return m
+        time.sleep(0.01)
+    return None
+
+
+@pytest.mark.parametrize("rig", [("ardupilot", True)], indirect=True)
+def test_parameter_protocol(rig):
+    vehicle, gcs = rig
+    gcs.wait_for("HEARTBEAT", 3.0)
+    t0 = time.monotonic()
+    gcs.mav.send(gcs.mav.param_request_list_encode(5, 1))
+    assert wait_until(lambda: len(gcs.messages("PARAM_VALUE", t0)) == len(vehicle.params), 2.0)
+    values = {m.param_id: m for _, m in gcs.messages("PARAM_VALUE", t0)}
+    assert values["SYSID_THISMAV"].param_value == 5 and values["MAV_GCS_SYSID"].param_value == 255
+    assert values["WPNAV_SPEED"].param_value == pytest.approx(1500.0)
+    assert sorted(m.param_index for m in values.values()) == list(range(len(vehicle.params)))
+    t1 = time.monotonic()
+    gcs.mav.send(gcs.mav.param_request_read_encode(5, 1, b"WPNAV_SPEED", -1))
+    assert param(gcs, "WPNAV_SPEED", t1).param_count == len(vehicle.params)
+    gcs.mav.send(gcs.mav.param_set_encode(5, 1, b"WPNAV_SPEED", 500.0,
+                                          MAV.MAV_PARAM_TYPE_REAL32))
+    assert param(gcs, "WPNAV_SPEED", t1 + 1e-6) is not None
+    assert wait_until(lambda: vehicle._ap.max_speed == pytest.approx(5.0), 1.0)
+    for bad in (float("nan"), float("inf"), -3.0, 3e38):  # refused: the value stays
+        t2 = time.monotonic()
+        gcs.mav.send(gcs.mav.param_set_encode(5, 1, b"WPNAV_SPEED", bad,
+                                              MAV.MAV_PARAM_TYPE_REAL32))
+        assert param(gcs, "WPNAV_SPEED", t2).param_value == pytest.approx(500.0)
+    t3 = time.monotonic()
+    gcs.mav.send(gcs.mav.param_set_encode(5, 1, b"SYSID_THISMAV", 9, MAV.MAV_PARAM_TYPE_INT32))
+    assert param(gcs, "SYSID_THISMAV", t3).param_value == 5  # read-only here
+    gcs.mav.send(gcs.mav.param_request_read_encode(5, 1, b"NO_SUCH_PARAM", -1))
+    time.sleep(0.2)
+    assert param(gcs, "NO_SUCH_PARAM", t3, timeout=0.1) is None and vehicle.errors == 0
+
+
+def test_only_the_configured_ground_station_commands():
+    with SimVehicle(5, "udpin:127.0.0.1:0", "ardupilot", airborne=True,
+                    start_ned=(0, 0, -10), gcs_sysid=200) as vehicle:
+        other, mine = gcs_for(vehicle, 255), gcs_for(vehicle, 200)
+        try:
+            other.wait_for("HEARTBEAT", 3.0)
+            setpoint(other, 9, 9, -9)
+            other.mav.send(other.mav.command_long_encode(5, 1, 400, 0, 0, *[0] * 6))
+            t0 = time.monotonic()
+            other.mav.send(other.mav.param_request_read_encode(5, 1, b"MAV_GCS_SYSID", -1))
+            assert param(other, "MAV_GCS_SYSID", t0).param_value == 200  # reads are open
+            other.mav.send(other.mav.param_set_encode(5, 1, b"MAV_GCS_SYSID", 0,
+                                                      MAV.MAV_PARAM_TYPE_INT32))
+            time.sleep(0.3)
+            assert vehicle.setpoints_accepted == 0 and vehicle.commands == []
+            assert vehicle.gcs_sysid == 200
+            setpoint(mine, 1, 2, -9)
+            assert wait_until(lambda: vehicle.setpoints_accepted == 1, 1.0)
+        finally:
+            other.close()
+            mine.close()
+
+
+@pytest.mark.parametrize("rig", [("ardupilot", True)], indirect=True)
+def test_ardupilot_guided_in_guided_keeps_the_target_and_brake_rtl(rig):
+    vehicle, gcs = rig
+    gcs.wait_for("HEARTBEAT", 3.0)
+    setpoint(gcs, 6, 0, -10)
+    assert wait_until(lambda: vehicle.position_ned[0] > 1.0, 3.0)
+    assert command(gcs, MAV.MAV_CMD_DO_SET_MODE, 1, 4) == ACCEPTED  # GUIDED again
+    assert wait_until(lambda: abs(vehicle.position_ned[0] - 6.0) < 0.2, 6.0)
+    setpoint(gcs, 20, 0, -10)
+    assert wait_until(lambda: vehicle.velocity_ned[0] > 3.0, 4.0)
+    assert command(gcs, MAV.MAV_CMD_DO_SET_MODE, 1, 17) == ACCEPTED  # BRAKE
+    assert wait_until(lambda: abs(vehicle.velocity_ned[0]) < 0.05, 4.0)
+    stopped = vehicle.position_ned
+    time.sleep(0.5)
+    assert abs(vehicle.position_ned[0] - stopped[0]) < 0.1 and vehicle.position_ned[0] < 19.0
+    for mode in (2, 5, 0):  # ALT_HOLD, LOITER, STABILIZE: hold (no RC modelled)
+        assert command(gcs, MAV.MAV_CMD_DO_SET_MODE, 1, mode) == ACCEPTED
+    assert command(gcs, MAV.MAV_CMD_DO_SET_MODE, 1, 6) == ACCEPTED  # RTL: home, then land
+    assert wait_until(lambda: vehicle.landed and not vehicle.armed, 20.0)
+    assert max(abs(c) for c in vehicle.position_ned) < 0.3
+
+
+@pytest.mark.parametrize("rig", [("px4", False)], indirect=True)
+def test_px4_offboard_needs_only_a_recent_setpoint(rig):
+    vehicle, gcs = rig
+    gcs.wait_for("HEARTBEAT", 3.0)
+    setpoint(gcs, 0, 0, -4)  # one setpoint, then OFFBOARD at once (MAVSDK's order)
+    time.sleep(0.1)
+    assert command(gcs, MAV.MAV_CMD_DO_SET_MODE, 1, 6, 0) == ACCEPTED
+    assert vehicle.mode == "OFFBOARD"
+    setpoint(gcs, 0, 0, -4)
+    assert command(gcs, MAV.MAV_CMD_COMPONENT_ARM_DISARM, 1) == ACCEPTED
+    time.sleep(0.8)  # no stream: PX4 leaves OFFBOARD
+    assert vehicle.mode == "HOLD"
+    assert command(gcs, MAV.MAV_CMD_DO_SET_MODE, 1, 6, 0) == MAV.MAV_RESULT_TEMPORARILY_REJECTED
+    for name, (main_mode, sub) in (("ALTCTL", (2, 0)), ("MANUAL", (1, 0)), ("RTL", (4, 5)),
+                              ("HOLD", (4, 3))):
+        assert command(gcs, MAV.MAV_CMD_DO_SET_MODE, 1, main_mode, sub) == ACCEPTED
+        assert vehicle.mode == name
+    assert command(gcs, MAV.MAV_CMD_DO_SET_MODE, 1, 4, 9) == MAV.MAV_RESULT_UNSUPPORTED
+
+
+def test_cli_starts_a_booting_vehicle_with_a_home():
+    import subprocess
+    import sys
+    probe = FakePeer(1)  # a free UDP port
+    port = probe.port
+    probe.close()
+    proc = subprocess.Popen([sys.executable, "-m", "uav_insar_sim.vehicle", "--sysid", "5",
+                             "--listen", f"udpin:127.0.0.1:{port}", "--boot-s", "0",
+                             "--home", "47.0,8.0,400"], stdout=subprocess.PIPE, text=True)
+    gcs = FakePeer(255, 191, dest=("127.0.0.1", port), heartbeat_hz=2.0)
+    try:
+        gpi = gcs.wait_for("GLOBAL_POSITION_INT", 10.0)
+        assert (gpi.lat, gpi.lon, gpi.alt) == (470000000, 80000000, 400000)
+    finally:
+        gcs.close()
+        proc.terminate()
+        assert proc.wait(10) == 0
+    assert main(["--sysid", "2", "--listen", "udpin:127.0.0.1:0", "--home", "95,0,0"]) == 2

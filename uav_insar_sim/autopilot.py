@@ -1,27 +1,35 @@
-"""The flight logic of the simulated multicopter: modes, arming, takeoff, setpoints, dynamics.
+"""The flight logic of the simulated multicopter: boot, modes, arming, takeoff, setpoints.
 
 No I/O: `SimVehicle` (vehicle.py) decodes MAVLink into these calls and reports the state.
-Results are MAV_RESULT numbers, as the real autopilots answer.
+Results are MAV_RESULT numbers, as the real autopilots answer; STATUSTEXTs to send are queued
+in `statustexts` as (severity, text) for the vehicle to drain.
 
+- Boot: for `boot_s` after construction (none when started `airborne`) the estimator is "not
+  ready": arming fails (ArduPilot FAILED, PX4 TEMPORARILY_REJECTED, with a PreArm STATUSTEXT),
+  PX4 refuses every mode change (TEMPORARILY_REJECTED), and an ArduPilot mode set during boot
+  is accepted but falls back to STABILIZE when boot ends (as ArduCopter SITL does).
 - ArduPilot (Copter mode numbers): setpoints only in GUIDED, only after NAV_TAKEOFF when on
-  the ground; velocity targets stop after 3 s.
-- PX4: setpoints are the offboard "proof of life"; OFFBOARD is refused
-  (TEMPORARILY_REJECTED) until they have streamed for > 1 s, and the vehicle drops to HOLD
-  (AUTO.LOITER) when they stop for `offboard_timeout_s`.
-- Setpoints: position, velocity or both, all three axes of a group together; offsets in the
-  offset / body frames are from where the vehicle is (it never yaws, so body axes are NED).
+  the ground; velocity targets stop after 3 s; GUIDED requested while in GUIDED keeps the
+  target. STABILIZE / ALT_HOLD (no RC modelled: sticks centred) stop and hold height, LOITER
+  holds, BRAKE stops then holds, RTL climbs to `rtl_alt_m`, returns above home and lands,
+  LAND descends and disarms. Arming is refused in RTL, LAND and BRAKE.
+- PX4: MANUAL / ALTCTL / POSCTL / HOLD hold, TAKEOFF climbs then holds, LAND, RTL as above.
+  OFFBOARD is accepted when the latest setpoint is recent (within `offboard_timeout_s`, as
+  PX4's offboardCheck does with COM_OF_LOSS_T), and drops to HOLD when setpoints stop.
+- Setpoints: position, velocity or both, all three axes of a group together, finite values
+  only; offsets in the offset / body frames are from where the vehicle is (it never yaws).
 - Point-mass dynamics (`kinematics.step_toward` with a P gain), speed <= `max_speed`,
-  acceleration <= `max_accel`; the ground is D = max(0, start D); LAND descends at 1 m/s and
-  disarms on touchdown.
+  acceleration <= `max_accel`; the ground is D = max(0, start D); landing at 1 m/s.
 """
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Sequence
 
 import numpy as np
 
-from uav_insar_planner.mavlink.autopilots import AUTOPILOTS, COPTER_MODES, PX4_MODES
+from uav_insar_planner.mavlink.autopilots import AUTOPILOTS, copter_mode_name, px4_mode_name
 from uav_insar_planner.mavlink.link import MAV
 from uav_insar_planner.mavlink.setpoints import POSITION_BITS, VELOCITY_BITS
 from uav_insar_sim.kinematics import PointMass, step_toward
@@ -31,9 +39,12 @@ ARDUPILOT_FRAMES = frozenset((MAV.MAV_FRAME_LOCAL_NED, MAV.MAV_FRAME_LOCAL_OFFSE
                               MAV.MAV_FRAME_BODY_NED, MAV.MAV_FRAME_BODY_OFFSET_NED))
 PX4_FRAMES = frozenset((MAV.MAV_FRAME_LOCAL_NED, MAV.MAV_FRAME_BODY_NED))
 ARDUPILOT_VELOCITY_TIMEOUT_S = 3.0
-PX4_STREAM_REQUIRED_S = 1.0
 PX4_DEFAULT_TAKEOFF_M = 2.5  # MIS_TAKEOFF_ALT default
 LAND_SPEED = 1.0
+MAX_TAKEOFF_M = 1000.0
+NOT_ARMABLE_COPTER = frozenset(("RTL", "LAND", "BRAKE"))
+PREARM_TEXT = {"ardupilot": "PreArm: AHRS: waiting for home",
+               "px4": "Preflight Fail: No valid global position estimate"}
 _ZERO = (0.0, 0.0, 0.0)
 
 
@@ -42,7 +53,8 @@ class Autopilot:
 
     def __init__(self, autopilot: str = "ardupilot",
                  start_ned: Sequence[float] = (0.0, 0.0, 0.0), max_speed: float = 10.0,
-                 max_accel: float = 5.0, airborne: bool = False, offboard_timeout_s: float = 0.5):
+                 max_accel: float = 5.0, airborne: bool = False, offboard_timeout_s: float = 0.5,
+                 boot_s: float = 0.0, now: float | None = None):
         if autopilot not in AUTOPILOTS:
             raise ValueError(f"autopilot: {autopilot!r} is not allowed; expected ardupilot "
                              "or px4")
@@ -50,22 +62,32 @@ class Autopilot:
             raise ValueError("speed and accel must be finite and > 0")
         if len(start_ned) != 3 or not all(math.isfinite(c) for c in start_ned):
             raise ValueError("start_ned: expected 3 finite numbers N E D")
+        if not (0.0 <= boot_s < 3600.0):
+            raise ValueError(f"boot_s: {boot_s!r} is not allowed; expected 0 <= s < 3600")
+        if not (0.0 < offboard_timeout_s < 60.0):
+            raise ValueError("offboard_timeout_s: expected 0 < s < 60")
         self.autopilot = autopilot
         self.px4 = autopilot == "px4"
         self.max_speed, self.max_accel = float(max_speed), float(max_accel)
-        self.offboard_timeout_s = offboard_timeout_s
+        self.offboard_timeout_s = float(offboard_timeout_s)
+        self.takeoff_alt_m = PX4_DEFAULT_TAKEOFF_M
+        self.rtl_alt_m = 60.0 if self.px4 else 15.0  # RTL_RETURN_ALT / RTL_ALT defaults
+        self.boot_s = 0.0 if airborne else float(boot_s)
+        self.boot_end = (time.monotonic() if now is None else now) + self.boot_s
+        self._booted = self.boot_s == 0.0
+        self.statustexts: list[tuple[int, str]] = []
         self.state = PointMass(np.array(start_ned, dtype=float), np.zeros(3))
         self.ground_d = max(0.0, float(start_ned[2]))
-        self._home_d = self.ground_d
+        self.home = np.array([start_ned[0], start_ned[1], self.ground_d], dtype=float)
         self.armed = airborne
         self.mode = ("OFFBOARD" if self.px4 else "GUIDED") if airborne else (
             "POSCTL" if self.px4 else "STABILIZE")
         self._hold = self.state.position.copy()  # where hold / loiter / guided-no-target stays
+        self._braking = False
         self._target_pos: np.ndarray | None = None
         self._target_vel: np.ndarray | None = None
         self._target_time = 0.0
         self._takeoff_d: float | None = None
-        self._stream_start: float | None = None
         self._last_setpoint: float | None = None
         self.setpoints_accepted = 0
         self.setpoints_rejected = 0
@@ -82,25 +104,45 @@ class Autopilot:
         return (self.state.position[2] >= self.ground_d - 0.05
                 and self.state.velocity[2] >= -0.05)
 
+    def booted(self, now: float) -> bool:
+        """True once the boot phase is over (position estimate, home, armable)."""
+        if not self._booted and now >= self.boot_end:
+            self._booted = True
+            if not self.px4 and self.mode != "STABILIZE":
+                self._enter("STABILIZE")  # ArduCopter: a mode set while booting does not stick
+        return self._booted
+
+    def landed_state(self) -> int:
+        """MAV_LANDED_STATE for EXTENDED_SYS_STATE."""
+        if self.on_ground():
+            return MAV.MAV_LANDED_STATE_ON_GROUND
+        if self.mode == "LAND" or (self.mode == "RTL" and self._rtl_descending()):
+            return MAV.MAV_LANDED_STATE_LANDING
+        if self.mode == "TAKEOFF":
+            return MAV.MAV_LANDED_STATE_TAKEOFF
+        return MAV.MAV_LANDED_STATE_IN_AIR
+
     # --------------------------------------------------------------------- modes, arming
     def set_mode(self, custom: int, main: int, sub: int, now: float) -> int:
         """Switch mode: ArduPilot by Copter number `custom`, PX4 by (main, sub)."""
         if self.px4:
-            names = [n for n, (m, s) in PX4_MODES.items() if m == main and (s == sub or m != 4)]
-            if not names:
+            name = px4_mode_name(main, sub)
+            if name is None:
                 return MAV.MAV_RESULT_UNSUPPORTED
-            name = names[0]
+            if not self.booted(now):
+                return MAV.MAV_RESULT_TEMPORARILY_REJECTED
             if name == "OFFBOARD":
-                if not self._streaming(now):
+                if not self._recent_setpoint(now):
                     return MAV.MAV_RESULT_TEMPORARILY_REJECTED
                 self._target_time = now
             elif name == "TAKEOFF":
-                return self.takeoff(float("nan"))
+                return self.takeoff(float("nan"), now)
         else:
-            names = [n for n, number in COPTER_MODES.items() if number == custom]
-            if not names:
+            name = copter_mode_name(custom)
+            if name is None:
                 return MAV.MAV_RESULT_FAILED
-            name = names[0]
+            if name == self.mode:
+                return MAV.MAV_RESULT_ACCEPTED  # ArduCopter: no change, GUIDED keeps its target
             self._target_pos = self._target_vel = None  # a new GUIDED session: no target
         self._enter(name)
         return MAV.MAV_RESULT_ACCEPTED
@@ -109,13 +151,28 @@ class Autopilot:
         self._enter("LAND")
         return MAV.MAV_RESULT_ACCEPTED
 
+    def rtl(self, now: float) -> int:
+        if not self.booted(now) and self.px4:
+            return MAV.MAV_RESULT_TEMPORARILY_REJECTED
+        self._enter("RTL")
+        return MAV.MAV_RESULT_ACCEPTED
+
     def arm(self, arm: bool, force: bool, now: float) -> int:
         """Arm, or disarm (in flight only with `force`)."""
         if arm:
-            if self.px4 and self.mode == "OFFBOARD" and not self._streaming(now):
+            if self.armed:
+                return MAV.MAV_RESULT_ACCEPTED
+            if not self.booted(now) and not force:
+                self.statustexts.append((MAV.MAV_SEVERITY_CRITICAL,
+                                         PREARM_TEXT[self.autopilot]))
+                return (MAV.MAV_RESULT_TEMPORARILY_REJECTED if self.px4
+                        else MAV.MAV_RESULT_FAILED)
+            if self.px4 and self.mode == "OFFBOARD" and not self._recent_setpoint(now):
                 return MAV.MAV_RESULT_DENIED
-            if not self.armed:
-                self._home_d = float(self.state.position[2])
+            if not self.px4 and self.mode in NOT_ARMABLE_COPTER and not force:
+                self.statustexts.append((MAV.MAV_SEVERITY_CRITICAL, "Arm: Mode not armable"))
+                return MAV.MAV_RESULT_FAILED
+            self.home = self.state.position.copy()  # both autopilots set home on arming
             self.armed = True
             return MAV.MAV_RESULT_ACCEPTED
         if not self.on_ground() and not force:
@@ -123,19 +180,19 @@ class Autopilot:
         self.armed = False
         return MAV.MAV_RESULT_ACCEPTED
 
-    def takeoff(self, altitude: float) -> int:
-        """NAV_TAKEOFF to `altitude` m above home (PX4: NaN for its default height)."""
+    def takeoff(self, height: float, now: float | None = None) -> int:
+        """NAV_TAKEOFF to `height` m above home (PX4: NaN for MIS_TAKEOFF_ALT)."""
         if not self.armed:
             return MAV.MAV_RESULT_DENIED if self.px4 else MAV.MAV_RESULT_FAILED
+        if not (math.isnan(height) or -MAX_TAKEOFF_M < height < MAX_TAKEOFF_M):
+            return MAV.MAV_RESULT_DENIED if self.px4 else MAV.MAV_RESULT_FAILED
         if self.px4:
-            # PX4's param7 is AMSL; the sim's home is at 0 m AMSL, so it is the height.
-            height = PX4_DEFAULT_TAKEOFF_M if math.isnan(altitude) else altitude
+            height = self.takeoff_alt_m if math.isnan(height) or height < 0.5 else height
             self._enter("TAKEOFF")
         else:
-            if self.mode != "GUIDED" or not self.on_ground() or not altitude > 0:
+            if self.mode != "GUIDED" or not self.on_ground() or not height > 0:
                 return MAV.MAV_RESULT_FAILED
-            height = altitude
-        self._takeoff_d = self._home_d - height
+        self._takeoff_d = float(self.home[2]) - height
         self._hold = np.array([self.state.position[0], self.state.position[1],
                                self._takeoff_d])
         return MAV.MAV_RESULT_ACCEPTED
@@ -147,7 +204,9 @@ class Autopilot:
         pos_bits, vel_bits = mask & POSITION_BITS, mask & VELOCITY_BITS
         use_pos, use_vel = pos_bits == 0, vel_bits == 0
         valid_groups = pos_bits in (0, POSITION_BITS) and vel_bits in (0, VELOCITY_BITS)
-        if frame not in frames or not valid_groups or not (use_pos or use_vel):
+        finite = (not use_pos or all(math.isfinite(c) and abs(c) < 1e6 for c in position)) \
+            and (not use_vel or all(math.isfinite(c) and abs(c) < 1e3 for c in velocity))
+        if frame not in frames or not valid_groups or not (use_pos or use_vel) or not finite:
             self.setpoints_rejected += 1
             return False
         if not self.px4 and self.mode != "GUIDED":
@@ -159,26 +218,25 @@ class Autopilot:
         self._target_pos = goal if use_pos else None
         self._target_vel = np.array(velocity, dtype=float) if use_vel else None
         self._target_time = now
-        if self._last_setpoint is None or now - self._last_setpoint > self.offboard_timeout_s:
-            self._stream_start = now
         self._last_setpoint = now
         self.setpoints_accepted += 1
         return True
 
-    def _streaming(self, now: float) -> bool:
-        return (self._last_setpoint is not None
-                and now - self._last_setpoint <= self.offboard_timeout_s
-                and now - self._stream_start > PX4_STREAM_REQUIRED_S)
+    def _recent_setpoint(self, now: float) -> bool:
+        return self._last_setpoint is not None and \
+            now - self._last_setpoint <= self.offboard_timeout_s
 
     def _enter(self, mode: str) -> None:
         self.mode = mode
         self._hold = self.state.position.copy()
-        if mode == "LAND":
+        self._braking = mode in ("BRAKE", "STABILIZE", "ALT_HOLD", "ALTCTL", "MANUAL")
+        if mode in ("LAND", "RTL"):
             self._takeoff_d = None
 
     # ------------------------------------------------------------------------- dynamics
     def tick(self, dt: float, now: float) -> None:
         """Advance the flight by `dt` seconds; the ground stops the vehicle."""
+        self.booted(now)
         goal, feed_forward = self._goal(now)
         self.state = step_toward(self.state, goal, dt, self.max_speed, self.max_accel,
                                  feed_forward, gain=KP)
@@ -189,19 +247,32 @@ class Autopilot:
             if not self.armed:
                 vel[:] = 0.0
 
+    def _rtl_descending(self) -> bool:
+        return float(np.hypot(*(self.state.position[:2] - self.home[:2]))) < 0.5
+
+    def _descend(self) -> tuple[np.ndarray | None, Sequence[float]]:
+        if self.on_ground():
+            self.armed = False
+            return None, _ZERO
+        return None, (0.0, 0.0, LAND_SPEED)
+
     def _goal(self, now: float) -> tuple[np.ndarray | None, Sequence[float]]:
         """(position to reach or None, feed-forward velocity) for the current mode."""
         if not self.armed:
             return None, _ZERO
         if self.mode == "LAND":
-            if self.on_ground():
-                self.armed = False
+            return self._descend()
+        if self.mode == "RTL":
+            return self._rtl()
+        if self._braking:  # stop, then hold where it stopped (height kept)
+            if float(np.linalg.norm(self.state.velocity)) > 0.1:
                 return None, _ZERO
-            return None, (0.0, 0.0, LAND_SPEED)
+            self._braking = False
+            self._hold = self.state.position.copy()
+            return self._hold, _ZERO
         if self.mode == "OFFBOARD":
             # (--airborne starts in OFFBOARD with no stream yet; the loss needs a stream)
-            if self._last_setpoint is not None and \
-                    now - self._last_setpoint > self.offboard_timeout_s:
+            if self._last_setpoint is not None and not self._recent_setpoint(now):
                 self._enter("HOLD")  # PX4's offboard-loss failsafe without RC
                 return self._hold, _ZERO
         elif self.mode == "GUIDED":
@@ -225,3 +296,15 @@ class Autopilot:
         if self._target_pos is None and self._target_vel is None:
             return self.state.position.copy(), _ZERO
         return self._target_pos, (_ZERO if self._target_vel is None else self._target_vel)
+
+    def _rtl(self) -> tuple[np.ndarray | None, Sequence[float]]:
+        """Climb to rtl_alt_m above home (if lower), fly above home, then land there."""
+        pos = self.state.position
+        if self._rtl_descending():
+            if self.on_ground():
+                return self._descend()
+            return np.array([self.home[0], self.home[1], pos[2]]), (0.0, 0.0, LAND_SPEED)
+        return_d = min(float(pos[2]), float(self.home[2]) - self.rtl_alt_m)
+        if pos[2] > return_d + 0.5:
+            return np.array([pos[0], pos[1], return_d]), _ZERO
+        return np.array([self.home[0], self.home[1], return_d]), _ZERO

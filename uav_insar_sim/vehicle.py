@@ -1,30 +1,34 @@
-"""A SITL-style MAVLink multicopter: enough of ArduCopter or PX4 to fly the bridge against.
+"""A SITL-style MAVLink multicopter: enough of ArduCopter or PX4 for the bridge and a GCS.
 
 Command line (the `uav-insar-vehicle` console script, or `python -m uav_insar_sim.vehicle`):
 
     uav-insar-vehicle --sysid 2 --listen udpin:127.0.0.1:14552 [--autopilot ardupilot|px4]
                       [--start-ned N E D] [--speed 10] [--accel 5] [--airborne]
+                      [--boot-s 3] [--home LAT,LON,ALT] [--gcs-sysid 255]
 
 In-process (a background thread; what tests and an agent node use):
 
     with SimVehicle(sysid=2, listen="udpin:127.0.0.1:0", autopilot="px4") as vehicle:
         port = vehicle.port              # the bound UDP port (0 picks a free one)
         vehicle.position_ned             # (N, E, D) in metres, thread-safe snapshot
-        vehicle.mode, vehicle.armed, vehicle.landed
+        vehicle.mode, vehicle.armed, vehicle.landed, vehicle.booted
         vehicle.set_radio(False)         # drop all traffic both ways (a link loss)
 
-The MAVLink side, like the real autopilots (the flight logic is `autopilot.Autopilot`):
-- HEARTBEAT at 1 Hz as (sysid, compid 1), MAV_TYPE_QUADROTOR, autopilot ARDUPILOTMEGA with
-  Copter mode numbers (STABILIZE 0, GUIDED 4, LOITER 5, LAND 9) or PX4 with
-  custom_mode = main << 16 | sub << 24 (POSCTL, OFFBOARD, AUTO.TAKEOFF/LOITER/LAND).
-- LOCAL_POSITION_NED at 10 Hz (MAV_CMD_SET_MESSAGE_INTERVAL changes it).
-- COMMAND_LONG ARM_DISARM, DO_SET_MODE, NAV_TAKEOFF, NAV_LAND, SET_MESSAGE_INTERVAL and the
-  SET_MODE message are answered with COMMAND_ACK; other commands get UNSUPPORTED.
-- SET_POSITION_TARGET_LOCAL_NED: frames LOCAL_NED, LOCAL_OFFSET_NED, BODY_NED,
-  BODY_OFFSET_NED for ArduPilot, LOCAL_NED and BODY_NED for PX4 (others are rejected and
-  counted); acceleration fields are ignored. A mask of 0 means "use every field", so
-  x = y = z = 0 flies the vehicle to the origin, just as on the real thing.
-- Messages for another system or component are ignored.
+In-process the boot phase defaults to 0 s (`boot_s`), on the command line to 3 s; a vehicle
+started `airborne` never boots. The MAVLink side, like the real autopilots (flight logic:
+`autopilot.Autopilot`, telemetry: `telemetry`, parameters: `sim_params`, commands:
+`commands`):
+- Sent as (sysid, compid 1): HEARTBEAT (MAV_TYPE_QUADROTOR; ArduCopter mode numbers or PX4
+  main << 16 | sub << 24), SYS_STATUS, GPS_RAW_INT, ATTITUDE, LOCAL_POSITION_NED,
+  GLOBAL_POSITION_INT, HOME_POSITION, EXTENDED_SYS_STATE, BATTERY_STATUS at the
+  `telemetry.DEFAULT_INTERVALS` rates; AUTOPILOT_VERSION and GPS_GLOBAL_ORIGIN on request;
+  STATUSTEXT for refused arming. No position, home or origin before the boot phase ends.
+- Obeyed only from the ground station `gcs_sysid` (default 255; 0 = anyone): COMMAND_LONG and
+  COMMAND_INT (see `commands`), SET_MODE, SET_POSITION_TARGET_LOCAL_NED (frames LOCAL_NED,
+  LOCAL_OFFSET_NED, BODY_NED, BODY_OFFSET_NED for ArduPilot, LOCAL_NED and BODY_NED for PX4;
+  a mask of 0 uses every field; non-finite used fields are refused and counted), PARAM_SET.
+  Answered from anyone: PARAM_REQUEST_LIST, PARAM_REQUEST_READ (PARAM_VALUE).
+- Messages for another system or component are ignored; a malformed one never stops it.
 """
 from __future__ import annotations
 
@@ -38,11 +42,16 @@ from dataclasses import replace
 from uav_insar_planner.mavlink.autopilots import AUTOPILOTS, COPTER_MODES, px4_custom_mode
 from uav_insar_planner.mavlink.link import MAV, Link, LinkStats
 from uav_insar_sim.autopilot import Autopilot
+from uav_insar_sim.commands import run_command
+from uav_insar_sim.sim_params import ParamTable, vehicle_params
+from uav_insar_sim.telemetry import SITL_HOME, Streams, Telemetry, parse_home
 
 __all__ = ["SimVehicle", "build_parser", "main"]
 
 PHYSICS_HZ = 50.0
-FORCE_DISARM_MAGIC = 21196
+OBEYED = frozenset(("COMMAND_LONG", "COMMAND_INT", "SET_MODE",
+                    "SET_POSITION_TARGET_LOCAL_NED", "PARAM_SET"))
+HANDLED = OBEYED | {"PARAM_REQUEST_LIST", "PARAM_REQUEST_READ"}
 
 
 class SimVehicle:
@@ -56,20 +65,28 @@ class SimVehicle:
     def __init__(self, sysid: int, listen: str, autopilot: str = "ardupilot",
                  start_ned: tuple[float, float, float] = (0.0, 0.0, 0.0),
                  max_speed: float = 10.0, max_accel: float = 5.0, airborne: bool = False,
-                 offboard_timeout_s: float = 0.5, compid: int = MAV.MAV_COMP_ID_AUTOPILOT1):
+                 offboard_timeout_s: float = 0.5, compid: int = MAV.MAV_COMP_ID_AUTOPILOT1,
+                 *, boot_s: float = 0.0, home: tuple[float, float, float] = SITL_HOME,
+                 gcs_sysid: int = 255):
         if not 1 <= sysid <= 255:
             raise ValueError(f"sysid: {sysid!r} is not allowed; expected 1..255")
+        if not 0 <= gcs_sysid <= 255:
+            raise ValueError(f"gcs_sysid: {gcs_sysid!r} is not allowed; expected 0..255")
         self.sysid, self.compid, self.autopilot = sysid, compid, autopilot
+        self.gcs_sysid = int(gcs_sysid)
+        self._boot = time.monotonic()
         self._ap = Autopilot(autopilot, start_ned, max_speed, max_accel, airborne,
-                             offboard_timeout_s)
+                             offboard_timeout_s, boot_s, self._boot)
         self._link = Link(listen, sysid, compid)
+        self.telemetry = Telemetry(self._link.mav, self._ap, tuple(home), self._boot, sysid)
+        self.streams = Streams()
+        self.params = ParamTable(vehicle_params(self), bytewise=self._ap.px4)
         self._lock = threading.Lock()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._radio = True
-        self._boot = time.monotonic()
-        self._position_interval = 0.1
         self.commands: list[tuple[int, int]] = []  # (command, result) answered, in order
+        self.errors = 0  # messages whose handling raised (answered FAILED, never fatal)
 
     # ------------------------------------------------------------------------- public API
     @property
@@ -101,6 +118,17 @@ class SimVehicle:
     def landed(self) -> bool:
         with self._lock:
             return self._ap.on_ground()
+
+    @property
+    def booted(self) -> bool:
+        with self._lock:
+            return self._ap.booted(time.monotonic())
+
+    @property
+    def boot_remaining_s(self) -> float:
+        """Seconds left of the boot phase (0 once booted)."""
+        with self._lock:
+            return max(0.0, self._ap.boot_end - time.monotonic())
 
     @property
     def setpoints_accepted(self) -> int:
@@ -144,8 +172,7 @@ class SimVehicle:
         """The vehicle loop; returns when `stop` (or `self.stop()`) is set."""
         stop = stop or self._stop
         dt = 1.0 / PHYSICS_HZ
-        now = time.monotonic()
-        next_tick, next_heartbeat, next_position = now, now, now
+        next_tick = time.monotonic()
         fd = self._link.fileno()
         while not stop.is_set() and not self._stop.is_set():
             wait = max(0.0, next_tick - time.monotonic())
@@ -160,21 +187,30 @@ class SimVehicle:
                 now = time.monotonic()
                 for msg in self._link.poll():
                     if self._radio:
-                        self._handle(msg, now)
+                        self._handle_safely(msg, now)
                 if now >= next_tick:
                     self._ap.tick(min(now - next_tick + dt, 0.1), now)
+                    self.telemetry.update(now)
                     next_tick = max(next_tick + dt, now)
-                if now >= next_heartbeat:
-                    self._send_heartbeat()
-                    next_heartbeat = max(next_heartbeat + 1.0, now)
-                if self._position_interval > 0 and now >= next_position:
-                    self._send_position(now)
-                    next_position = max(next_position + self._position_interval, now)
+                for msgid in self.streams.due(now):
+                    self.send_now(msgid, now)
+                self._send_statustexts()
 
     # --------------------------------------------------------------------- MAVLink out
     def _send(self, msg: MAV.MAVLink_message) -> None:
         if self._radio:
             self._link.send(msg)
+
+    def send_now(self, msgid: int, now: float) -> bool:
+        """Send message `msgid` once; False when it is not available (yet)."""
+        if msgid == MAV.MAVLINK_MSG_ID_HEARTBEAT:
+            self._send_heartbeat()
+            return True
+        msg = self.telemetry.build(msgid, now, self._ap.booted(now))
+        if msg is None:
+            return False
+        self._send(msg)
+        return True
 
     def _send_heartbeat(self) -> None:
         ap = self._ap
@@ -188,15 +224,24 @@ class SimVehicle:
             flags |= MAV.MAV_MODE_FLAG_STABILIZE_ENABLED
             if ap.mode == "GUIDED":
                 flags |= MAV.MAV_MODE_FLAG_GUIDED_ENABLED
-        state = MAV.MAV_STATE_ACTIVE if ap.armed and not ap.on_ground() \
-            else MAV.MAV_STATE_STANDBY
+        if not ap.booted(time.monotonic()):
+            state = MAV.MAV_STATE_BOOT if ap.px4 else MAV.MAV_STATE_CALIBRATING
+        elif ap.armed and not ap.on_ground():
+            state = MAV.MAV_STATE_ACTIVE
+        else:
+            state = MAV.MAV_STATE_STANDBY
         self._send(self._link.mav.heartbeat_encode(MAV.MAV_TYPE_QUADROTOR, autopilot, flags,
                                                    custom, state))
 
-    def _send_position(self, now: float) -> None:
-        boot_ms = int((now - self._boot) * 1000.0) & 0xFFFFFFFF
-        self._send(self._link.mav.local_position_ned_encode(boot_ms, *self._ap.position,
-                                                            *self._ap.velocity))
+    def _send_statustexts(self) -> None:
+        while self._ap.statustexts:
+            severity, text = self._ap.statustexts.pop(0)
+            self._send(self._link.mav.statustext_encode(severity, text.encode()[:50]))
+
+    def _send_param(self, i: int) -> None:
+        p = self.params.params[i]
+        self._send(self._link.mav.param_value_encode(p.name.encode(), self.params.encode(i),
+                                                     p.kind, len(self.params), i))
 
     def _ack(self, msg: MAV.MAVLink_message, command: int, result: int) -> None:
         self.commands.append((command, result))
@@ -210,11 +255,20 @@ class SimVehicle:
         component = getattr(msg, "target_component", 0)
         return system in (0, self.sysid) and component in (0, self.compid)
 
+    def _handle_safely(self, msg: MAV.MAVLink_message, now: float) -> None:
+        try:
+            self._handle(msg, now)
+        except Exception:  # noqa: BLE001 - a GCS must never be able to stop the vehicle
+            self.errors += 1
+            if msg.get_type() in ("COMMAND_LONG", "COMMAND_INT"):
+                self._ack(msg, msg.command, MAV.MAV_RESULT_FAILED)
+
     def _handle(self, msg: MAV.MAVLink_message, now: float) -> None:
         kind = msg.get_type()
-        if kind not in ("COMMAND_LONG", "COMMAND_INT", "SET_MODE",
-                        "SET_POSITION_TARGET_LOCAL_NED") or not self._for_me(msg):
+        if kind not in HANDLED or not self._for_me(msg):
             return
+        if kind in OBEYED and self.gcs_sysid not in (0, msg.get_srcSystem()):
+            return  # only the configured ground station commands this vehicle
         if kind == "SET_POSITION_TARGET_LOCAL_NED":
             self._ap.setpoint(msg.coordinate_frame, msg.type_mask, (msg.x, msg.y, msg.z),
                               (msg.vx, msg.vy, msg.vz), now)
@@ -226,30 +280,29 @@ class SimVehicle:
             self._ack(msg, MAV.MAVLINK_MSG_ID_SET_MODE,
                       self._ap.set_mode(msg.custom_mode, main, sub, now))
         elif kind == "COMMAND_INT":
-            self._ack(msg, msg.command, MAV.MAV_RESULT_UNSUPPORTED)
-        else:
-            self._ack(msg, msg.command, self._command(msg, now))
+            params = (msg.param1, msg.param2, msg.param3, msg.param4, msg.x, msg.y, msg.z)
+            self._ack(msg, msg.command, run_command(self, msg.command, params, now))
+        elif kind == "COMMAND_LONG":
+            params = (msg.param1, msg.param2, msg.param3, msg.param4, msg.param5,
+                      msg.param6, msg.param7)
+            self._ack(msg, msg.command, run_command(self, msg.command, params, now))
+        elif kind == "PARAM_REQUEST_LIST":
+            for i in range(len(self.params)):
+                self._send_param(i)
+        elif kind == "PARAM_REQUEST_READ":
+            i = self.params.find(_param_name(msg.param_id), msg.param_index)
+            if i is not None:
+                self._send_param(i)
+        else:  # PARAM_SET
+            i = self.params.set(_param_name(msg.param_id), msg.param_value, msg.param_type)
+            if i is not None:
+                self._send_param(i)
 
-    def _command(self, msg: MAV.MAVLink_message, now: float) -> int:
-        c = msg.command
-        if c == MAV.MAV_CMD_COMPONENT_ARM_DISARM:
-            return self._ap.arm(msg.param1 > 0.5, int(round(msg.param2)) == FORCE_DISARM_MAGIC,
-                                now)
-        if c == MAV.MAV_CMD_DO_SET_MODE:
-            if not int(msg.param1) & MAV.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED:
-                return MAV.MAV_RESULT_UNSUPPORTED
-            return self._ap.set_mode(int(msg.param2), int(msg.param2), int(msg.param3), now)
-        if c == MAV.MAV_CMD_NAV_TAKEOFF:
-            return self._ap.takeoff(msg.param7)
-        if c == MAV.MAV_CMD_NAV_LAND:
-            return self._ap.land()
-        if c == MAV.MAV_CMD_SET_MESSAGE_INTERVAL:
-            if int(msg.param1) != MAV.MAVLINK_MSG_ID_LOCAL_POSITION_NED:
-                return MAV.MAV_RESULT_FAILED
-            us = msg.param2
-            self._position_interval = 0.1 if us == 0 else (0.0 if us < 0 else us * 1e-6)
-            return MAV.MAV_RESULT_ACCEPTED
-        return MAV.MAV_RESULT_UNSUPPORTED
+
+def _param_name(param_id: str | bytes) -> str:
+    if isinstance(param_id, bytes):
+        param_id = param_id.decode("ascii", "replace")
+    return param_id.rstrip("\x00")
 
 
 # ----------------------------------------------------------------------------- command line
@@ -268,9 +321,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--speed", type=float, default=10.0, help="maximum speed [m/s]")
     p.add_argument("--accel", type=float, default=5.0, help="maximum acceleration [m/s^2]")
     p.add_argument("--airborne", action="store_true",
-                   help="start armed and flying in GUIDED (ardupilot) or OFFBOARD (px4)")
+                   help="start armed and flying in GUIDED (ardupilot) or OFFBOARD (px4), "
+                        "with no boot phase")
     p.add_argument("--offboard-timeout", type=float, default=0.5,
                    help="PX4: leave OFFBOARD after this long without setpoints [s]")
+    p.add_argument("--boot-s", type=float, default=3.0,
+                   help="boot phase: no position and arming refused for this long [s]")
+    p.add_argument("--home", default=",".join(str(c) for c in SITL_HOME),
+                   help="LAT,LON,ALT (deg, deg, m AMSL) of the local NED origin "
+                        "(default: ArduPilot SITL's)")
+    p.add_argument("--gcs-sysid", type=int, default=255,
+                   help="the only ground-station sysid obeyed; 0 obeys anyone")
     return p
 
 
@@ -279,7 +340,9 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         vehicle = SimVehicle(args.sysid, args.listen, args.autopilot, tuple(args.start_ned),
-                             args.speed, args.accel, args.airborne, args.offboard_timeout)
+                             args.speed, args.accel, args.airborne, args.offboard_timeout,
+                             boot_s=args.boot_s, home=parse_home(args.home),
+                             gcs_sysid=args.gcs_sysid)
     except ValueError as exc:
         print(f"uav-insar-vehicle: error: {exc}", file=sys.stderr)
         return 2
