@@ -1,6 +1,8 @@
 """Test helper: a bare MAVLink peer on a real loopback UDP socket, encoding and decoding with
 pymavlink's MAVLink 2 codec. It records everything it receives, can send heartbeats at a
-rate (switchable, to fake a link loss) and can write arbitrary bytes (malformed frames)."""
+rate (switchable, to fake a link loss) and can write arbitrary bytes (malformed frames).
+`custom_mode` / `armed` are what its heartbeat says; `respond(peer, msg)`, if given, is called
+(in the peer's thread) for every message it receives, to script an autopilot."""
 from __future__ import annotations
 
 import socket
@@ -24,7 +26,8 @@ class FakePeer:
 
     def __init__(self, sysid: int, compid: int = 1, dest: tuple[str, int] | None = None,
                  heartbeat_hz: float = 0.0, mav_type: int = MAV.MAV_TYPE_QUADROTOR,
-                 autopilot: int = MAV.MAV_AUTOPILOT_ARDUPILOTMEGA):
+                 autopilot: int = MAV.MAV_AUTOPILOT_ARDUPILOTMEGA, custom_mode: int = 4,
+                 respond=None):
         self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         self.sock.bind(("127.0.0.1", 0))
         self.sock.settimeout(0.02)
@@ -36,6 +39,7 @@ class FakePeer:
         self.heartbeat_hz = heartbeat_hz
         self.heartbeats_on = True
         self.mav_type, self.autopilot = mav_type, autopilot
+        self.custom_mode, self.armed, self.respond = custom_mode, False, respond
         self.received: list[tuple[float, MAV.MAVLink_message]] = []
         self.lock = threading.Lock()
         self._stop = threading.Event()
@@ -47,9 +51,10 @@ class FakePeer:
             self.sock.sendto(data, self.dest)
 
     def heartbeat(self) -> None:
-        self.mav.send(self.mav.heartbeat_encode(self.mav_type, self.autopilot,
-                                                MAV.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 4,
-                                                MAV.MAV_STATE_ACTIVE))
+        flags = MAV.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | (
+            MAV.MAV_MODE_FLAG_SAFETY_ARMED if self.armed else 0)
+        self.mav.send(self.mav.heartbeat_encode(self.mav_type, self.autopilot, flags,
+                                                self.custom_mode, MAV.MAV_STATE_ACTIVE))
 
     def _run(self) -> None:
         next_hb = time.monotonic()
@@ -67,6 +72,9 @@ class FakePeer:
                 with self.lock:
                     now = time.monotonic()
                     self.received += [(now, m) for m in msgs]
+                if self.respond is not None:
+                    for m in msgs:
+                        self.respond(self, m)
             now = time.monotonic()
             if self.heartbeat_hz > 0 and now >= next_hb:
                 next_hb = now + 1.0 / self.heartbeat_hz

@@ -187,3 +187,113 @@ def test_type_masks_are_the_named_ignore_bits_mavros_uses():
     """Built from MAV_POSITION_TARGET_TYPEMASK bits; the values autopilots expect."""
     assert MASK_POSITION == 3576
     assert MASK_POSITION_VELOCITY == 3520
+
+
+class BootingCopter:
+    """Scripts a FakePeer like a cold-booting ArduCopter: the first GUIDED request is
+    ACCEPTED but does not stick, the first `refusals` arm requests fail with a PreArm
+    STATUSTEXT and FAILED; NAV_TAKEOFF is accepted and the position jumps to its altitude."""
+
+    def __init__(self, refusals: int = 2):
+        self.refusals, self.mode_requests, self.commands = refusals, 0, []
+        self.down = 0.0
+
+    def __call__(self, peer, msg) -> None:
+        if msg.get_type() != "COMMAND_LONG":
+            return
+        self.commands.append(msg.command)
+        result = MAV.MAV_RESULT_ACCEPTED
+        if msg.command == MAV.MAV_CMD_DO_SET_MODE:
+            self.mode_requests += 1
+            if self.mode_requests > 1:
+                peer.custom_mode = int(msg.param2)
+        elif msg.command == MAV.MAV_CMD_COMPONENT_ARM_DISARM:
+            if self.refusals > 0:
+                self.refusals -= 1
+                peer.mav.send(peer.mav.statustext_encode(
+                    MAV.MAV_SEVERITY_CRITICAL, b"PreArm: Need Position Estimate"))
+                result = MAV.MAV_RESULT_FAILED
+            else:
+                peer.armed = True
+        elif msg.command == MAV.MAV_CMD_NAV_TAKEOFF:
+            self.down = -msg.param7
+        peer.mav.send(peer.mav.command_ack_encode(msg.command, result))
+        peer.mav.send(peer.mav.local_position_ned_encode(0, 0.0, 0.0, self.down, 0, 0, 0))
+
+
+def test_cold_start_readiness_retries_arming_and_resets_a_dropped_mode():
+    script = BootingCopter()
+    peer = FakePeer(2, heartbeat_hz=5.0, custom_mode=0, respond=script)
+    try:
+        with make_bridge([peer], target_sysids=(2,), arm_and_takeoff=True) as bridge:
+            bridge.set_formation([(0.0, 0.0, 10.0)])
+            t0 = time.monotonic()
+            phases = set()
+
+            def done() -> bool:
+                phases.add(bridge.status()[0].phase)
+                return bridge.status()[0].sequence == "done"
+
+            assert wait_until(done, 20.0), bridge.drain_events()
+            events = [e.text for e in bridge.drain_events()]
+            took = time.monotonic() - t0
+            since = time.monotonic()
+            assert peer.wait_for("SET_POSITION_TARGET_LOCAL_NED", 2.0, since)
+        assert script.mode_requests == 2 and script.refusals == 0
+        assert script.commands.count(MAV.MAV_CMD_COMPONENT_ARM_DISARM) == 3
+        assert MAV.MAV_CMD_NAV_TAKEOFF in script.commands
+        assert "prearm: PreArm: Need Position Estimate" in phases, phases
+        assert any("sysid 2 PreArm: Need Position Estimate" in t for t in events), events
+        assert any("arm: FAILED" in t and "retrying" in t for t in events), events
+        assert took < 15.0
+    finally:
+        peer.close()
+
+
+def test_no_setpoints_to_a_disarmed_copter_outside_guided():
+    peer = FakePeer(2, heartbeat_hz=5.0, custom_mode=0)  # STABILIZE
+    try:
+        with make_bridge([peer], target_sysids=(2,)) as bridge:
+            bridge.set_formation([(0.0, 0.0, 10.0)])
+            assert wait_until(lambda: bridge.status()[0].link == "linked", 3.0)
+            time.sleep(1.0)
+            assert not peer.messages("SET_POSITION_TARGET_LOCAL_NED")
+            assert bridge.status()[0].phase.startswith("waiting for position")
+            peer.custom_mode = 4  # the pilot switches to GUIDED: the stream starts
+            assert peer.wait_for("SET_POSITION_TARGET_LOCAL_NED", 2.0)
+    finally:
+        peer.close()
+
+
+def test_separation_below_the_safety_distance_is_warned(peers):
+    with make_bridge(peers, min_separation_m=2.0) as bridge:
+        bridge.set_formation([(-0.75, 0.0, 12.0), (0.75, 0.0, 12.0), (10.0, 0.0, 12.0)])
+        status = bridge.status()
+        events = bridge.drain_events()
+    assert status[0].separation == "1.50 m from uav1" and status[1].separation
+    assert status[2].separation == ""
+    assert any(e.level == "warn" and "uav0 and uav1" in e.text and "1.50 m" in e.text
+               for e in events)
+
+
+def test_a_dead_tcp_link_does_not_stall_the_others(peers):
+    import socket
+    closed = socket.socket()
+    closed.bind(("127.0.0.1", 0))
+    port = closed.getsockname()[1]
+    closed.close()  # nobody listens there: every connect is refused
+    t0 = time.monotonic()
+    bridge = Bridge(BridgeConfig(
+        connections=(f"tcp:127.0.0.1:{port}",) + tuple(
+            f"udpout:127.0.0.1:{p.port}" for p in peers[1:]),
+        target_sysids=SYSIDS, speed_mps=0.0, capture_radius_m=0.0))
+    assert time.monotonic() - t0 < 0.5  # the constructor never waits for TCP
+    with bridge:
+        bridge.set_formation(FORMATION)
+        since = time.monotonic() + 1.0
+        time.sleep(3.0)
+        status = bridge.status()
+    assert status[0].link == "waiting" and not status[0].link_up
+    for peer in peers[1:]:
+        window = [t for t, _ in peer.messages("SET_POSITION_TARGET_LOCAL_NED", since)]
+        assert len(window) == pytest.approx(20, rel=0.2)

@@ -11,7 +11,17 @@ Contract:
   vehicles are reported (`supervision`); setpoints to the others never stop, nor to the lost
   one (PX4 needs the stream on return).
 - LOCAL_POSITION_NED is read back (and requested at 10 Hz with SET_MESSAGE_INTERVAL).
-- Optional arm_and_takeoff (`sequencer`); each COMMAND_ACK is reported as an event.
+- Optional arm_and_takeoff (`sequencer`): readiness (position, mode confirmed from the
+  heartbeat, arming checks retried until `readiness_timeout_s`), arm, take off; each
+  COMMAND_ACK and each new PreArm / Arm STATUSTEXT reason is reported as an event.
+- ArduPilot: no setpoints to a vehicle that is not in GUIDED (nor during its takeoff
+  sequence); PX4: the stream never stops (OFFBOARD needs it before and on return).
+- Each UAV has a `phase` (supervision.phase): waiting for heartbeat / waiting for position /
+  prearm: <reason> / armed / airborne / in formation / lost ...
+- Two planned UAVs closer than `min_separation_m` are warned about (an event per new
+  formation, and `separation` in their status).
+- TCP links connect and reconnect without blocking (`link.TcpClient`), so a dead vehicle is
+  reported lost after `heartbeat_timeout_s` while the others go on.
 
 All I/O runs in one background thread (`start()` / `stop()`); `set_formation`, `status`,
 `link_stats`, `drain_events`, `track_started` and `target` are thread-safe and are what the
@@ -30,10 +40,15 @@ from dataclasses import dataclass, replace
 from uav_insar_planner.mavlink.config import BridgeConfig
 from uav_insar_planner.mavlink.frames import TrackFrame, Vec3
 from uav_insar_planner.mavlink.link import MAV, Link, LinkStats
-from uav_insar_planner.mavlink.sequencer import ArmingSequence, command_name, result_name
+from uav_insar_planner.mavlink.sequencer import (
+    COPTER_MODE_GUIDED,
+    ArmingSequence,
+    command_name,
+    result_name,
+)
 from uav_insar_planner.mavlink.setpoints import setpoint_message
-from uav_insar_planner.mavlink.supervision import WatchedVehicle, is_vehicle_heartbeat
-from uav_insar_planner.mavlink.trajectory import PassTrajectory, clean_formation
+from uav_insar_planner.mavlink.supervision import WatchedVehicle, is_vehicle_heartbeat, phase
+from uav_insar_planner.mavlink.trajectory import PassTrajectory, clean_formation, too_close
 
 __all__ = ["Bridge", "BridgeConfig", "BridgeEvent", "VehicleStatus"]
 
@@ -70,6 +85,10 @@ class VehicleStatus:
     setpoints_sent: int
     sequence: str  # "off" | step being run | "done" | "failed: ..."
     last_ack: str
+    phase: str = ""  # see supervision.phase
+    prearm: str = ""  # the latest arming refusal reason the vehicle sent
+    link_up: bool = True  # False while its TCP link is (re)connecting
+    separation: str = ""  # "" or why this UAV is planned too close to another
 
 
 class Bridge:
@@ -104,6 +123,7 @@ class Bridge:
             raise ValueError(f"connections: {exc}") from None
         self._vehicles = [WatchedVehicle(k, sysid, self._links[address]) for k, (sysid, address)
                           in enumerate(zip(config.target_sysids, addresses, strict=True))]
+        self._separation = [""] * len(self._vehicles)
         self._by_link: dict[int, dict[int, WatchedVehicle]] = {}
         for v in self._vehicles:
             self._by_link.setdefault(id(v.link), {})[v.sysid] = v
@@ -143,6 +163,7 @@ class Bridge:
         with self._lock:
             if self._pass.set_formation(clean):
                 self._event(-1, "info", "new track start: approaching the formation again")
+            self._check_separation(clean)
             if self.config.arm_and_takeoff:
                 for v in self._vehicles:
                     if clean[v.uav] is not None and v.sequence is None:
@@ -187,9 +208,11 @@ class Bridge:
         period = 1.0 / self.config.setpoint_rate_hz
         now = self._clock()
         next_setpoint, next_heartbeat = now, now
-        fds = [fd for fd in (link.fileno() for link in self._links.values()) if fd is not None]
-        must_poll = len(fds) < len(self._links)
         while not self._stop.is_set():
+            # TCP descriptors change on reconnect, and a link without one must be polled
+            fds = [fd for fd in (link.fileno() for link in self._links.values())
+                   if fd is not None]
+            must_poll = len(fds) < len(self._links)
             wait = max(0.0, min(next_setpoint, next_heartbeat) - self._clock())
             if must_poll:
                 wait = min(wait, 0.01)
@@ -219,6 +242,17 @@ class Bridge:
     def _event(self, uav: int, level: str, text: str) -> None:
         self._events.append(BridgeEvent(self._clock(), uav, level, text))
 
+    def _check_separation(self, formation: list[Vec3 | None]) -> None:
+        self._separation = [""] * len(self._vehicles)
+        limit = self.config.min_separation_m
+        for j, k, d in too_close(formation, limit):
+            for a, b in ((j, k), (k, j)):
+                self._separation[a] = (self._separation[a] + "; " if self._separation[a]
+                                       else "") + f"{d:.2f} m from uav{b}"
+            self._event(-1, "warn", f"uav{j} and uav{k} are planned {d:.2f} m apart, closer "
+                                    f"than min_separation_m {limit:g} m (standard GNSS is "
+                                    "good to ~1.5-3 m; RTK needed)")
+
     def _new_sequence(self, v: WatchedVehicle) -> ArmingSequence:
         def start_down() -> float:
             return self.frame.to_ned(*self._pass.start_pose(v.uav))[2]
@@ -227,7 +261,8 @@ class Bridge:
             self.config.autopilot, v,
             send=lambda command, params, confirmation: self._send_command(
                 v, command, params, confirmation),
-            emit=lambda level, text: self._event(v.uav, level, text), start_down=start_down)
+            emit=lambda level, text: self._event(v.uav, level, text), start_down=start_down,
+            readiness_timeout_s=self.config.readiness_timeout_s)
 
     def _handle(self, link: Link, msg: MAV.MAVLink_message, now: float) -> None:
         src = msg.get_srcSystem()
@@ -250,6 +285,14 @@ class Bridge:
                     v.sequence.retry_now()
         elif kind == "LOCAL_POSITION_NED":
             v.on_position(msg, now)
+        elif kind == "STATUSTEXT":
+            reason = v.on_statustext(msg)
+            if reason is not None:
+                self._event(v.uav, "warn", f"sysid {v.sysid} {reason}")
+        elif kind == "GPS_RAW_INT":
+            v.gps_fix = msg.fix_type
+        elif kind == "HOME_POSITION":
+            v.home_seen = True
         elif kind == "COMMAND_ACK":
             if msg.target_system in (0, self.config.source_sysid):
                 self._on_ack(v, msg.command, msg.result, now)
@@ -303,8 +346,9 @@ class Bridge:
     def _send_setpoints(self, now: float) -> None:
         for v in self._vehicles:
             target = self._pass.target(v.uav, now)
-            holding_for_takeoff = self.config.autopilot == "ardupilot" and v.sequence_active
-            if target is None or holding_for_takeoff:
+            ardupilot = self.config.autopilot == "ardupilot"
+            holding = ardupilot and (v.sequence_active or v.custom_mode != COPTER_MODE_GUIDED)
+            if target is None or holding:
                 v.stream_since = None
                 continue
             v.link.send(setpoint_message(v.link.mav, self.frame, target, self._boot_ms(now),
@@ -315,14 +359,18 @@ class Bridge:
 
     def _status(self, v: WatchedVehicle, now: float) -> VehicleStatus:
         target = self._pass.target(v.uav, now)
+        track = None if v.position_ned is None else self.frame.from_ned(*v.position_ned)
+        error = None if track is None or target is None else math.dist(track, target[0])
+        radius = self.config.capture_radius_m if self.config.capture_radius_m > 0 else 1.0
         return VehicleStatus(
             uav=v.uav, sysid=v.sysid, compid=v.compid, connection=v.link.address,
             link=v.link_state,
             heartbeat_age_s=None if v.last_heartbeat is None else now - v.last_heartbeat,
             mode=v.mode, armed=v.armed,
-            position_track=None if v.position_ned is None else self.frame.from_ned(
-                *v.position_ned),
+            position_track=track,
             position_ned=v.position_ned,
             position_age_s=None if v.position_time is None else now - v.position_time,
             target_track=None if target is None else target[0], setpoints_sent=v.setpoints_sent,
-            sequence="off" if v.sequence is None else v.sequence.text(), last_ack=v.last_ack)
+            sequence="off" if v.sequence is None else v.sequence.text(), last_ack=v.last_ack,
+            phase=phase(v, now, error, radius), prearm=v.prearm, link_up=v.link.up,
+            separation=self._separation[v.uav])

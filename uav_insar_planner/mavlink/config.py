@@ -7,6 +7,7 @@ from uav_insar_planner.mavlink.autopilots import AUTOPILOTS
 from uav_insar_planner.mavlink.frames import Vec3
 from uav_insar_planner.mavlink.link import parse_address
 from uav_insar_planner.params import ParamSpec, check_value
+from uav_insar_planner.plan import SAFE_SEPARATION_M as DEFAULT_MIN_SEPARATION_M
 
 # The bridge's parameters (ROS descriptors, README table, BridgeConfig.validate). Defaults
 # pair with `uav-insar-vehicle --sysid 2..4 --listen udpin:127.0.0.1:14552/14562/14572`.
@@ -38,7 +39,14 @@ BRIDGE_SPECS = (
               "its start point; 0: start at once [m]", 0.0, 1e4),
     ParamSpec("heartbeat_timeout_s", float, 5.0, "report a UAV lost after this long without "
               "heartbeat [s]", 0.0, 3600.0, True),
+    ParamSpec("readiness_timeout_s", float, 120.0, "arm_and_takeoff: how long to wait for "
+              "position, mode and a passed arming check (FAILED is retried) before giving up "
+              "[s]", 0.0, 3600.0, True),
+    ParamSpec("min_separation_m", float, DEFAULT_MIN_SEPARATION_M, "warn when two planned "
+              "UAVs are closer than this (standard GNSS ~1.5-3 m, RTK ~0.05 m); 0: no check "
+              "[m]", 0.0, 1e4),
 )
+
 
 
 
@@ -53,6 +61,11 @@ class BridgeConfig:
     - track_duration_s: 0 for an endless pass, else the pass brakes to a stop after it.
     - capture_radius_m: how close every UAV must be to its start before the pass (0: at once).
     - heartbeat_timeout_s: a UAV is lost after this long without a heartbeat.
+    - readiness_timeout_s: with arm_and_takeoff, how long each UAV may take to report a
+      position, hold its mode and pass its arming checks (FAILED / TEMPORARILY_REJECTED are
+      retried meanwhile) before its sequence fails; a cold-booting ArduCopter needs ~45 s.
+    - min_separation_m: the bridge warns when two planned UAVs are closer (0: no check); see
+      DEFAULT_MIN_SEPARATION_M for the figure.
     """
 
     connections: tuple[str, ...]
@@ -68,6 +81,8 @@ class BridgeConfig:
     track_duration_s: float = 0.0
     capture_radius_m: float = 1.0
     heartbeat_timeout_s: float = 5.0
+    readiness_timeout_s: float = 120.0
+    min_separation_m: float = DEFAULT_MIN_SEPARATION_M
 
     def validate(self) -> None:
         """Raise ValueError with one line naming the first bad value and what is allowed."""

@@ -1,14 +1,25 @@
-"""The optional arm-and-take-off sequence of one vehicle, with COMMAND_ACK checks and retries.
+"""The optional readiness-and-arming sequence of one vehicle, the way an operator flies it.
 
-ArduPilot: GUIDED -> arm -> NAV_TAKEOFF to the formation altitude -> wait for the climb; the
-bridge holds the setpoints back until the sequence is done. PX4: stream setpoints > 1 s, then
-OFFBOARD -> arm (the offboard setpoint is the takeoff).
+ArduPilot: wait for position -> GUIDED (confirmed from the heartbeat) -> arm -> NAV_TAKEOFF to
+the formation altitude -> wait for the climb; the bridge holds the setpoints back until the
+sequence is done. PX4: wait for position -> stream setpoints > 1 s -> OFFBOARD (confirmed) ->
+arm (the offboard setpoint is the takeoff).
 
-Each command is sent up to COMMAND_ATTEMPTS times, COMMAND_TIMEOUT_S apart (the confirmation
-field counts the retries). TEMPORARILY_REJECTED is retried up to TEMP_REJECT_ATTEMPTS times,
-IN_PROGRESS waits for the final ACK, any other refusal fails the sequence. Every outcome is
-reported through `emit(level, text)`. A vehicle already armed under our control (and, for
-ArduPilot, airborne) skips the sequence; one already airborne skips the takeoff.
+Contract:
+- "wait for position": `WatchedVehicle.position_ready` (LOCAL_POSITION_NED flowing or a
+  HOME_POSITION; a 3D fix where GPS_RAW_INT is reported).
+- A mode or arm command counts only once a heartbeat received after its ACCEPTED shows the
+  state; else it is sent again after CONFIRM_S. A mode the autopilot dropped later (ArduPilot
+  accepts GUIDED while booting, then falls back to STABILIZE) sends the sequence back to the
+  mode step; a vehicle that disarmed before its takeoff (DISARM_DELAY) back to the arm step.
+- FAILED and TEMPORARILY_REJECTED (ArduPilot answers every failed arming check with FAILED,
+  with the reason in a STATUSTEXT) are retried every RETRY_S until `readiness_timeout_s` after
+  the sequence started; any other refusal (DENIED, UNSUPPORTED, ...) fails at once, and so
+  does a command without any COMMAND_ACK after COMMAND_ATTEMPTS tries, COMMAND_TIMEOUT_S apart
+  (the confirmation field counts them). IN_PROGRESS waits for the final ACK.
+- Every outcome is reported through `emit(level, text)`. A vehicle already armed under our
+  control (and, for ArduPilot, airborne) skips the sequence; one already airborne skips the
+  takeoff.
 """
 from __future__ import annotations
 
@@ -24,8 +35,11 @@ PX4_MAIN_MODE_OFFBOARD = PX4_MODES["OFFBOARD"][0]
 PX4_STREAM_BEFORE_OFFBOARD_S = 1.2  # PX4 wants > 1 s of setpoints; margin for jitter
 COMMAND_TIMEOUT_S = 1.0
 COMMAND_ATTEMPTS = 3
-TEMP_REJECT_ATTEMPTS = 5
+CONFIRM_S = 3.0  # heartbeats come at >= 1 Hz
+RETRY_S = 2.0
+POSITION_MAX_AGE_S = 2.0
 CLIMB_TIMEOUT_EXTRA_S = 20.0
+_RETRIED = (MAV.MAV_RESULT_FAILED, MAV.MAV_RESULT_TEMPORARILY_REJECTED)
 
 SendCommand = Callable[[int, Sequence[float], int], None]  # (command, params, confirmation)
 Emit = Callable[[str, str], None]  # (level, text)
@@ -55,11 +69,12 @@ def arming_steps(autopilot: str) -> list[Step]:
     arm = Step("arm", MAV.MAV_CMD_COMPONENT_ARM_DISARM, (1.0,))
     custom = float(MAV.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED)
     if autopilot == "px4":
-        return [Step("stream setpoints"),
+        return [Step("wait for position"), Step("stream setpoints"),
                 Step("mode OFFBOARD", MAV.MAV_CMD_DO_SET_MODE,
                      (custom, float(PX4_MAIN_MODE_OFFBOARD), 0.0)),
                 arm]
-    return [Step("mode GUIDED", MAV.MAV_CMD_DO_SET_MODE, (custom, float(COPTER_MODE_GUIDED))),
+    return [Step("wait for position"),
+            Step("mode GUIDED", MAV.MAV_CMD_DO_SET_MODE, (custom, float(COPTER_MODE_GUIDED))),
             arm,
             Step("takeoff", MAV.MAV_CMD_NAV_TAKEOFF),
             Step("climb")]
@@ -70,15 +85,21 @@ class ArmingSequence:
     read when the takeoff is sent. Not thread-safe (the bridge holds its lock)."""
 
     def __init__(self, autopilot: str, vehicle: WatchedVehicle, send: SendCommand, emit: Emit,
-                 start_down: Callable[[], float]):
+                 start_down: Callable[[], float], readiness_timeout_s: float = 120.0):
         self.autopilot = autopilot
         self.vehicle = vehicle
         self.steps = arming_steps(autopilot)
         self._send, self._emit, self._start_down = send, emit, start_down
+        self.readiness_timeout_s = readiness_timeout_s
         self.index = 0
         self.sent_at: float | None = None
+        self.accepted_at: float | None = None
+        self.retry_at: float | None = None
+        self.entered_at: float | None = None
         self.attempts = 0
-        self.temp_rejects = 0
+        self.refusals = 0
+        self.deadline: float | None = None
+        self.waiting_for = ""
         self.climb_target_d: float | None = None
         self.climb_height = 0.0
         self.climb_deadline: float | None = None
@@ -87,6 +108,11 @@ class ArmingSequence:
     @property
     def active(self) -> bool:
         return not self.failed and self.index < len(self.steps)
+
+    @property
+    def current(self) -> str:
+        """The name of the step being run ("" when done or failed)."""
+        return self.steps[self.index].name if self.active else ""
 
     def text(self) -> str:
         """"failed: ..." | "done" | the name of the step being run."""
@@ -98,29 +124,50 @@ class ArmingSequence:
 
     def retry_now(self) -> None:
         """The link came back: resend the current step at once, with fresh retry counts."""
-        self.sent_at, self.attempts, self.temp_rejects = None, 0, 0
+        self.sent_at, self.accepted_at, self.retry_at, self.attempts = None, None, None, 0
 
     def step(self, now: float) -> None:
         """Move the sequence on (call often while the vehicle is linked)."""
         v = self.vehicle
+        if self.deadline is None:
+            self.deadline = now + self.readiness_timeout_s
+            self.entered_at = now
+            if self._already_in_control():
+                self.index = len(self.steps)
+                self._emit("info", f"sysid {v.sysid} already armed in {v.mode}; arming "
+                                   "sequence skipped")
+                return
         step = self.steps[self.index]
-        if self.index == 0 and self.sent_at is None and self._already_in_control():
-            self.index = len(self.steps)
-            self._emit("info", f"sysid {v.sysid} already armed in {v.mode}; arming sequence "
-                               "skipped")
+        if step.name != "climb" and now > self.deadline:
+            why = self.waiting_for or v.prearm or step.name
+            self._fail(f"not ready after {self.readiness_timeout_s:g} s ({step.name}: {why})")
+            return
+        if self._regressed(now):
+            return
+        if step.name == "wait for position":
+            self.waiting_for = v.position_ready(now, POSITION_MAX_AGE_S)
+            if not self.waiting_for:
+                self._advance(now)
             return
         if step.name == "stream setpoints":
             if v.stream_since is not None and now - v.stream_since > PX4_STREAM_BEFORE_OFFBOARD_S:
-                self._advance()
+                self._advance(now)
             return
         if step.name == "climb":
             self._step_climb(now)
             return
         if step.command == MAV.MAV_CMD_NAV_TAKEOFF and self.sent_at is None and v.airborne:
             self._emit("info", f"sysid {v.sysid} already airborne; no takeoff")
-            self._advance()
-            self._advance()  # and no climb to wait for
+            self._advance(now)
+            self._advance(now)  # and no climb to wait for
             return
+        if self.accepted_at is not None:
+            self._confirm(step, now)
+            return
+        if self.retry_at is not None:
+            if now < self.retry_at:
+                return
+            self.retry_at = None
         if self.sent_at is None or now - self.sent_at > COMMAND_TIMEOUT_S:
             if self.attempts >= COMMAND_ATTEMPTS:
                 self._fail(f"{step.name}: no COMMAND_ACK after {self.attempts} tries")
@@ -134,28 +181,73 @@ class ArmingSequence:
     def on_ack(self, command: int, result: int, now: float) -> None:
         """A COMMAND_ACK for us while the sequence is active."""
         step = self.steps[self.index]
-        if command != step.command or self.sent_at is None:
+        if command != step.command or self.sent_at is None or self.accepted_at is not None:
             return
         sysid = self.vehicle.sysid
         if result == MAV.MAV_RESULT_ACCEPTED:
             self._emit("info", f"sysid {sysid} {step.name}: ACCEPTED")
-            self._advance()
+            if step.command == MAV.MAV_CMD_NAV_TAKEOFF:
+                self._advance(now)
+            else:
+                self.accepted_at = now
         elif result == MAV.MAV_RESULT_IN_PROGRESS:
             self.sent_at = now  # keep waiting for the final ACK
-        elif result == MAV.MAV_RESULT_TEMPORARILY_REJECTED and \
-                self.temp_rejects < TEMP_REJECT_ATTEMPTS:
-            self.temp_rejects += 1
-            self.attempts = 0  # a rejection is an answer, not a lost packet: retry after 1 s
-            self._emit("warn", f"sysid {sysid} {step.name}: TEMPORARILY_REJECTED, retrying")
+        elif result in _RETRIED:
+            self.refusals += 1
+            self.sent_at, self.attempts, self.retry_at = None, 0, now + RETRY_S
+            if self.refusals == 1 or self.refusals % 10 == 0:
+                reason = f" ({self.vehicle.prearm})" if self.vehicle.prearm else ""
+                self._emit("warn", f"sysid {sysid} {step.name}: {result_name(result)}{reason}; "
+                                   f"retrying every {RETRY_S:g} s until ready "
+                                   f"(refusal {self.refusals})")
         else:
             self._fail(f"{step.name}: {result_name(result)}")
+
+    # ------------------------------------------------------------------ internals
+    def _in_mode(self) -> bool:
+        v = self.vehicle
+        if self.autopilot == "px4":
+            return (v.custom_mode & PX4_MAIN_MODE_MASK) == PX4_MAIN_MODE_OFFBOARD << 16
+        return v.custom_mode == COPTER_MODE_GUIDED
+
+    def _heard_since(self, t: float | None) -> bool:
+        """A heartbeat arrived after time `t` (so it shows the state after that moment)."""
+        last = self.vehicle.last_heartbeat
+        return t is not None and last is not None and last > t
+
+    def _confirm(self, step: Step, now: float) -> None:
+        ok = self.vehicle.armed if step.name == "arm" else self._in_mode()
+        if self._heard_since(self.accepted_at) and ok:
+            self._advance(now)
+        elif now - self.accepted_at > CONFIRM_S:
+            self._emit("warn", f"sysid {self.vehicle.sysid} {step.name}: ACCEPTED but the "
+                               f"heartbeat still says {self.vehicle.mode}, "
+                               f"{'armed' if self.vehicle.armed else 'disarmed'}; again")
+            self.accepted_at, self.sent_at, self.attempts = None, None, 0
+
+    def _regressed(self, now: float) -> bool:
+        """Go back a step when the heartbeat shows the autopilot undid one; True if so."""
+        names = [s.name for s in self.steps]
+        mode_index = next(i for i, n in enumerate(names) if n.startswith("mode"))
+        step = self.steps[self.index].name
+        v = self.vehicle
+        if step in ("arm", "takeoff") and self._heard_since(self.entered_at) \
+                and not self._in_mode() and not (step == "arm" and self.accepted_at):
+            self._emit("warn", f"sysid {v.sysid}: mode is {v.mode}, not {names[mode_index][5:]}"
+                               f" any more; setting it again")
+            self._go_to(mode_index, now)
+            return True
+        if step == "takeoff" and self._heard_since(self.entered_at) and not v.armed:
+            self._emit("warn", f"sysid {v.sysid} disarmed before its takeoff; arming again")
+            self._go_to(names.index("arm"), now)
+            return True
+        return False
 
     def _already_in_control(self) -> bool:
         v = self.vehicle
         if self.autopilot == "px4":
-            return v.armed and (v.custom_mode & PX4_MAIN_MODE_MASK) == \
-                PX4_MAIN_MODE_OFFBOARD << 16
-        return v.armed and v.custom_mode == COPTER_MODE_GUIDED and v.airborne
+            return v.armed and self._in_mode()
+        return v.armed and self._in_mode() and v.airborne
 
     def _takeoff_altitude(self) -> float:
         """Metres above the current (home) height up to the formation's start height."""
@@ -175,15 +267,19 @@ class ArmingSequence:
         reached = (v.position_ned is not None and self.climb_target_d is not None
                    and v.position_ned[2] <= self.climb_target_d + 1.0)
         if reached:
-            self._advance()
+            self._advance(now)
         elif now > self.climb_deadline:
             self._emit("warn", f"sysid {v.sysid}: takeoff altitude not confirmed by "
                                "LOCAL_POSITION_NED; streaming setpoints anyway")
-            self._advance()
+            self._advance(now)
 
-    def _advance(self) -> None:
-        self.index += 1
-        self.sent_at, self.attempts, self.temp_rejects = None, 0, 0
+    def _go_to(self, index: int, now: float) -> None:
+        self.index, self.entered_at = index, now
+        self.sent_at, self.accepted_at, self.retry_at = None, None, None
+        self.attempts = self.refusals = 0
+
+    def _advance(self, now: float) -> None:
+        self._go_to(self.index + 1, now)
         if self.index >= len(self.steps):
             self._emit("info", f"sysid {self.vehicle.sysid}: armed and under our control")
 

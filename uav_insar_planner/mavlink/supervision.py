@@ -2,7 +2,9 @@
 
 A UAV is found on its first vehicle HEARTBEAT (one from a camera, GCS or companion on the same
 sysid does not count), lost after `heartbeat_timeout_s` without one, and found again when one
-returns. LOCAL_POSITION_NED is kept with the time it arrived.
+returns. LOCAL_POSITION_NED is kept with the time it arrived; HOME_POSITION, the GPS fix
+(GPS_RAW_INT) and the latest arming refusal reason (STATUSTEXT "PreArm: ..." / "Arm: ...") are
+kept for the readiness phase (`position_ready`, `prearm`).
 """
 from __future__ import annotations
 
@@ -46,6 +48,29 @@ class WatchedVehicle:
     stream_since: float | None = None
     last_ack: str = ""
     sequence: ArmingSequence | None = None
+    home_seen: bool = False
+    gps_fix: int | None = None  # GPS_RAW_INT.fix_type, None: never reported
+    prearm: str = ""  # the latest arming refusal reason, "" once armed
+
+    def position_ready(self, now: float, max_age_s: float) -> str:
+        """"" when the vehicle reports a usable position (LOCAL_POSITION_NED flowing, i.e. an
+        EKF origin, or a HOME_POSITION; and a 3D fix where GPS_RAW_INT is reported), else
+        what is missing."""
+        if self.gps_fix is not None and self.gps_fix < MAV.GPS_FIX_TYPE_3D_FIX:
+            return f"waiting for a GPS 3D fix (fix type {self.gps_fix})"
+        if not (self.position_fresh(now, max_age_s) or self.home_seen):
+            return "waiting for position (LOCAL_POSITION_NED / HOME_POSITION)"
+        return ""
+
+    def on_statustext(self, msg: MAV.MAVLink_message) -> str | None:
+        """Take a STATUSTEXT; return the reason when it is a new arming refusal."""
+        text = msg.text.rstrip("\x00").strip() if isinstance(msg.text, str) else ""
+        if not text.lower().startswith(("prearm", "arm:")):
+            return None
+        if text == self.prearm:
+            return None
+        self.prearm = text
+        return text
 
     @property
     def link_state(self) -> str:
@@ -73,6 +98,8 @@ class WatchedVehicle:
         self.mode = mavutil.mode_string_v10(msg)
         self.custom_mode = msg.custom_mode
         self.armed = bool(msg.base_mode & MAV.MAV_MODE_FLAG_SAFETY_ARMED)
+        if self.armed:
+            self.prearm = ""
         if self.linked:
             return None
         self.linked = True
@@ -93,3 +120,35 @@ class WatchedVehicle:
 
     def position_fresh(self, now: float, max_age_s: float) -> bool:
         return self.position_time is not None and now - self.position_time < max_age_s
+
+
+def phase(v: WatchedVehicle, now: float, error_m: float | None, formation_radius_m: float,
+          lost_text: str = "lost") -> str:
+    """What an operator would say the UAV is doing, for the log and /diagnostics:
+    "waiting for heartbeat" | "lost" | "failed: ..." | the readiness step ("waiting for
+    position ...", "setting mode GUIDED (now STABILIZE)", "prearm: <reason>", "arming",
+    "taking off", "streaming setpoints before OFFBOARD") | "disarmed" | "armed" | "airborne" |
+    "in formation" (within `formation_radius_m` of its target)."""
+    if not v.linked:
+        return lost_text if v.last_heartbeat is not None else "waiting for heartbeat"
+    seq = v.sequence
+    if seq is not None and seq.failed:
+        return "failed: " + seq.failed
+    if seq is not None and seq.active:
+        step = seq.current
+        if step == "wait for position":
+            return seq.waiting_for or "waiting for position"
+        if step.startswith("mode"):
+            return f"setting mode {step[5:]} (now {v.mode})"
+        if step == "arm" and not v.armed:
+            return f"prearm: {v.prearm}" if v.prearm else "arming"
+        if step == "stream setpoints":
+            return "streaming setpoints before OFFBOARD"
+        return "armed, taking off"
+    if not v.armed:
+        if v.prearm:
+            return f"prearm: {v.prearm}"
+        return v.position_ready(now, 2.0) or "disarmed"
+    if error_m is not None and error_m <= formation_radius_m and v.airborne:
+        return "in formation"
+    return "airborne" if v.airborne else "armed"

@@ -83,3 +83,19 @@ class PassTrajectory:
             return (x, y, z), (0.0, 0.0, 0.0)
         offset, speed = braked_pass(now - self.t_start, self.speed_mps, self.track_duration_s)
         return (x, y + offset, z), (0.0, speed, 0.0)
+
+
+def too_close(formation: Sequence[Vec3 | None], min_separation_m: float
+              ) -> list[tuple[int, int, float]]:
+    """Every pair (j, k, distance) of flown UAVs planned closer than `min_separation_m`
+    (0: no check). Their positions are only as good as their GNSS (see config
+    DEFAULT_MIN_SEPARATION_M), so a plan below that figure risks a collision."""
+    out = []
+    for j in range(len(formation)):
+        for k in range(j + 1, len(formation)):
+            a, b = formation[j], formation[k]
+            if a is not None and b is not None and min_separation_m > 0.0:
+                d = math.dist(a, b)
+                if d < min_separation_m:
+                    out.append((j, k, d))
+    return out

@@ -5,7 +5,7 @@ Parameters (mavlink/config.py BRIDGE_SPECS, all read-only: the links are opened 
   connections (string[]), target_sysids (int[]), source_sysid, track_bearing_deg,
   origin_ned_m (double[3], N E D), setpoint_rate_hz, velocity_feedforward, arm_and_takeoff,
   autopilot (ardupilot|px4), speed_mps, track_duration_s, capture_radius_m,
-  heartbeat_timeout_s.
+  heartbeat_timeout_s, readiness_timeout_s, min_separation_m.
 A bad value or unknown name logs one line and exits with code 2 before anything is published
 or opened.
 
@@ -14,7 +14,11 @@ Subscribes  formation (geometry_msgs/PoseArray, reliable + transient_local, dept
 Publishes   uav{K}/mavlink/pose (geometry_msgs/PoseStamped, frame insar_track), the
             vehicle's LOCAL_POSITION_NED in the track frame, each time a new one arrives;
             /diagnostics (diagnostic_msgs/DiagnosticArray) once a second, one status per UAV:
-            link state, mode, arming sequence, position error, link counters.
+            its `phase` (waiting for heartbeat / waiting for position / prearm: <reason> /
+            armed / airborne / in formation / lost ...), link state, mode, arming sequence,
+            PreArm reason, position error, separation warning, link counters. Level ERROR:
+            I/O thread dead or sequence failed; WARN: not linked, or planned closer than
+            min_separation_m to another UAV; else OK.
 """
 from __future__ import annotations
 
@@ -129,11 +133,14 @@ class MavlinkBridgeNode(Node):
             level, text = DiagnosticStatus.ERROR, f"arming sequence {s.sequence}"
         elif s.link != "linked":
             level = DiagnosticStatus.WARN
-            text = ("no heartbeat yet" if s.link == "waiting"
+            text = ("waiting for heartbeat" if s.link == "waiting"
                     else f"lost: no heartbeat for {s.heartbeat_age_s:.1f} s")
         else:
             level = DiagnosticStatus.OK
-            text = f"linked, {s.mode}, {'armed' if s.armed else 'disarmed'}"
+            text = f"linked, {s.mode}, {'armed' if s.armed else 'disarmed'}: {s.phase}"
+        if s.separation:
+            level = max(level, DiagnosticStatus.WARN)
+            text += f"; planned too close: {s.separation}"
         error = (math.dist(s.position_track, s.target_track)
                  if s.position_track is not None and s.target_track is not None else None)
 
@@ -144,9 +151,11 @@ class MavlinkBridgeNode(Node):
                 return " ".join(f"{c:.3f}" for c in v)
             return f"{v:.3f}" if isinstance(v, float) else str(v)
 
-        values = [("connection", s.connection), ("sysid", s.sysid), ("compid", s.compid),
-                  ("link", s.link), ("heartbeat_age_s", s.heartbeat_age_s), ("mode", s.mode),
-                  ("armed", s.armed), ("sequence", s.sequence), ("last_ack", s.last_ack),
+        values = [("phase", s.phase), ("connection", s.connection), ("sysid", s.sysid),
+                  ("compid", s.compid), ("link", s.link), ("link_up", s.link_up),
+                  ("heartbeat_age_s", s.heartbeat_age_s), ("mode", s.mode),
+                  ("armed", s.armed), ("sequence", s.sequence), ("prearm", s.prearm),
+                  ("last_ack", s.last_ack), ("separation", s.separation),
                   ("setpoints_sent", s.setpoints_sent), ("target_track_m", s.target_track),
                   ("position_track_m", s.position_track), ("position_error_m", error),
                   ("rx_messages", link.rx_messages), ("bad_data", link.bad_data),
