@@ -126,6 +126,8 @@ BAD_FILES = {
     "empty file": ("", "is empty", "ros__parameters"),
     "not YAML": ("a: [\n", "is not valid YAML", "line"),
     "no ros__parameters": ('"/**":\n  num_slots: 3\n', "must hold a 'ros__parameters'", ""),
+    "aliases": ('"/**":\n  ros__parameters:\n    ground_station_m: &g [1.0, 2.0, 3.0]\n'
+                "    rate_min_mbps: *g\n", "aliases are not allowed", "line 4"),
 }
 
 

@@ -67,6 +67,9 @@ BAD_FILES = {
               "z_min_m: value 120.0 is not allowed; expected less than z_max_m (100.0)"),
     "yaml": ('"/**":\n  ros__parameters: [\n', "is not valid YAML"),
     "layout": ("looks: 4\n", "must hold a 'ros__parameters' mapping"),
+    # 478 bytes of nested aliases once took 22 s and 2.4 GB to expand.
+    "aliases": ("a: &a [x, x, x, x, x, x, x, x, x]\nb: &b [*a, *a, *a, *a, *a, *a, *a, *a, *a]\n"
+                "c: [*b, *b, *b, *b, *b, *b, *b, *b, *b]\n", "aliases are not allowed"),
 }
 
 
@@ -83,6 +86,18 @@ def test_bad_params_file_cli(tmp_path, case):
     assert len(lines) == 1, proc.stderr
     assert expected in lines[0]
     assert "Traceback" not in proc.stderr
+
+
+@pytest.mark.parametrize("path,expected", [("/dev/zero", "larger than 1048576 bytes"),
+                                           ("latin1", "is not UTF-8")])
+def test_unreadable_kinds_of_params_file_are_one_line(tmp_path, path, expected):
+    if path == "latin1":
+        path = tmp_path / "p.yaml"
+        path.write_bytes(b'"/**":\n  ros__parameters:\n    scheme: "\xe9"\n')
+    proc = subprocess.run([sys.executable, "-m", "uav_insar_planner.cli", "solve", "--params",
+                           str(path)], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 2 and expected in proc.stderr, proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1
 
 
 def test_missing_file_and_bad_set(tmp_path):

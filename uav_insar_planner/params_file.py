@@ -14,10 +14,19 @@ import yaml
 
 from uav_insar_planner.params import ParamError, Params, params_from_mapping
 
+PARAMS_FILE_MAX_BYTES = 1 << 20
+
 
 class _RosYamlLoader(yaml.SafeLoader):
     """YAML 1.1 safe loader that also reads `1e9` and `1.0e9` as floats, as ROS 2's params
-    parser does (PyYAML's 1.1 resolver wants a signed exponent)."""
+    parser does (PyYAML's 1.1 resolver wants a signed exponent), and refuses aliases: a params
+    file needs none, and nested aliases make a few hundred bytes expand to gigabytes."""
+
+    def compose_node(self, parent: Any, index: Any) -> Any:
+        if self.check_event(yaml.events.AliasEvent):
+            raise yaml.composer.ComposerError(None, None, "aliases are not allowed",
+                                              self.peek_event().start_mark)
+        return super().compose_node(parent, index)
 
 
 _RosYamlLoader.add_implicit_resolver(
@@ -32,6 +41,31 @@ def yaml_load(text: str) -> Any:
     return yaml.load(text, Loader=_RosYamlLoader)  # noqa: S506 - a SafeLoader subclass
 
 
+def read_yaml_file(path: str | Path) -> Any:
+    """The YAML document in file `path`; ParamError with one line when it is not a readable,
+    UTF-8, alias-free YAML file of at most PARAMS_FILE_MAX_BYTES (read no further)."""
+    where = f"params file {str(path)[:200]!r}"
+    try:
+        with open(path, "rb") as f:
+            raw = f.read(PARAMS_FILE_MAX_BYTES + 1)
+    except OSError as exc:
+        raise ParamError([f"{where}: cannot be read ({exc.strerror or exc}); expected a "
+                          "readable file"]) from None
+    if len(raw) > PARAMS_FILE_MAX_BYTES:
+        raise ParamError([f"{where}: larger than {PARAMS_FILE_MAX_BYTES} bytes; expected a "
+                          "params file"])
+    try:
+        return yaml_load(raw.decode("utf-8"))
+    except UnicodeDecodeError:
+        raise ParamError([f"{where}: is not UTF-8 text; expected a YAML params file"]) from None
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        at = f" at line {mark.line + 1}" if mark else ""
+        why = f" ({exc.problem})" if getattr(exc, "problem", None) else ""
+        raise ParamError([f"{where}: is not valid YAML{at}{why}; expected '/**:' or 'NODE:' "
+                          "sections with ros__parameters"]) from None
+
+
 def read_params_file(path: str | Path, node_name: str = "planner") -> dict[str, Any]:
     """Read a ROS 2 params file: the "/**" section, then the node's own section on top.
 
@@ -39,15 +73,7 @@ def read_params_file(path: str | Path, node_name: str = "planner") -> dict[str, 
     (rclpy matches the fully qualified name; we accept `planner`, `/planner`, `/ns/planner`).
     Raises ParamError with one line when the file is unreadable or not in that format.
     """
-    path = Path(path)
-    try:
-        doc = yaml_load(path.read_text())
-    except OSError as exc:
-        raise ParamError([f"params file: {str(path)!r} cannot be read ({exc.strerror})"]) from None
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}" if mark else ""
-        raise ParamError([f"params file: {str(path)!r} is not valid YAML{where}"]) from None
+    doc = read_yaml_file(path)
     if not isinstance(doc, dict):
         raise ParamError([f"params file: {str(path)!r} must map node names to "
                           "{ros__parameters: {...}}"])

@@ -13,24 +13,22 @@ import re
 import signal
 import sys
 from collections.abc import Callable, Iterator, Sequence
-from pathlib import Path
 from typing import Any
 
 import rclpy
 import rclpy.logging
-import yaml
 from rclpy.executors import ExternalShutdownException
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 
-from uav_insar_planner.params_file import yaml_load
+from uav_insar_planner.params import ParamError
+from uav_insar_planner.params_file import read_yaml_file
 
 EXIT_BAD_PARAMS = 2
 # Fast DDS derives its ports from the domain id; above 232 they pass 65535 and the process
 # aborts inside the middleware.
 DOMAIN_ID_MAX = 232
 SUITE_NODE_NAMES = ("planner", "agent", "mavlink_bridge")
-PARAMS_FILE_MAX_BYTES = 1 << 20
 
 
 def params_files(args: Sequence[str]) -> Iterator[str]:
@@ -70,19 +68,9 @@ def params_file_problems(path: str, own_name: str) -> list[str]:
     """One line per problem of params file `path` for a node named `own_name`."""
     where = f"params file {path!r}"
     try:
-        p = Path(path)
-        if p.is_file() and p.stat().st_size > PARAMS_FILE_MAX_BYTES:
-            return [f"{where}: larger than {PARAMS_FILE_MAX_BYTES} bytes; expected a params file"]
-        doc = yaml_load(p.read_bytes().decode("utf-8"))
-    except OSError as exc:
-        return [f"{where}: cannot be read ({exc.strerror or exc}); expected a readable file"]
-    except UnicodeDecodeError:
-        return [f"{where}: is not UTF-8 text; expected a YAML params file"]
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        at = f" at line {mark.line + 1}" if mark else ""
-        return [f"{where}: is not valid YAML{at}; expected '/**:' or 'NODE:' sections with "
-                "ros__parameters"]
+        doc = read_yaml_file(path)
+    except ParamError as exc:
+        return exc.problems
     if doc is None or doc == {}:
         return [f"{where}: is empty; expected '/**:' or 'NODE:' sections with "
                 "ros__parameters"]
