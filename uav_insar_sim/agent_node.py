@@ -4,7 +4,11 @@ Waits for the latched `formation` and `formation/power`, flies to its across-tra
 (x_k, z_k), then runs the stripmap track slot by slot (slots.SlotSchedule), applying P_com[k][n]
 in slot n and computing the rate it achieves from where it actually is. Publishes
 `uav{K}/pose` (PoseStamped, every tick and at each slot start) and `uav{K}/achieved_rate`
-(Float64, bit/s, one message per slot, at the slot start). A new plan re-targets the UAV
+(Float64, bit/s, one message per slot, at the slot start) and, next to it, `uav{K}/offload`
+(Float64MultiArray [slot, power_w, energy_used_j, energy_left_j], topics.OFFLOAD_FIELDS):
+the power applied in the slot and the energy used and left of E_com^max. The power is the
+plan's P_com[k][n] (`offloading: open`, the default) or the closed-loop choice
+(`offloading: closed`, offload.ClosedLoopOffload). A new plan re-targets the UAV
 without restarting the slot clock, so a planner restart (same latched plan) changes nothing.
 
 How the UAV flies is chosen once at start-up (`flight.choose_flight`): by itself on the
@@ -13,13 +17,16 @@ embedded SITL-style vehicle (sysid `mavlink_sysid`, 0 = 2 + uav_id like the brid
 target_sysids) that `mavlink_bridge` flies; the agent then reads the vehicle's position
 (converted to the track frame with `track_bearing_deg` and `origin_ned_m`, which must match
 the bridge's; default N = y, E = x, D = -z) and slot n starts when the vehicle crosses
-y = n v_y delta_t. `time_scale` and the position noise do not apply then.
+y = n v_y delta_t. `time_scale`, the position noise and the wind do not apply then.
 
 Parameters (ros/parameters.py, all read-only: a mission is set up once): uav_id, time_scale
 (mission seconds per wall second), position_noise_std_m, noise_seed, max_speed_mps,
-max_accel_mps2 (AGENT_SPECS), mavlink_listen, mavlink_sysid, track_bearing_deg, origin_ned_m
-(MAVLINK_SPECS) and the scenario parameters of AGENT_SCENARIO_NAMES from params.PARAM_SPECS, so
-one params file serves every node. Invalid values or unknown names log one line each and exit
+max_accel_mps2, offloading, the simulated link's shadowing_std_db, shadowing_corr_m,
+small_scale_fading, rician_k_db, fading_seed and the wind's wind_mps, gust_std_mps, gust_tau_s
+(AGENT_SPECS, all off by default, so the link is the paper's model), mavlink_listen,
+mavlink_sysid, track_bearing_deg, origin_ned_m (MAVLINK_SPECS) and the scenario parameters of
+AGENT_SCENARIO_NAMES from params.PARAM_SPECS (P_max and E_max included, for the closed loop),
+so one params file serves every node. Invalid values or unknown names log one line each and exit
 with code 2.
 """
 from __future__ import annotations
@@ -28,7 +35,7 @@ import sys
 
 from geometry_msgs.msg import PoseArray, PoseStamped
 from rclpy.node import Node
-from std_msgs.msg import Float64, Float64MultiArray
+from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension
 
 from uav_insar_planner.evaluate import rate_tolerance_bps
 from uav_insar_planner.params import ParamError, params_from_mapping
@@ -86,6 +93,8 @@ class AgentNode(Node):
         self._pose_pub = self.create_publisher(PoseStamped, topics.pose(self.k), topics.DEPTH)
         self._rate_pub = self.create_publisher(Float64, topics.achieved_rate(self.k),
                                                topics.RATE_DEPTH)
+        self._offload_pub = self.create_publisher(Float64MultiArray, topics.offload(self.k),
+                                                  topics.RATE_DEPTH)
         self.create_subscription(PoseArray, topics.FORMATION, self._on_formation,
                                  topics.LATCHED)
         self.create_subscription(Float64MultiArray, topics.POWER, self._on_power, topics.LATCHED)
@@ -133,6 +142,7 @@ class AgentNode(Node):
         for sample in self.flight.tick():
             self._publish_pose(sample.position)
             self._rate_pub.publish(Float64(data=sample.rate_bps))
+            self._publish_offload(sample)
         self._publish_pose(self.mission.actual_position())
         if self.mission.phase != self._phase:
             self._phase = self.mission.phase
@@ -145,6 +155,15 @@ class AgentNode(Node):
         msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = position
         msg.pose.orientation.w = 1.0
         self._pose_pub.publish(msg)
+
+    def _publish_offload(self, sample) -> None:
+        size = len(topics.OFFLOAD_FIELDS)
+        msg = Float64MultiArray()
+        msg.layout.dim = [MultiArrayDimension(label=",".join(topics.OFFLOAD_FIELDS), size=size,
+                                              stride=size)]
+        msg.data = [float(sample.slot), sample.power_w, sample.energy_used_j,
+                    sample.energy_left_j]
+        self._offload_pub.publish(msg)
 
     def _log_phase(self) -> None:
         log = self.get_logger()

@@ -4,8 +4,11 @@
   when the plan arrives and runs `time_scale` mission seconds per wall second.
 - `MavlinkFlight`: an embedded SITL-style vehicle (`vehicle.SimVehicle`) that the MAVLink
   bridge flies; the agent reads its position, converted to the track frame, and runs the
-  schedule on it (`observed_mission.ObservedMission`). time_scale and the position noise do
-  not apply then.
+  schedule on it (`observed_mission.ObservedMission`). time_scale, the position noise and
+  the wind do not apply then.
+
+In both, the simulated link fading (`fading.LinkFading`) and the offloading law (open loop:
+the plan's powers; closed: `offload.ClosedLoopOffload`) are the agent parameters' (`link_of`).
 
 Both offer the same calls: `start()` (returns a line to log, or ""), `stop()`,
 `set_plan(x, y, z, powers)`, `tick() -> started slots`, and `mission` (the slot schedule).
@@ -17,10 +20,13 @@ from collections.abc import Sequence
 
 from uav_insar_planner.mavlink.frames import TrackFrame
 from uav_insar_planner.params import Params
+from uav_insar_sim.fading import LinkFading
 from uav_insar_sim.mission import Mission, home_position
 from uav_insar_sim.observed_mission import ObservedMission
+from uav_insar_sim.offload import ClosedLoopOffload
 from uav_insar_sim.slots import SlotSample
 from uav_insar_sim.vehicle import SimVehicle
+from uav_insar_sim.wind import Wind
 
 # MAVLink mode: the embedded vehicle starts airborne (no arming needed) above the agent's home.
 MAVLINK_START_HEIGHT_M = 10.0
@@ -93,14 +99,26 @@ def choose_flight(own: dict, params: Params) -> SelfFlight | MavlinkFlight:
 
     ValueError (one line) for a bad value, e.g. max_speed_mps below speed_mps (checked in
     both modes) or a bad connection string."""
-    mission = Mission(own["uav_id"], params, own["max_speed_mps"], own["max_accel_mps2"],
-                      own["position_noise_std_m"], own["noise_seed"])
+    k = own["uav_id"]
+    wind = Wind(own["wind_mps"], own["gust_std_mps"], own["gust_tau_s"], own["fading_seed"], k)
+    mission = Mission(k, params, own["max_speed_mps"], own["max_accel_mps2"],
+                      own["position_noise_std_m"], own["noise_seed"], wind, *link_of(own, params))
     if not own["mavlink_listen"]:
         return SelfFlight(mission, own["time_scale"])
     # The embedded vehicle's local NED relates to the track as the bridge's does.
     frame = TrackFrame.from_degrees(own["track_bearing_deg"], own["origin_ned_m"])
-    return MavlinkFlight(ObservedMission(own["uav_id"], params), embedded_vehicle(own, frame),
-                         frame, own["mavlink_listen"])
+    return MavlinkFlight(ObservedMission(k, params, *link_of(own, params)),
+                         embedded_vehicle(own, frame), frame, own["mavlink_listen"])
+
+
+def link_of(own: dict, params: Params) -> tuple[LinkFading | None, ClosedLoopOffload | None]:
+    """(fading, controller) for the agent parameters `own`; None where off / open loop."""
+    k = own["uav_id"]
+    k_db = own["rician_k_db"] if own["small_scale_fading"] == "rician" else None
+    fading = LinkFading(own["shadowing_std_db"], own["shadowing_corr_m"], k_db,
+                        own["fading_seed"], k)
+    controller = ClosedLoopOffload(k, params) if own["offloading"] == "closed" else None
+    return (None if fading.off else fading), controller
 
 
 def embedded_vehicle(own: dict, frame: TrackFrame) -> SimVehicle:

@@ -15,14 +15,17 @@ from collections.abc import Sequence
 
 from uav_insar_planner.mavlink.frames import Vec3
 from uav_insar_planner.params import Params
+from uav_insar_sim.fading import LinkFading
+from uav_insar_sim.offload import ClosedLoopOffload
 from uav_insar_sim.slots import SlotSample, SlotSchedule
 
 
 class ObservedMission(SlotSchedule):
     """Slots of UAV `uav_id` under `params` (SI), triggered by the observed position."""
 
-    def __init__(self, uav_id: int, params: Params):
-        super().__init__(uav_id, params)
+    def __init__(self, uav_id: int, params: Params, fading: LinkFading | None = None,
+                 controller: ClosedLoopOffload | None = None):
+        super().__init__(uav_id, params, fading, controller)
         self._last: Vec3 | None = None
 
     def actual_position(self) -> Vec3 | None:

@@ -2,7 +2,8 @@
 
 The planner sizes P_com[k][n] for the planned position q_k[n] = (x_k, y[n], z_k); the agent
 calls `achieved_rate` with where it actually is, so any position error shows up as a rate
-margin (positive closer to the station, negative farther away).
+margin (positive closer to the station, negative farther away). `gain` is the simulated
+link's channel power gain (fading.LinkFading; 1, the default, is the paper's link exactly).
 """
 from __future__ import annotations
 
@@ -12,8 +13,11 @@ from uav_insar_planner import model
 
 
 def achieved_rate(position: Sequence[float], p_com_w: float,
-                  station: Sequence[float], bandwidth_hz: float, beta_c: float) -> float:
-    """R = B_c log2(1 + P_com beta_c / d^2) in bit/s, d = |position - station| (3-D, metres)."""
+                  station: Sequence[float], bandwidth_hz: float, beta_c: float,
+                  gain: float = 1.0) -> float:
+    """R = B_c log2(1 + P_com g beta_c / d^2) in bit/s, d = |position - station| (3-D,
+    metres), g = `gain`."""
     x, y, z = position
     d = model.distance_to_station(x, y, z, tuple(station))
-    return float(model.fdma_rate(p_com_w, d, bandwidth_hz, beta_c))
+    power = p_com_w if gain == 1.0 else p_com_w * gain
+    return float(model.fdma_rate(power, d, bandwidth_hz, beta_c))

@@ -7,6 +7,11 @@ running) -> `done` (every slot flown). `idle` means the plan does not fly this U
 (the model's y[n]). A position source decides when the UAV is there and calls `start_slot`
 with where it actually is: `mission.Mission` flies the UAV itself on the mission clock,
 `observed_mission.ObservedMission` watches a vehicle something else flies.
+
+The link may differ from the plan (`fading.LinkFading`, off by default) and the power applied
+is the plan's P_com[k][n] (open loop, the default) or the closed-loop choice of
+`offload.ClosedLoopOffload`; each sample carries the power applied and the energy used so far
+against E_com^max.
 """
 from __future__ import annotations
 
@@ -16,6 +21,8 @@ from dataclasses import dataclass
 
 from uav_insar_planner.mavlink.frames import Vec3
 from uav_insar_planner.params import Params
+from uav_insar_sim.fading import LinkFading
+from uav_insar_sim.offload import ClosedLoopOffload
 from uav_insar_sim.radio import achieved_rate
 
 
@@ -28,6 +35,10 @@ class SlotSample:
     power_w: float
     rate_bps: float
     rate_min_bps: float
+    planned_power_w: float = math.nan
+    gain: float = 1.0  # channel power gain of the simulated link (1: the paper's)
+    energy_used_j: float = 0.0  # this slot included
+    energy_left_j: float = math.nan  # E_com^max - energy_used_j
 
     @property
     def margin_bps(self) -> float:
@@ -35,11 +46,15 @@ class SlotSample:
 
 
 class SlotSchedule:
-    """The plan and the slots of agent `uav_id` under `params` (SI)."""
+    """The plan and the slots of agent `uav_id` under `params` (SI), over the link `fading`
+    (None: the paper's), with the closed-loop `controller` (None: open loop)."""
 
-    def __init__(self, uav_id: int, params: Params):
+    def __init__(self, uav_id: int, params: Params, fading: LinkFading | None = None,
+                 controller: ClosedLoopOffload | None = None):
         self.uav_id = uav_id
         self.params = params
+        self.fading = fading
+        self.controller = controller
         self.phase = "wait"
         self.y_start = 0.0
         self.target_xz: tuple[float, float] | None = None
@@ -78,12 +93,22 @@ class SlotSchedule:
         return self.y_start + n * self.params.speed * self.params.slot_duration_s
 
     def start_slot(self, position: Vec3) -> SlotSample:
-        """Start the next slot with the UAV at `position`: its P_com and the rate there."""
+        """Start the next slot with the UAV at `position`: the power applied (the plan's, or
+        the controller's) and the rate there over the (possibly faded) link."""
         p = self.params
         n = len(self.samples)
-        rate = achieved_rate(position, self.powers[n], p.ground_station, p.comm_bandwidth_hz,
-                             p.beta_c)
-        sample = SlotSample(n, position, self.powers[n], rate, p.rate_min_bps[self.uav_id])
+        used = self.samples[-1].energy_used_j if self.samples else 0.0
+        planned = self.powers[n]
+        power = planned if self.controller is None else self.controller.power(
+            n, position, self.powers, used)
+        gain = 1.0 if self.fading is None else self.fading.gain(position)
+        rate = achieved_rate(position, power, p.ground_station, p.comm_bandwidth_hz,
+                             p.beta_c, gain)
+        used += power * p.slot_duration_s
+        sample = SlotSample(n, position, power, rate, p.rate_min_bps[self.uav_id], planned,
+                            gain, used, p.e_max_j - used)
+        if self.controller is not None:
+            self.controller.observe(position, power, rate)
         self.samples.append(sample)
         self.phase = "track"
         return sample

@@ -42,6 +42,25 @@ AGENT_SPECS = (
     ParamSpec("max_speed_mps", float, 10.0, "speed limit [m/s], at least speed_mps", 0.0,
               100.0, True),
     ParamSpec("max_accel_mps2", float, 3.0, "acceleration limit [m/s^2]", 0.0, 50.0, True),
+    ParamSpec("offloading", str, "open", "power per slot: open = the plan's P_com[k][n], "
+              "closed = least power meeting R_min from the measured rate and position",
+              choices=("open", "closed")),
+    ParamSpec("shadowing_std_db", float, 0.0, "simulated link: std of the log-normal "
+              "shadowing [dB] (0: off)", 0.0, 30.0),
+    ParamSpec("shadowing_corr_m", float, 20.0, "simulated link: correlation length of the "
+              "shadowing along the track [m]", 0.0, 10000.0, True),
+    ParamSpec("small_scale_fading", str, "off", "simulated link: small-scale fading, off or "
+              "rician (K-factor rician_k_db)", choices=("off", "rician")),
+    ParamSpec("rician_k_db", float, 10.0, "simulated link: Rician K-factor [dB], when "
+              "small_scale_fading is rician", -30.0, 60.0),
+    ParamSpec("fading_seed", int, 0, "seed of the simulated link fading and of the wind "
+              "gusts", 0, 2**31 - 1),
+    ParamSpec("wind_mps", float, [0.0, 0.0, 0.0], "steady wind (x, y, z) in the track frame "
+              "[m/s], self-flown agent only", -50.0, 50.0, length=3),
+    ParamSpec("gust_std_mps", float, 0.0, "std of the wind gusts per axis [m/s] (0: off)",
+              0.0, 30.0),
+    ParamSpec("gust_tau_s", float, 2.0, "time constant of the wind gusts [s]", 0.0, 1000.0,
+              True),
 )
 MAVLINK_SPECS = (
     ParamSpec("mavlink_listen", str, "", "MAVLink mode: the embedded vehicle's connection "
@@ -54,7 +73,8 @@ MAVLINK_SPECS = (
               "vehicle's local NED [m], as the bridge's", length=3),
 )
 AGENT_SCENARIO_NAMES = ("num_slots", "slot_duration_s", "speed_mps", "ground_station_m",
-                        "comm_bandwidth_hz", "ref_snr_db", "rate_min_mbps")
+                        "comm_bandwidth_hz", "ref_snr_db", "rate_min_mbps", "p_com_max_db",
+                        "e_com_max_j")
 
 #: Every parameter name of every node of the suite (a shared `/**` section may hold any).
 SUITE_PARAMETER_NAMES = frozenset(

@@ -34,6 +34,17 @@ def achieved_rate(k: int) -> str:
     return f"uav{k}/achieved_rate"
 
 
+#: The fields of one `offload(k)` message, in order (its layout's single dimension label).
+OFFLOAD_FIELDS = ("slot", "power_w", "energy_used_j", "energy_left_j")
+
+
+def offload(k: int) -> str:
+    """std_msgs/Float64MultiArray: agent k's slot just started, data = OFFLOAD_FIELDS (power
+    applied [W], energy used so far this slot included and left of E_com^max [J]),
+    RATE_DEPTH."""
+    return f"uav{k}/offload"
+
+
 def mavlink_pose(k: int) -> str:
     """geometry_msgs/PoseStamped: vehicle k's LOCAL_POSITION_NED in the track frame (bridge)."""
     return f"uav{k}/mavlink/pose"
