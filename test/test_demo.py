@@ -45,3 +45,22 @@ def test_bad_demo_option_exits_2(repo):
                            "--mavlink-pass-s", "0"], cwd=repo, capture_output=True, text=True,
                           timeout=30)
     assert proc.returncode == 2 and "--mavlink-pass-s" in proc.stderr
+
+
+def test_demo_flies_closed_loop_under_fading_and_wind(ros_domain, repo):
+    proc = subprocess.run(
+        [sys.executable, "-m", "uav_insar_planner.demo", "--num-slots", "8", "--time-scale",
+         "40", "--no-mavlink", "--offloading", "closed", "--fading", "--wind", "5", "0", "0",
+         "--seed", "3", "--domain-id", str(ros_domain)],
+        cwd=repo, capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    summary = proc.stdout[proc.stdout.index("\nsummary"):]
+    energies = [float(e) for e in re.findall(r"energy ([\d.]+) of 594 J", summary)]
+    assert len(energies) == 3 and all(0.0 < e <= 594.0 for e in energies), summary
+    assert "offloading:=closed" not in proc.stderr
+
+
+def test_bad_wind_exits_2(repo):
+    proc = subprocess.run([sys.executable, "-m", "uav_insar_planner.demo", "--wind", "99", "0",
+                           "0"], cwd=repo, capture_output=True, text=True, timeout=30)
+    assert proc.returncode == 2 and "--wind" in proc.stderr

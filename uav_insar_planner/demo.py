@@ -68,6 +68,22 @@ def start_mavlink(ports: Sequence[int], pass_s: float, common: Sequence[str],
     return procs
 
 
+# --fading: the benchmark's link (benchmarks/offloading.py): 4 dB shadowing over 20 m, Rician
+# K = 6 dB.
+FADING = ("shadowing_std_db:=4.0", "shadowing_corr_m:=20.0", "small_scale_fading:=rician",
+          "rician_k_db:=6.0")
+
+
+def link_args(args: argparse.Namespace) -> list[str]:
+    """The agents' -p arguments for --offloading, --fading, --wind and --seed."""
+    values = [f"offloading:={args.offloading}", f"fading_seed:={args.seed}"]
+    if args.fading:
+        values += FADING
+    if args.wind:
+        values.append("wind_mps:=[" + ", ".join(f"{float(v)!r}" for v in args.wind) + "]")
+    return [a for v in values for a in ("-p", v)]
+
+
 def run(args: argparse.Namespace) -> int:
     from uav_insar_planner.evaluate import rate_tolerance_bps
     from uav_insar_planner.params_file import ParamError, load_params, parse_override
@@ -103,7 +119,8 @@ def run(args: argparse.Namespace) -> int:
     procs = [start_node("agent", [*common, "-p", f"uav_id:={k}", "-p",
                                   f"time_scale:={args.time_scale}", "-p",
                                   f"position_noise_std_m:={args.noise_std}",
-                                  "-r", f"__node:=agent{k}"], env, f"[agent{k}]")
+                                  *link_args(args), "-r", f"__node:=agent{k}"], env,
+                                 f"[agent{k}]")
              for k in range(3)]
     ports: list[int] = []
     try:
@@ -138,6 +155,8 @@ def run(args: argparse.Namespace) -> int:
             lambda: mavlink_pass.done(time.monotonic(), args.mavlink_pass_s + SETTLE_S),
             MAVLINK_TIMEOUT_S, procs)
         tol = rate_tolerance_bps(params.rate_min_bps)
+        # /diagnostics is volatile: a short mission can end before its publisher is matched.
+        w.spin_until(lambda: w.plan_status() is not None, 5.0, procs)
         status = w.plan_status()
         with PRINT_LOCK:
             print("\nachieved rate per slot [Mbit/s], slots first-last ('!' = below R_min)")
@@ -147,9 +166,11 @@ def run(args: argparse.Namespace) -> int:
                 print("\n".join(mavlink_table(
                     mavlink_pass, [FIRST_SYSID + k for k in range(3)],
                     [f"udpin:127.0.0.1:{port}" for port in ports])))
+            energy = {k: w.offloads[k][-1][2] for k in targets if w.offloads[k]}
             print(summary(status.message if status else None, targets, w.rates, n_slots,
                           params.rate_min_bps, tol, mavlink_pass, plan_time,
-                          args.mavlink_pass_s * params.speed), flush=True)
+                          args.mavlink_pass_s * params.speed, energy, params.e_max_j),
+                  flush=True)
         if not complete:
             print("demo: the mission did not complete in time", flush=True)
         if not flew_pass:
@@ -176,6 +197,14 @@ def main(argv: list[str] | None = None) -> int:
                         help="agents' mission seconds per wall second (default 20)")
     parser.add_argument("--noise-std", type=float, default=0.0,
                         help="agents' position disturbance std per axis [m] (default 0)")
+    parser.add_argument("--offloading", choices=("open", "closed"), default="open",
+                        help="agents' power per slot: the plan's, or closed loop (default open)")
+    parser.add_argument("--fading", action="store_true",
+                        help="simulated link: 4 dB shadowing over 20 m and Rician K 6 dB")
+    parser.add_argument("--wind", type=float, nargs=3, metavar=("VX", "VY", "VZ"),
+                        help="steady wind in the track frame [m/s] (each in [-50, 50])")
+    parser.add_argument("--seed", type=int, default=0,
+                        help="seed of the fading and the gusts (default 0)")
     parser.add_argument("-p", "--param", action="append", default=[], metavar="NAME:=VALUE",
                         help="a parameter for every node, e.g. -p solver:=paper-ao")
     parser.add_argument("--domain-id", type=int, default=None,
@@ -190,6 +219,10 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.time_scale <= 0 or args.noise_std < 0:
         parser.error("--time-scale must be > 0 and --noise-std >= 0")
+    if args.wind and not all(-50.0 <= v <= 50.0 for v in args.wind):
+        parser.error("--wind components must be finite and in [-50, 50] m/s")
+    if not 0 <= args.seed <= 2**31 - 1:
+        parser.error("--seed must be in 0..2147483647")
     if args.domain_id is not None and not 0 <= args.domain_id <= 232:
         parser.error("--domain-id must be in 0..232 (Fast DDS's range)")
     if not args.mavlink_pass_s > 0 or not 0 <= args.mavlink_base_port <= 65515:

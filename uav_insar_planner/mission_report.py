@@ -87,10 +87,12 @@ def mavlink_table(mavlink_pass: MavlinkPass, sysids: Sequence[int],
 def summary(plan_message: str | None, targets: Mapping[int, Vec3],
             rates: Mapping[int, Sequence[float]], num_slots: int,
             rate_min_bps: Sequence[float], tol: float, mavlink_pass: MavlinkPass | None,
-            plan_time: float, pass_m: float) -> str:
+            plan_time: float, pass_m: float, energy_j: Mapping[int, float] | None = None,
+            energy_max_j: float = math.nan) -> str:
     """The plan and, per UAV (targets[k] = planned (x_k, y, z_k)), slots flown, rate met or
-    missed and the worst margin; per MAVLink vehicle, its across-track error on the pass and
-    its distance along the track (the pass is `pass_m` long)."""
+    missed, the worst margin and the energy used (`energy_j[k]`, of `energy_max_j`); per
+    MAVLink vehicle, its across-track error on the pass and its distance along the track
+    (the pass is `pass_m` long)."""
     lines = ["\nsummary"]
     if plan_message:
         lines.append(f"  plan: {plan_message}")
@@ -99,8 +101,10 @@ def summary(plan_message: str | None, targets: Mapping[int, Vec3],
         missed = sum(r < rate_min_bps[k] - tol for r in got)
         worst = min(got) - rate_min_bps[k] if got else float("nan")
         verdict = "rate met in every slot" if got and not missed else f"missed in {missed}"
+        used = (energy_j or {}).get(k)
+        energy = "" if used is None else f", energy {used:.1f} of {energy_max_j:g} J"
         lines.append(f"  uav{k}: x={x:8.3f} m z={z:7.3f} m  {len(got)}/{num_slots}"
-                     f" slots, {verdict}, worst margin {worst:+.3g} bit/s")
+                     f" slots, {verdict}, worst margin {worst:+.3g} bit/s{energy}")
     mp = mavlink_pass
     if mp is not None and mp.began is None:
         lines.append("  MAVLink: the vehicles never gathered at their start points")

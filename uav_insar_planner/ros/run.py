@@ -149,6 +149,10 @@ def run_node(make_node: Callable[[], Node], default_name: str,
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
+        # A second Ctrl-C / SIGTERM (or rclpy passing its signal on to Python's handler) must
+        # not cut the clean-up short: the exit code stays what it was.
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
         if node is not None:
             stop = getattr(node, "stop", None)
             if stop is not None:

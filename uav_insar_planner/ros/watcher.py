@@ -5,7 +5,8 @@
     watcher.destroy()                                      # ROS_DOMAIN_ID)
 
 It subscribes with each topic's own QoS (ros/topics.py) and keeps every message in arrival
-order: `formations`, `powers`, `diagnostics`, and per UAV k `rates[k]` (bit/s), `poses[k]` and
+order: `formations`, `powers`, `diagnostics`, and per UAV k `rates[k]` (bit/s), `offloads[k]`
+(the agent's [slot, power_w, energy_used_j, energy_left_j]), `poses[k]` and
 `mavlink_poses[k]`. An optional `on_mavlink_pose(k, msg)` sees each vehicle position as it
 arrives.
 """
@@ -46,6 +47,7 @@ class TopicWatcher:
         self.rates: dict[int, list[float]] = {k: [] for k in UAVS}
         self.poses: dict[int, list[Any]] = {k: [] for k in UAVS}
         self.mavlink_poses: dict[int, list[Any]] = {k: [] for k in UAVS}
+        self.offloads: dict[int, list[list[float]]] = {k: [] for k in UAVS}
         self._on_mavlink_pose = on_mavlink_pose
         n = self.node
         n.create_subscription(PoseArray, "/" + topics.FORMATION, self.formations.append,
@@ -60,6 +62,9 @@ class TopicWatcher:
                                   topics.RATE_DEPTH)
             n.create_subscription(PoseStamped, "/" + topics.pose(k), self.poses[k].append,
                                   topics.DEPTH)
+            n.create_subscription(Float64MultiArray, "/" + topics.offload(k),
+                                  lambda m, k=k: self.offloads[k].append(list(m.data)),
+                                  topics.RATE_DEPTH)
             n.create_subscription(PoseStamped, "/" + topics.mavlink_pose(k),
                                   lambda m, k=k: self._mavlink_pose(k, m), topics.RATE_DEPTH)
         self.executor = SingleThreadedExecutor(context=context)
