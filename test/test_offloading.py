@@ -89,16 +89,21 @@ def test_closed_loop_beats_open_loop_on_a_faded_link(table1):
             for k in range(3):
                 m = Mission(k, p, 10.0, 3.0, fading=LinkFading(4.0, 20.0, 6.0, seed, k),
                             controller=ClosedLoopOffload(k, p) if closed else None)
-                m.set_plan(tuple(plan.formation[k]), plan.p_com_w[k])
-                t = 0.0
-                while not m.all_flown:
-                    t += 0.5
-                    m.advance(t)
+                fly_plan(m, plan, k)
                 total += sum(s.margin_bps >= -tol for s in m.samples)
                 assert m.samples[-1].energy_used_j <= p.e_max_j + 1e-9
         return total
 
     assert met(True) > 1.3 * met(False)
+
+
+def fly_plan(mission, plan, k: int, step: float = 0.5) -> None:
+    """Give `mission` UAV k's part of `plan` and advance its clock until every slot is flown."""
+    mission.set_plan(tuple(plan.formation[k]), plan.p_com_w[k])
+    t = 0.0
+    while not mission.all_flown:
+        t += step
+        mission.advance(t)
 
 
 def counterfactual(params, plan, closed):
@@ -110,11 +115,7 @@ def counterfactual(params, plan, closed):
                             FADING["rician_k_db"], FADING["fading_seed"], k)
         m = Mission(k, params, 10.0, 3.0, fading=fading,
                     controller=ClosedLoopOffload(k, params) if closed else None)
-        m.set_plan(tuple(plan.formation[k]), plan.p_com_w[k])
-        t = 0.0
-        while not m.all_flown:
-            t += 0.5
-            m.advance(t)
+        fly_plan(m, plan, k)
         out[k] = m.samples
     met = sum(s.margin_bps >= -tol for k in out for s in out[k])
     return met, out
