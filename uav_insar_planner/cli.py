@@ -28,7 +28,8 @@ def _add_scenario_args(command: argparse.ArgumentParser) -> None:
     command.add_argument("--set", metavar="NAME=VALUE", action="append", default=[],
                          help="override a parameter (repeatable), e.g. --set h_amb_min_m=0.9")
     command.add_argument("--objective", choices=OBJECTIVES,
-                         help="exact sigma_h or Prop. 1 bound")
+                         help="exact sigma_h, Prop. 1 bound, or sigma_h with the exact "
+                         "multilook phase std")
     command.add_argument("--solver", choices=SOLVERS, help="global (certified) or paper-ao")
 
 
@@ -55,6 +56,9 @@ def _build_parser() -> argparse.ArgumentParser:
     w.add_argument("--band", action="store_true",
                    help="also show the bound's optimum and sigma_h's range over the bound's "
                    "minimisers (the paper's solution set)")
+    w.add_argument("--montecarlo", nargs="?", const="100000", metavar="N",
+                   help="also the Monte-Carlo fused sigma_h and ambiguity rate of each plan "
+                   "(N samples per pair, default 100000, seed 0)")
     w.add_argument("--csv", metavar="FILE", help="write one row per (value, scheme)")
     w.add_argument("--plot", metavar="FILE.png", help="plot as the paper's Figures 3/4")
     w.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
@@ -63,6 +67,10 @@ def _build_parser() -> argparse.ArgumentParser:
     _add_scenario_args(f)
     f.add_argument("--scheme", choices=SCHEMES)
     f.add_argument("--out", default="formation.png", metavar="FILE.png")
+
+    from uav_insar_planner.montecarlo_cli import add_parser as add_montecarlo_parser
+
+    add_montecarlo_parser(sub, _add_scenario_args)
 
     # echo parses its own options (uav_insar_planner/ros/echo.py): they pass through.
     sub.add_parser("echo", help="print a topic like `ros2 topic echo` (see echo --help)",
@@ -110,13 +118,19 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     parse_sweep_name(args.name)
     if args.count < 1:
         raise ParamError([f"sweep COUNT: value {args.count} is not allowed; expected >= 1"])
+    mc = 0
+    if args.montecarlo is not None:
+        from uav_insar_planner.montecarlo_cli import MAX_SAMPLES, parse_int
+
+        mc = parse_int("--montecarlo", args.montecarlo, 2, MAX_SAMPLES)
     values = np.linspace(args.start, args.stop, args.count)
     bar = tqdm(total=len(values) * len(args.schemes), unit="solve", file=sys.stderr,
                disable=args.no_progress)
     rows = run_sweep(params, args.name, values, args.schemes, band=args.band,
-                     progress=bar.update)
+                     progress=bar.update, montecarlo=mc)
     bar.close()
     extra = f" {'bound_opt':>10} {'band_lo':>9} {'band_hi':>9}" if args.band else ""
+    extra += f" {'mc_sigma_h':>10} {'mc_amb_%':>8}" if mc else ""
     print(f"{'value':>10}  {'scheme':<16} {'sigma_h_m':>10} {'bound_m':>10}{extra}  blocking")
     for r in rows:
         sh = f"{r.sigma_h_m:10.5f}" if r.feasible else f"{'infeas.':>10}"
@@ -124,6 +138,9 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         if args.band:
             bd += (f" {r.bound_opt_m:10.5f} {r.band_lo_m:9.5f} {r.band_hi_m:9.5f}"
                    if r.feasible else " " * 31)
+        if mc:
+            bd += (f" {r.mc_sigma_h_m:10.5f} {100 * r.mc_ambiguity:8.2f}" if r.feasible
+                   else " " * 20)
         print(f"{r.value:10.4g}  {r.scheme:<16} {sh} {bd}  {r.blocking}")
     if "proposed" in args.schemes and len(args.schemes) > 1:
         for scheme, g in sorted(gains(rows).items()):
@@ -155,6 +172,12 @@ def _cmd_plot_formation(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _cmd_montecarlo(args: argparse.Namespace) -> int:
+    from uav_insar_planner.montecarlo_cli import run
+
+    return run(args, _scenario)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     parser = _build_parser()
@@ -165,7 +188,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return echo_main(rest)
     if rest:
         parser.error("unrecognized arguments: " + " ".join(rest))
-    commands = {"solve": _cmd_solve, "sweep": _cmd_sweep, "plot-formation": _cmd_plot_formation}
+    commands = {"solve": _cmd_solve, "sweep": _cmd_sweep, "plot-formation": _cmd_plot_formation,
+                "montecarlo": _cmd_montecarlo}
     try:
         return commands[args.command](args)
     except ParamError as exc:

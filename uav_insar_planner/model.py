@@ -142,11 +142,18 @@ def height_error(h_amb: ArrayLike, sigma_phi: ArrayLike) -> ArrayLike:
     return np.asarray(h_amb) * np.asarray(sigma_phi) / (2.0 * np.pi)
 
 
+def fusion_weights(sigma_h1: ArrayLike, sigma_h2: ArrayLike) -> tuple[ArrayLike, ArrayLike]:
+    """w_k = 1/sigma_hk^2, the inverse-variance weights of the fused DEM
+    h = (w_1 h_1 + w_2 h_2) / (w_1 + w_2)  (eq. 15)."""
+    s1, s2 = np.asarray(sigma_h1, dtype=float), np.asarray(sigma_h2, dtype=float)
+    return 1.0 / s1**2, 1.0 / s2**2
+
+
 def fused_height_error(sigma_h1: ArrayLike, sigma_h2: ArrayLike) -> ArrayLike:
     """sigma_h = sqrt(sum w_k^2 sigma_hk^2 / (sum w_k)^2) with w_k = 1/sigma_hk^2  (eq. 15),
     which simplifies to (1/sigma_h1^2 + 1/sigma_h2^2)^(-1/2)."""
     s1, s2 = np.asarray(sigma_h1, dtype=float), np.asarray(sigma_h2, dtype=float)
-    w1, w2 = 1.0 / s1**2, 1.0 / s2**2
+    w1, w2 = fusion_weights(s1, s2)
     return np.sqrt((w1**2 * s1**2 + w2**2 * s2**2) / (w1 + w2) ** 2)
 
 

@@ -14,7 +14,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 SCHEMES = ("proposed", "single-baseline", "fixed-master", "static-power")
-OBJECTIVES = ("exact", "bound")
+OBJECTIVES = ("exact", "bound", "multilook")
+# The multilook objective tabulates the exact phase std per n_L (multilook.py): O(n_L) work.
+MULTILOOK_MAX_LOOKS = 1000
 SOLVERS = ("global", "paper-ao")
 
 SPEED_OF_LIGHT = 299_792_458.0
@@ -111,8 +113,8 @@ PARAM_SPECS: tuple[ParamSpec, ...] = (
     _f("master_fixed_xz_m", [-54.0, 74.0], "q0_fixed = (x_0, z_0) for the fixed-master scheme "
        "[m]", length=2),
     ParamSpec("scheme", str, "proposed", "which scheme to solve", choices=SCHEMES),
-    ParamSpec("objective", str, "exact", "exact: minimise sigma_h; bound: Proposition 1",
-              choices=OBJECTIVES),
+    ParamSpec("objective", str, "exact", "exact: minimise sigma_h; bound: Proposition 1; "
+              "multilook: sigma_h with the exact multilook phase std", choices=OBJECTIVES),
     ParamSpec("solver", str, "global", "global (certified) or paper-ao (Algorithm 2)",
               choices=SOLVERS),
 )
@@ -262,11 +264,26 @@ def validate(values: Mapping[str, Any]) -> tuple[dict[str, Any], list[str]]:
             f"slave_look_angle_min_deg: value {clean['slave_look_angle_min_deg']!r} is not "
             f"allowed; expected less than slave_look_angle_max_deg "
             f"({clean['slave_look_angle_max_deg']!r})")
+    problems += objective_problems(clean["objective"], clean["solver"], clean["looks"])
     if clean["radar_bandwidth_hz"] >= 2.0 * clean["center_frequency_hz"]:
         problems.append(
             f"radar_bandwidth_hz: value {clean['radar_bandwidth_hz']!r} is not allowed; "
             "expected a fractional bandwidth B_Rg/f_0 below 2")
     return clean, problems
+
+
+def objective_problems(objective: Any, solver: Any, looks: Any) -> list[str]:
+    """The objective's cross-field rules: `multilook` runs on the global solver only, with
+    looks <= MULTILOOK_MAX_LOOKS."""
+    if objective != "multilook":
+        return []
+    if solver == "paper-ao":
+        return ["objective: value 'multilook' is not allowed with solver 'paper-ao'; expected "
+                "exact or bound (paper-ao minimises Proposition 1's bound), or solver global"]
+    if isinstance(looks, int) and looks > MULTILOOK_MAX_LOOKS:
+        return [f"looks: value {looks!r} is not allowed with objective 'multilook'; expected "
+                f"an integer in [1, {MULTILOOK_MAX_LOOKS}]"]
+    return []
 
 
 def params_from_mapping(values: Mapping[str, Any]) -> Params:

@@ -139,3 +139,31 @@ def plot_formation(p: Params, plan: Plan, path: str | Path) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
+
+
+def plot_montecarlo(result: dict, path: str | Path) -> None:
+    """Height-error histograms of a Monte-Carlo run (montecarlo.simulate with keep_samples),
+    one panel per pair and the fused DEM, each against the model's Gaussian N(0, sigma_h^2)
+    (eq. 13 with the Cramer-Rao phase error; eq. 15 for the fused)."""
+    errs = result["height_errors_m"]
+    rows = {**result["pairs"], **({"fused": result["fused"]} if "fused" in result else {})}
+    fig, axes = plt.subplots(1, len(rows), figsize=(4.2 * len(rows), 3.6), squeeze=False)
+    for ax, (name, row) in zip(axes[0], rows.items(), strict=True):
+        e = errs[name]
+        s_model, s_mc = row["sigma_h_model_m"], row["sigma_h_mc_m"]["value"]
+        lim = 4.0 * max(s_model, s_mc)
+        ax.hist(e, bins=120, range=(-lim, lim), density=True, color="tab:blue", alpha=0.6,
+                label=f"Monte-Carlo, std {s_mc:.4f} m")
+        x = np.linspace(-lim, lim, 400)
+        ax.plot(x, np.exp(-0.5 * (x / s_model) ** 2) / (s_model * np.sqrt(2 * np.pi)), "k--",
+                label=f"model Gaussian, {s_model:.4f} m")
+        ax.set_title("fused DEM" if name == "fused" else f"pair U0-U{name[-1]}", fontsize=10)
+        ax.set_xlabel("height error [m]")
+        ax.legend(fontsize=7)
+        ax.grid(True, alpha=0.3)
+    axes[0][0].set_ylabel("density [1/m]")
+    fig.suptitle(f"{result['samples']} samples per pair, n_L = {result['looks']}, "
+                 f"seed {result['seed']}", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

@@ -32,6 +32,10 @@ class SweepRow:
     optimality_gap: float
     solve_time_s: float
     blocking: str
+    # Opt-in (run_sweep's montecarlo): the Monte-Carlo fused sigma_h of the plan's formation and
+    # its fused ambiguity rate without resolution (montecarlo.py); NaN when not run.
+    mc_sigma_h_m: float = float("nan")
+    mc_ambiguity: float = float("nan")
 
 
 def parse_sweep_name(text: str) -> tuple[str, int | None]:
@@ -62,8 +66,10 @@ def with_value(params: Params, name: str, index: int | None, value: float) -> Pa
 
 def run_sweep(params: Params, name: str, values: Iterable[float], schemes: Sequence[str],
               objective: str | None = None, solver: str | None = None, band: bool = False,
-              progress: Callable[[], None] | None = None) -> list[SweepRow]:
-    """Solve every (value, scheme); `progress` is called once per solve."""
+              progress: Callable[[], None] | None = None,
+              montecarlo: int = 0) -> list[SweepRow]:
+    """Solve every (value, scheme); `progress` is called once per solve. `montecarlo` > 0:
+    that many Monte-Carlo samples per pair (seed 0) for each feasible plan."""
     base, index = parse_sweep_name(name)
     rows = []
     for value in values:
@@ -79,20 +85,32 @@ def run_sweep(params: Params, name: str, values: Iterable[float], schemes: Seque
                 lo, hi = bound_minimizer_band(p, scheme)
             rows.append(SweepRow(float(value), scheme, plan.feasible, plan.sigma_h_m,
                                  plan.sigma_h_bound_m, bound_opt, lo, hi, plan.optimality_gap,
-                                 plan.solve_time_s, " ".join(plan.blocking_constraints)))
+                                 plan.solve_time_s, " ".join(plan.blocking_constraints),
+                                 *(_montecarlo(p, plan, montecarlo) if montecarlo
+                                   and plan.feasible else ())))
             if progress:
                 progress()
     return rows
 
 
+def _montecarlo(p: Params, plan, samples: int) -> tuple[float, float]:
+    from uav_insar_planner.montecarlo import pairs_of_formation, simulate
+
+    r = simulate(pairs_of_formation(p, plan.formation), p.looks, samples, seed=0)
+    top = r.get("fused") or next(iter(r["pairs"].values()))
+    return top["sigma_h_mc_m"]["value"], top["ambiguity_rate"]["value"]
+
+
 def write_csv(rows: Sequence[SweepRow], path: str | Path, name: str) -> None:
     with open(path, "w", newline="") as fh:
         fields = list(asdict(rows[0]).keys()) if rows else ["value"]
+        if not any(np.isfinite(r.mc_sigma_h_m) for r in rows):  # the default columns only
+            fields = [f for f in fields if not f.startswith("mc_")]
         writer = csv.DictWriter(fh, fieldnames=fields)
         fh.write(f"# sweep of {name}\n")
         writer.writeheader()
         for row in rows:
-            writer.writerow(asdict(row))
+            writer.writerow({k: v for k, v in asdict(row).items() if k in fields})
 
 
 def gains(rows: Sequence[SweepRow], reference: str = "proposed") -> dict[str, float]:

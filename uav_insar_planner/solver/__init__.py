@@ -1,6 +1,7 @@
 """solve(params) -> Plan: run a back end, then check its answer independently.
 
-Back ends: `global` (solver/global_opt/, certified optimum of the exact or bound objective)
+Back ends: `global` (solver/global_opt/, certified optimum of the exact, bound or multilook
+objective)
 and `paper-ao` (solver/ao/, Algorithm 2 of the paper with SCA on CVXPY + Clarabel). They never
 import each other; what both need (the station disk in power.py, the start grid, the deletion
 filter in blocking.py, SolverResult) lives here in solver/.
@@ -12,7 +13,14 @@ import time
 import numpy as np
 
 from uav_insar_planner.evaluate import evaluate
-from uav_insar_planner.params import OBJECTIVES, SCHEMES, SOLVERS, ParamError, Params
+from uav_insar_planner.params import (
+    OBJECTIVES,
+    SCHEMES,
+    SOLVERS,
+    ParamError,
+    Params,
+    objective_problems,
+)
 from uav_insar_planner.plan import Plan
 
 
@@ -42,6 +50,8 @@ def solve(params: Params, scheme: str | None = None, objective: str | None = Non
         if value not in allowed:
             raise ParamError([f"{field}: value {value!r} is not allowed; expected one of "
                               + ", ".join(allowed)])
+    if problems := objective_problems(objective, solver, params.looks):
+        raise ParamError(problems)
     start = time.perf_counter()
     result = _backend(solver)(params, scheme, objective)
     elapsed = time.perf_counter() - start
@@ -55,6 +65,12 @@ def solve(params: Params, scheme: str | None = None, objective: str | None = Non
         blocking = ev.violated
         message = (message + "; " if message else "") + "independent check failed: " + ", ".join(
             f"{n} (slack {ev.constraints[n].slack:.3g})" for n in ev.violated)
+    metrics = ev.metrics if ev else {}
+    if objective == "multilook" and ev is not None:
+        from uav_insar_planner.multilook import plan_metrics
+
+        # The multilook figures from the checker's coherences and h_amb, not the back end's.
+        metrics = metrics | {"multilook": plan_metrics(ev.metrics["pairs"], params.looks)}
     return Plan(
         feasible=feasible,
         scheme=scheme,
@@ -67,7 +83,7 @@ def solve(params: Params, scheme: str | None = None, objective: str | None = Non
         iterations=result.iterations,
         solve_time_s=elapsed,
         constraints=ev.constraints if ev else {},
-        metrics=ev.metrics if ev else {},
+        metrics=metrics,
         blocking_constraints=[] if feasible else blocking,
         lower_bound_m=result.lower_bound,
         optimality_gap=result.gap,

@@ -203,11 +203,18 @@ def snr_factor(sc: Scenario, r0, r):
 def weight(sc: Scenario, b_perp, g_rg, g_snr):
     """w = b_perp^2 / sigma_Phi^2: the objective is lambda r0 sin(theta_0) / (2 pi sqrt(sum w))
     (eq. 15 with eqs. 12-14). `bound` uses sigma_Phi at the worst-case coherence A
-    (Proposition 1); `exact` the coherence gamma = gamma_Rg gamma_SNR gamma_other."""
+    (Proposition 1); `exact` the coherence gamma = gamma_Rg gamma_SNR gamma_other; `multilook`
+    the exact multilook phase std at gamma (multilook.phase_std: decreasing in gamma with
+    d log sigma / d log((1 - gamma^2)/gamma^2) < 1, so every monotonicity the bounds use holds as
+    for `exact`, whose slope is 1/2; see solver/global_opt/slave_ranges.py)."""
     b2 = np.asarray(b_perp, dtype=float) ** 2
     if sc.objective == "bound":
         return b2 / sc.sigma_phi_bound**2
     g = np.asarray(g_rg) * np.asarray(g_snr) * sc.p.coherence_other
+    if sc.objective == "multilook":
+        from uav_insar_planner.multilook import phase_std
+
+        return b2 / phase_std(g, sc.p.looks) ** 2
     # sigma_Phi^2 = (1 - g^2) / (2 n_L g^2)
     return b2 * 2.0 * sc.p.looks * g * g / (1.0 - g * g)
 

@@ -1,4 +1,4 @@
-"""Certified global solver of problem (P) for the four schemes and both objectives.
+"""Certified global solver of problem (P) for the four schemes and the three objectives.
 
 `solve_global` reduces (P) to the master range r0 and the slave look angles (solver/rays.py:
 C2, and every other constraint an interval of slave ranges along each look-angle ray;
@@ -52,8 +52,9 @@ def formation_of(sc: rays.Scenario, point) -> np.ndarray:
 
 
 def solve_global(p: Params, scheme: str, objective: str) -> SolverResult:
-    """Global minimum of sigma_h (`exact`, eq. 15) or of Proposition 1's bound (`bound`) over
-    C1..C11 for `scheme`, with a certificate: lower_bound <= optimum <= objective."""
+    """Global minimum of sigma_h (`exact`, eq. 15), of Proposition 1's bound (`bound`) or of
+    sigma_h with the exact multilook phase std (`multilook`, multilook.phase_std in eq. 13)
+    over C1..C11 for `scheme`, with a certificate: lower_bound <= optimum <= objective."""
     if scheme == "fixed-master" and not master_on_c2(p):
         return _nan_result(p, 0, blocking=["C2"], lower_bound=math.inf,
                            certificate="q0_fixed violates C2", message="q0_fixed is off the "

@@ -1,11 +1,15 @@
 """The slaves' best ranges for given look angles, and interval bounds over boxes of angles.
 
-Both objectives are sigma = lambda r0 sin(theta_0) / (2 pi sqrt(w_1 + w_2)) with
+All three objectives are sigma = lambda r0 sin(theta_0) / (2 pi sqrt(w_1 + w_2)) with
 w_k = b_perp,k^2 / sigma_Phi,k^2 (rays.weight). For fixed (r0, theta_k), w_k is increasing in
 the slave range r: b_perp = r |sin(theta - theta_0)| grows linearly, and for `exact`, with
 s = r0^2 r / gamma_m and gamma = K / sqrt(1 + s) (K < 1 collects gamma_Rg, the master's SNR
 factor and gamma_other), sigma_Phi^2 / r^2 is proportional to ((1 + s)/K^2 - 1) / s^2, whose
-derivative in s is (2 - (2 + s)/K^2) / s^3 < 0. So each slave wants the top of its feasible
+derivative in s is (2 - (2 + s)/K^2) / s^3 < 0. For `multilook`, d log w / d log r =
+2 - e s / (1 + s), e = -d log sigma_Phi / d log gamma = 2 (d log sigma_Phi / dv) / (1 - gamma^2),
+v = log((1 - gamma^2) / gamma^2); as gamma^2 < 1 / (1 + s), s / (1 + s) < 1 - gamma^2, so
+e s / (1 + s) < 2 d log sigma_Phi / dv < 2 (the slope is < 1, checked on every table in
+multilook.py; Cramer-Rao's is 1/2). So each slave wants the top of its feasible
 set on its ray, and the slaves interact only through C4 between themselves:
 ||q_1 - q_2||^2 = r_1^2 + r_2^2 - 2 c r_1 r_2 with c = cos(theta_1 - theta_2), an ellipse E
 about the origin of the (r_1, r_2) plane that the pair must avoid.
