@@ -21,7 +21,7 @@ integrated with composite Gauss-Legendre panels graded towards psi = 0 (`phase_s
 planner's objective uses `phase_std`, a table per n_L (computed once, cached in the process) of
 log sigma against v = log((1 - gamma^2) / (n_L gamma^2)) = 2 log sigma_CR + log 2, linearly
 interpolated. Accuracy (test/test_multilook.py): the integral matches the single-look closed
-form to 1e-9 and has unit mass to 1e-7 (n_L <= 1000); the table matches the integral to 1e-6
+form to 1e-9 and has unit mass to 1e-9 (n_L <= 1000); the table matches the integral to 1e-6
 relative between its nodes (`TABLE_REL_ERROR`). A table costs 0.1 s for n_L = 4, 4.4 s for 1000.
 
 Monotonicity, which the certified solver's bounds need (solver/global_opt/slave_ranges.py):
