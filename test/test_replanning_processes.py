@@ -76,7 +76,12 @@ def test_killed_slave_is_replanned_out_and_the_survivors_finish(watcher, procs):
     status = w.plan_status()
     values = {kv.key: kv.value for kv in status.values}
     n0 = int(values["lost_at_slot"])
-    assert status.level == DiagnosticStatus.OK, status.message
+    # Single-baseline puts uav2 where uav1 flew: the operator is warned that a lost UAV may
+    # still be there.
+    assert status.level == DiagnosticStatus.WARN, status.message
+    assert "uav2's new target is 0.0" in status.message
+    assert "across-track from where uav1 was last heard (it may still be there)" in \
+        status.message
     assert status.message.startswith(f"uav1 lost at slot {n0} (no pose, rate or offload for")
     assert f"re-planned from slot {n0} without uav1: single-baseline for uav0 and uav2" in \
         status.message

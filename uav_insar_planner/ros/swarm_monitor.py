@@ -130,8 +130,8 @@ class SwarmMonitor:
                 continue
             silent = now - u.last_heard
             if silent > timeout_s:
-                out.append(self._declare(k, now, f"no pose, rate or offload for {silent:.1f} s "
-                                                  f"(uav_timeout_s {timeout_s:g})"))
+                out.append(self._declare(k, now, f"no pose, rate or offload for {silent:.1f} s, "
+                                                  f"uav_timeout_s {timeout_s:g}"))
         return out
 
     def _declare(self, k: int, now: float, why: str) -> Lost:

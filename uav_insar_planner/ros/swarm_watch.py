@@ -10,8 +10,11 @@ and checks the swarm every CHECK_PERIOD_S against the planner parameter `uav_tim
   `replan.remaining_problem` is solved (on a worker thread) from the slot the swarm reached
   with the energy left; the plan is published on formation / formation/power (the lost UAV
   NaN, its power row zero) with the plan status `uavK lost at slot n (why); re-planned from
-  slot n without uavK: ...`. An infeasible reduced problem is reported (ERROR) and not
-  published: the survivors fly on with the plan they have.
+  slot n without uavK: ...`; WARN instead of OK when a new target lies within
+  plan.SAFE_SEPARATION_M (across-track) of where the lost UAV was last heard (the solver knows
+  nothing of it, and a UAV that is only silent may still be there). An infeasible reduced
+  problem is reported (ERROR) and not published: the survivors fly on with the plan they
+  have.
 - Lost master (or no slave left): nothing can be measured any more; the plan status is ERROR
   `mission cannot continue: master uav0 lost at slot n (why)` and the hold plan
   (`replan.hold_plan`: every pose NaN, every power zero) is published: agents hold where
@@ -22,6 +25,7 @@ and checks the swarm every CHECK_PERIOD_S against the planner parameter `uav_tim
 """
 from __future__ import annotations
 
+import math
 import threading
 import time
 from dataclasses import dataclass
@@ -32,7 +36,7 @@ from std_msgs.msg import Float64MultiArray
 
 from uav_insar_planner import replan
 from uav_insar_planner.params import Params
-from uav_insar_planner.plan import UAV_NAMES, Plan
+from uav_insar_planner.plan import SAFE_SEPARATION_M, UAV_NAMES, Plan
 from uav_insar_planner.ros import diagnostics as report
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.solve_worker import SolveWorker
@@ -179,6 +183,12 @@ class SwarmWatch:
         status = report.plan_status(plan)
         latency = time.monotonic() - lost.at
         status.message = f"{head}; {plan.message}: {status.message}"
+        with self._lock:
+            last = self.monitor.uavs[lost.uav].position
+        near = self._near_the_lost(plan, lost.uav, last)
+        if near:
+            status.level = report.WARN
+            status.message += "; " + near
         status.values += [("lost_uav", UAV_NAMES[lost.uav]), ("lost_at_slot", str(lost.slot)),
                           ("replan_latency_s", report.fmt(latency))]
         with self._lock:
@@ -186,6 +196,19 @@ class SwarmWatch:
             self.monitor.set_plan(plan.p_com_w)
         self._node.publish_replan(plan, status)
         log.info(f"{status.message}; published {latency * 1e3:.0f} ms after detection")
+
+    @staticmethod
+    def _near_the_lost(plan: Plan, lost: int, last: tuple[float, float, float] | None) -> str:
+        """A warning when a new target is within SAFE_SEPARATION_M (across-track) of where the
+        lost UAV was last heard: a UAV that is only silent may still be there."""
+        if last is None:
+            return ""
+        close = [(k, math.hypot(plan.formation[k][0] - last[0], plan.formation[k][1] - last[2]))
+                 for k in plan.active_uavs]
+        close = [(k, d) for k, d in close if d < SAFE_SEPARATION_M]
+        return "; ".join(f"{UAV_NAMES[k]}'s new target is {d:.2f} m across-track from where "
+                         f"{UAV_NAMES[lost]} was last heard (it may still be there)"
+                         for k, d in close)
 
     def _power_replan(self, event: Saturated) -> None:
         with self._lock:
