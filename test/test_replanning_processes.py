@@ -152,3 +152,26 @@ def test_killed_master_stops_the_mission_and_the_slaves_hold(watcher, procs):
     assert swarm.level == DiagnosticStatus.ERROR
     assert stop_nodes([planner, agents[1], agents[2]]) == [0, 0, 0]
     assert "holding position after" in agents[1].stdout.read()
+
+
+def test_demo_kill_uav_shows_the_replan_in_its_summary(ros_domain, repo):
+    import re
+    import subprocess
+    import sys
+
+    proc = subprocess.run(
+        [sys.executable, "-m", "uav_insar_planner.demo", "--num-slots", "30", "--no-mavlink",
+         "--kill-uav", "2", "--at", "3", "--uav-timeout", str(TIMEOUT_S),
+         "--domain-id", str(ros_domain)],
+        cwd=repo, capture_output=True, text=True, timeout=90)
+    out = proc.stdout
+    assert proc.returncode == 0, out + proc.stderr
+    summary = out[out.index("\nsummary"):]
+    m = re.search(r"kill: agent2 killed \(SIGKILL\) at slot (\d+); new formation ([\d.]+) s "
+                  r"later \(uav_timeout_s 2 s\)", summary)
+    assert m and int(m[1]) >= 3 and float(m[2]) <= TIMEOUT_S + 1.0, summary
+    assert re.search(r"plan: uav2 lost at slot \d+ .*re-planned from slot \d+ without uav2",
+                     summary), summary
+    assert summary.count("30/30 slots, rate met in every slot") == 2, summary
+    assert "planner: detection to new formation" in summary
+    assert "(exit codes [0, 0, -9, 0])" in out

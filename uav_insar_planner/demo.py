@@ -173,7 +173,8 @@ def run(args: argparse.Namespace) -> int:
         if not w.spin_until(w.agents_matched, 20.0, procs):
             print("demo: the agents did not come up (see their log above)", flush=True)
             return 1
-        procs.append(start_node("planner", common, env, "[planner]"))
+        timeout = [] if args.uav_timeout is None else ["-p", f"uav_timeout_s:={args.uav_timeout}"]
+        procs.append(start_node("planner", [*common, *timeout], env, "[planner]"))
         if not args.no_mavlink:
             ports = ([args.mavlink_base_port + 10 * k for k in range(3)]
                      if args.mavlink_base_port else free_udp_ports(3))
@@ -284,7 +285,11 @@ def main(argv: list[str] | None = None) -> int:
                              "and show the planner's re-plan")
     parser.add_argument("--at", type=int, default=10, metavar="SLOT",
                         help="the slot for --kill-uav (default 10)")
+    parser.add_argument("--uav-timeout", type=float, default=None, metavar="S",
+                        help="the planner's uav_timeout_s (default: its own, 5 s)")
     args = parser.parse_args(argv)
+    if args.uav_timeout is not None and not 0.1 <= args.uav_timeout <= 3600.0:
+        parser.error("--uav-timeout must be in [0.1, 3600] s")
     if args.time_scale is None:
         args.time_scale = 20.0 if args.kill_uav is None else KILL_TIME_SCALE
     if args.at < 0:
