@@ -218,3 +218,29 @@ def test_a_new_plan_restarts_the_count(table1):
     m.set_plan(dataclasses.replace(plan).p_com_w)
     heard(m, 1, 1.0, slot=SATURATED_MISSES - 1, power=p.p_max_w, rate=low)
     assert m.take_saturated() == []
+
+
+# --- the agent's side: a NaN target in mid-flight is a hold ----------------------------------
+def test_a_nan_target_in_mid_flight_holds_and_flies_no_more_slots(table1):
+    from uav_insar_sim.mission import Mission
+
+    p, plan = table1
+    m = Mission(1, p, 10.0, 3.0)
+    m.set_plan(tuple(plan.formation[1]), plan.p_com_w[1])
+    t = 0.0
+    while len(m.samples) < 5:
+        t += 0.5
+        m.advance(t)
+    m.set_plan((np.nan, np.nan), np.zeros(p.num_slots))
+    assert m.phase == "hold"
+    flown = len(m.samples)
+    m.advance(t + 5.0)  # brakes from 4.3 m/s at 3 m/s^2: at rest within 1.5 s
+    here = m.state.position.copy()
+    assert not m.state.velocity.any()
+    m.advance(t + 60.0)
+    assert len(m.samples) == flown and np.array_equal(m.state.position, here)
+    m.set_plan(tuple(plan.formation[1]), plan.p_com_w[1])  # hold is final
+    assert m.phase == "hold"
+    idle = Mission(2, p, 10.0, 3.0)
+    idle.set_plan((np.nan, np.nan), np.zeros(p.num_slots))
+    assert idle.phase == "idle"  # not flown from the start: idle, as before
