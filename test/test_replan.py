@@ -149,6 +149,17 @@ def test_silence_past_the_timeout_is_lost_once_with_the_slot_reached(table1):
     assert 1 in m.lost  # lost stays lost
 
 
+def test_without_offload_reports_the_slot_comes_from_the_poses(table1):
+    p, _ = table1
+    m = SwarmMonitor(p)
+    assert m.next_slot() == 0
+    step = p.speed * p.slot_duration_s
+    m.heard_pose(0, 0.0, (0.0, -3.0, 50.0))  # on the run-up
+    assert m.next_slot() == 0
+    m.heard_pose(2, 0.0, (0.0, 7.5 * step, 50.0))  # slot 7 started
+    assert m.next_slot() == 8
+
+
 def test_never_heard_is_never_lost(table1):
     p, _ = table1
     m = SwarmMonitor(p)

@@ -8,8 +8,9 @@ its agents waits for them. Lost is final for the mission: a UAV heard again late
 (`back`), not taken back into the plan.
 
 The slot the swarm has reached (`next_slot`): one past the latest slot any surviving UAV
-reported on uavK/offload (0 before any). Energy left: the UAV's latest `energy_left_j`, else
-E_com^max minus the plan's schedule up to that slot.
+reported on uavK/offload, else from the furthest survivor's pose (0 before any). Energy
+left: the UAV's latest `energy_left_j`, else E_com^max minus the plan's schedule up to that
+slot.
 
 Saturated closed loop: each slot's rate and offload report are paired in arrival order. A slot
 counts when the rate misses R_min,k by more than the checker's tolerance while the loop is
@@ -139,10 +140,15 @@ class SwarmMonitor:
         return self.lost[k]
 
     def next_slot(self) -> int:
-        """One past the latest slot a surviving UAV reported (0 before any)."""
-        slots = [u.slot for k, u in enumerate(self.uavs)
-                 if k not in self.lost and u.slot is not None]
-        return max(slots) + 1 if slots else 0
+        """One past the latest slot a surviving UAV reported; without any uavK/offload, the
+        slot line y[n] = n v_y delta_t the furthest survivor's pose has passed; 0 before."""
+        alive = [u for k, u in enumerate(self.uavs) if k not in self.lost]
+        slots = [u.slot for u in alive if u.slot is not None]
+        if slots:
+            return max(slots) + 1
+        step = self.params.speed * self.params.slot_duration_s
+        ys = [u.position[1] for u in alive if u.position is not None and u.position[1] >= 0.0]
+        return min(int(max(ys) // step) + 1, self.params.num_slots) if ys else 0
 
     def energy_left_j(self, k: int, first_slot: int) -> float:
         """What UAV k has left for the slots from `first_slot` on (see the module doc)."""
