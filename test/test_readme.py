@@ -10,7 +10,7 @@ import pytest
 from uav_insar_planner.mavlink.config import BRIDGE_SPECS
 from uav_insar_planner.params import PARAM_SPECS
 from uav_insar_planner.params_file import yaml_load
-from uav_insar_planner.ros.parameters import AGENT_SPECS, MAVLINK_SPECS
+from uav_insar_planner.ros.parameters import AGENT_SPECS, MAVLINK_SPECS, PLANNER_SPECS
 
 REPO = Path(__file__).resolve().parent.parent
 README = (REPO / "README.md").read_text()
@@ -41,6 +41,7 @@ def test_the_parameter_table_is_the_spec_table():
 
 @pytest.mark.parametrize("heading,specs", [
     ("### Agent parameters", AGENT_SPECS + MAVLINK_SPECS),
+    ("#### Planner-only parameters", PLANNER_SPECS),
     ("### `mavlink_bridge` parameters", BRIDGE_SPECS)])
 def test_node_tables_list_each_parameter_of_the_node(heading, specs):
     assert set(table_after(heading)) == {s.name for s in specs}

@@ -14,15 +14,20 @@ vehicles (a table), and a summary (per UAV: slots and rates; per vehicle: the ac
 error to the planned (x_k, z_k) on the pass, max and final, and the distance flown along the
 track); then stops every process with SIGINT (as Ctrl-C would).
 
-Exit code 0 when every flown UAV reported every slot and every flown vehicle flew its pass;
-1 when something did not happen in time (no plan, a process died, slots missing, no pass);
-2 for bad options.
+With `--kill-uav K --at SLOT` it kills agent K's process (SIGKILL) once the swarm reached
+SLOT, waits for the planner's answer (a formation without uavK after `uav_timeout_s`, or the
+hold when K is the master) and adds to the summary when it came and what the plan status said.
+
+Exit code 0 when every flown UAV reported every slot and every flown vehicle flew its pass
+(with --kill-uav: the planner answered, and every surviving UAV finished); 1 when something
+did not happen in time (no plan, a process died, slots missing, no pass); 2 for bad options.
 """
 from __future__ import annotations
 
 import argparse
 import math
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -48,6 +53,47 @@ CAPTURE_RADIUS_M = 0.2
 SETTLE_S = 3.0  # after the pass: the vehicles brake past its end and return; then the final error
 MAVLINK_TIMEOUT_S = 30.0  # for the approach and the pass, after the agents are done
 FIRST_SYSID = 2  # vehicles sysid 2, 3, 4: the bridge's default target_sysids
+# --kill-uav: the agents' default time_scale, slow enough that the swarm flies on for a while
+# after uav_timeout_s (5 s: 20 slots at 4x); the planner's answer may take that long and more.
+KILL_TIME_SCALE = 4.0
+ANSWER_TIMEOUT_S = 60.0
+
+
+def swarm_slot(w) -> int:
+    """The latest slot any agent reported on uavK/offload (-1 before any)."""
+    return max((int(o[-1][0]) for o in w.offloads.values() if o), default=-1)
+
+
+def kill_agent(w, procs: list[subprocess.Popen], k: int, slot: int,
+               timeout: float) -> tuple[list[str], bool]:
+    """Kill agent k (procs[k]) with SIGKILL once the swarm reached `slot`, then wait for the
+    planner's next formation; (summary lines, whether the planner answered)."""
+    agent = procs[k]
+    if not w.spin_until(lambda: swarm_slot(w) >= slot, timeout, procs):
+        return [f"  kill: the swarm never reached slot {slot}"], False
+    agent.send_signal(signal.SIGKILL)
+    killed, at, seen = time.monotonic(), swarm_slot(w), len(w.formations)
+    print(f"demo: killed agent{k} (SIGKILL) at slot {at}", flush=True)
+    others = [p for p in procs if p is not agent]
+    if not w.spin_until(lambda: len(w.formations) > seen, ANSWER_TIMEOUT_S, others):
+        return [f"  kill: agent{k} killed at slot {at}; no new formation came"], False
+    after = time.monotonic() - killed
+    w.spin_until(lambda: False, 1.0, others)  # the agents' and the bridge's reactions, logged
+    w.spin_until(lambda: (s := w.plan_status()) is not None and f"uav{k}" in s.message
+                 and "lost" in s.message, 5.0, others)
+    status = w.plan_status()
+    values = {kv.key: kv.value for kv in status.values} if status else {}
+    swarm = [s for m in w.diagnostics for s in m.status if s.name == "planner: swarm"]
+    timeout_s = {kv.key: kv.value for kv in swarm[-1].values}.get("uav_timeout_s", "?") \
+        if swarm else "?"
+    lines = [f"  kill: agent{k} killed (SIGKILL) at slot {at}; new formation {after:.2f} s "
+             f"later (uav_timeout_s {timeout_s} s)"]
+    if "replan_latency_s" in values:
+        lines.append(f"  planner: detection to new formation "
+                     f"{float(values['replan_latency_s']) * 1e3:.0f} ms")
+    if status is None:
+        lines.append("  kill: no plan status came")
+    return lines, True
 
 
 def start_mavlink(ports: Sequence[int], pass_s: float, common: Sequence[str],
@@ -127,7 +173,8 @@ def run(args: argparse.Namespace) -> int:
         if not w.spin_until(w.agents_matched, 20.0, procs):
             print("demo: the agents did not come up (see their log above)", flush=True)
             return 1
-        procs.append(start_node("planner", common, env, "[planner]"))
+        timeout = [] if args.uav_timeout is None else ["-p", f"uav_timeout_s:={args.uav_timeout}"]
+        procs.append(start_node("planner", [*common, *timeout], env, "[planner]"))
         if not args.no_mavlink:
             ports = ([args.mavlink_base_port + 10 * k for k in range(3)]
                      if args.mavlink_base_port else free_udp_ports(3))
@@ -141,6 +188,7 @@ def run(args: argparse.Namespace) -> int:
             return 1
         plan_time = time.monotonic()
         formation, n_slots = w.formations[0], w.powers[0].layout.dim[1].size
+        mission_s = n_slots * params.slot_duration_s + 60.0  # + transit and run-up
         with PRINT_LOCK:
             print("\n$ ros2 topic echo /formation  (first message)")
             print(message_to_yaml(formation) + "---", flush=True)
@@ -148,15 +196,28 @@ def run(args: argparse.Namespace) -> int:
                    for k, p in enumerate(formation.poses) if math.isfinite(p.position.x)}
         if not args.no_mavlink:
             mavlink_pass = MavlinkPass(targets, CAPTURE_RADIUS_M)
-        mission_s = n_slots * params.slot_duration_s + 60.0  # + transit and run-up
-        complete = w.spin_until(lambda: all(len(w.rates[k]) >= n_slots for k in targets),
-                                mission_s / args.time_scale + 10.0, procs)
-        flew_pass = mavlink_pass is None or w.spin_until(
+        killed, kill_lines, answered = set(), [], True
+        if args.kill_uav is not None:
+            killed = {args.kill_uav}
+            kill_lines, answered = kill_agent(w, procs, args.kill_uav, args.at,
+                                              mission_s / args.time_scale + 10.0)
+        running = [p for k, p in enumerate(procs) if k not in killed]
+        finishing = [] if 0 in killed else [k for k in targets if k not in killed]
+        last = w.formations[-1]
+        # (a UAV whose first slots were flown before the watcher saw it: its last slot counts)
+        complete = answered and w.spin_until(
+            lambda: all(len(w.rates[k]) >= n_slots or (
+                w.offloads[k] and w.offloads[k][-1][0] == n_slots - 1) for k in finishing),
+            mission_s / args.time_scale + 10.0, running)
+        if finishing:  # the survivors' targets of the re-plan
+            targets = {k: ((p.position.x, p.position.y, p.position.z) if k in finishing
+                           else targets[k]) for k, p in enumerate(last.poses) if k in targets}
+        flew_pass = mavlink_pass is None or 0 in killed or w.spin_until(
             lambda: mavlink_pass.done(time.monotonic(), args.mavlink_pass_s + SETTLE_S),
-            MAVLINK_TIMEOUT_S, procs)
+            MAVLINK_TIMEOUT_S, running)
         tol = rate_tolerance_bps(params.rate_min_bps)
         # /diagnostics is volatile: a short mission can end before its publisher is matched.
-        w.spin_until(lambda: w.plan_status() is not None, 5.0, procs)
+        w.spin_until(lambda: w.plan_status() is not None, 5.0, running)
         status = w.plan_status()
         with PRINT_LOCK:
             print("\nachieved rate per slot [Mbit/s], slots first-last ('!' = below R_min)")
@@ -171,6 +232,8 @@ def run(args: argparse.Namespace) -> int:
                           params.rate_min_bps, tol, mavlink_pass, plan_time,
                           args.mavlink_pass_s * params.speed, energy, params.e_max_j),
                   flush=True)
+            if kill_lines:
+                print("\n".join(kill_lines), flush=True)
         if not complete:
             print("demo: the mission did not complete in time", flush=True)
         if not flew_pass:
@@ -193,8 +256,9 @@ def main(argv: list[str] | None = None) -> int:
                         help="ROS 2 params file for every node (default: config/params.yaml)")
     parser.add_argument("--num-slots", type=int, default=0,
                         help="override num_slots (default: the params file's)")
-    parser.add_argument("--time-scale", type=float, default=20.0,
-                        help="agents' mission seconds per wall second (default 20)")
+    parser.add_argument("--time-scale", type=float, default=None,
+                        help="agents' mission seconds per wall second (default 20, 4 with "
+                             "--kill-uav)")
     parser.add_argument("--noise-std", type=float, default=0.0,
                         help="agents' position disturbance std per axis [m] (default 0)")
     parser.add_argument("--offloading", choices=("open", "closed"), default="open",
@@ -216,7 +280,20 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--mavlink-base-port", type=int, default=0,
                         help="vehicles listen on UDP PORT, PORT+10, PORT+20 (default: free "
                              "ports chosen by the OS)")
+    parser.add_argument("--kill-uav", type=int, choices=(0, 1, 2), default=None, metavar="K",
+                        help="kill agent K's process (SIGKILL) when the swarm reaches --at SLOT "
+                             "and show the planner's re-plan")
+    parser.add_argument("--at", type=int, default=10, metavar="SLOT",
+                        help="the slot for --kill-uav (default 10)")
+    parser.add_argument("--uav-timeout", type=float, default=None, metavar="S",
+                        help="the planner's uav_timeout_s (default: its own, 5 s)")
     args = parser.parse_args(argv)
+    if args.uav_timeout is not None and not 0.1 <= args.uav_timeout <= 3600.0:
+        parser.error("--uav-timeout must be in [0.1, 3600] s")
+    if args.time_scale is None:
+        args.time_scale = 20.0 if args.kill_uav is None else KILL_TIME_SCALE
+    if args.at < 0:
+        parser.error("--at must be >= 0")
     if args.time_scale <= 0 or args.noise_std < 0:
         parser.error("--time-scale must be > 0 and --noise-std >= 0")
     if args.wind and not all(-50.0 <= v <= 50.0 for v in args.wind):

@@ -118,7 +118,8 @@ def evaluate(p: Params, formation: np.ndarray, p_com: np.ndarray, scheme: str) -
                       for k in uavs}, max(p.p_max_w, 1e-9))
     c["C10"] = status({f"R{k}": float((rates[k] - p.rate_min_bps[k]).min()) for k in uavs},
                       max(max(p.rate_min_bps), 1.0))
-    c["C11"] = status({f"E{k}": p.e_max_j - float(power[k].sum() * p.slot_duration_s)
+    c["C11"] = status({f"E{k}": p.energy_budget_j(k) - float(power[k].sum()
+                                                             * p.slot_duration_s)
                        for k in uavs}, p.e_max_j)
     if scheme == "static-power":
         dev = max(float(np.abs(power[k] - static_power_w(p)).max()) for k in uavs)

@@ -173,6 +173,13 @@ class Params:
     scheme: str
     objective: str
     solver: str
+    #: Per-UAV budgets [J] in place of E_com^max in C11, for a re-plan in mid-mission
+    #: (replan.py); None: e_max_j for every UAV. Not a user parameter: `replace` drops it.
+    energy_budget_uav_j: tuple[float, float, float] | None = None
+
+    def energy_budget_j(self, k: int) -> float:
+        """E_com^max of UAV k in C11: e_max_j, unless a re-plan gave each UAV its own."""
+        return self.e_max_j if self.energy_budget_uav_j is None else self.energy_budget_uav_j[k]
 
     def replace(self, **user_values: Any) -> Params:
         """A copy with some user-facing (file-unit) parameters changed, validated again."""

@@ -169,6 +169,9 @@ class AgentNode(Node):
         log = self.get_logger()
         if self._phase == "track":
             log.info(f"uav{self.k}: {self.flight.track_started_text()}")
+        elif self._phase == "hold":
+            log.warning(f"uav{self.k}: the plan took this UAV out in mid-flight (NaN target): "
+                        f"holding position after {len(self.mission.samples)} slots")
         elif self._phase == "idle":
             log.info(f"uav{self.k}: this scheme does not fly uav{self.k}; holding at home")
         elif self._phase == "done":

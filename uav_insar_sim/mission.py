@@ -3,8 +3,9 @@
 Flight: `transit` is a 3-D flight from home to the run-up point (x_k, -v^2/(2 a), z_k),
 arriving at rest; `track` is the along-track run-up, then slot n starts exactly when the UAV
 reaches y = n v_y delta_t (track time `kinematics.slot_start`), with across-track (x, z) held
-on the plan's target; `done` brakes to a hover straight ahead once all slots are flown. The
-slots themselves are `slots.SlotSchedule`'s.
+on the plan's target; `done` brakes to a hover straight ahead once all slots are flown;
+`hold` (the plan took this UAV out in mid-flight, slots.SlotSchedule.set_plan) brakes the
+same way at once. The slots themselves are `slots.SlotSchedule`'s.
 
 The position handed to the schedule at a slot's start is the flown position plus, optionally,
 a Gaussian disturbance of `noise_std` metres per axis (wind, GNSS error) drawn from a seeded
@@ -123,7 +124,7 @@ class Mission(SlotSchedule):
             end = slot_start(self.num_slots, p.speed, self.max_accel, p.slot_duration_s)
             if self.all_flown and tau >= end - 1e-9:
                 self.phase = "done"
-        elif self.phase == "done" and self.state.velocity.any():
+        elif self.phase in ("done", "hold") and self.state.velocity.any():
             # A velocity command of zero: brake at max_accel to a hover straight ahead.
             self.state = step_toward(self.state, None, h, self.max_speed, self.max_accel)
 
@@ -136,7 +137,7 @@ class Mission(SlotSchedule):
         elif self.phase == "track":
             y, vy = runup_and_cruise(self.t + h - self._track_t0, p.speed, self.max_accel)
             target, v_t = np.array([self.target_xz[0], y, self.target_xz[1]]), (0.0, vy, 0.0)
-        elif self.phase == "done":
+        elif self.phase in ("done", "hold"):
             if self._hold is None:
                 self._hold = self.state.position + np.array(
                     [0.0, runup_distance(max(self.state.velocity[1], 0.0), self.max_accel),

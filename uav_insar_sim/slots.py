@@ -3,10 +3,12 @@ achieved there.
 
 Phases: `wait` (no plan yet) -> `transit` (plan known, before the track) -> `track` (slots
 running) -> `done` (every slot flown). `idle` means the plan does not fly this UAV
-(single-baseline's U2). Slot n belongs at the along-track line y = y_start + n v_y delta_t
-(the model's y[n]). A position source decides when the UAV is there and calls `start_slot`
-with where it actually is: `mission.Mission` flies the UAV itself on the mission clock,
-`observed_mission.ObservedMission` watches a vehicle something else flies.
+(single-baseline's U2); `hold` that a plan in mid-flight took it out (NaN target): it
+stops where it is and flies no more slots. Slot n belongs at the along-track line
+y = y_start + n v_y delta_t (the model's y[n]). A position source decides when the UAV is
+there and calls `start_slot` with where it actually is: `mission.Mission` flies the UAV
+itself on the mission clock, `observed_mission.ObservedMission` watches a vehicle something
+else flies.
 
 The link may differ from the plan (`fading.LinkFading`, off by default) and the power applied
 is the plan's P_com[k][n] (open loop, the default) or the closed-loop choice of
@@ -75,12 +77,14 @@ class SlotSchedule:
 
         Slots already flown stay flown, later ones use the new schedule; a replan during the
         track re-targets across-track while the slots continue. A non-finite target means
-        the plan does not fly this UAV (`idle`). Ignored once the mission is done.
+        the plan does not fly this UAV: `idle` before the flight, `hold` once under way (the
+        planner's hold plan, or this UAV taken out of the plan: stop where it is, start no
+        more slots). Ignored once the mission is done or holding.
         """
-        if self.phase == "done":
+        if self.phase in ("done", "hold"):
             return
         if not all(math.isfinite(v) for v in target_xz):
-            self.phase = "idle"
+            self.phase = "hold" if self.phase in ("transit", "track") else "idle"
             return
         self.target_xz = (float(target_xz[0]), float(target_xz[1]))
         self.powers = [float(p) for p in powers]

@@ -18,6 +18,9 @@ Contract:
   sequence); PX4: the stream never stops (OFFBOARD needs it before and on return).
 - Each UAV has a `phase` (supervision.phase): waiting for heartbeat / waiting for position /
   prearm: <reason> / armed / airborne / in formation / lost ...
+- A formation with every pose NaN after one with targets (the planner's hold: the mission
+  cannot continue) stops the setpoints and commands every vehicle into LOITER / PX4
+  AUTO.LOITER (`hold.HoldOrder`).
 - Two planned UAVs closer than `min_separation_m` are warned about (an event per new
   formation, and `separation` in their status).
 - TCP links connect and reconnect without blocking (`link.TcpClient`), so a dead vehicle is
@@ -39,6 +42,7 @@ from dataclasses import dataclass, replace
 
 from uav_insar_planner.mavlink.config import BridgeConfig
 from uav_insar_planner.mavlink.frames import TrackFrame, Vec3
+from uav_insar_planner.mavlink.hold import HoldOrder
 from uav_insar_planner.mavlink.link import MAV, Link, LinkStats
 from uav_insar_planner.mavlink.sequencer import (
     COPTER_MODE_GUIDED,
@@ -113,6 +117,7 @@ class Bridge:
         self.failure: str | None = None
         self._events: deque[BridgeEvent] = deque(maxlen=1000)
         self._pass = PassTrajectory(config.speed_mps, config.track_duration_s)
+        self._hold = HoldOrder(config.autopilot)
         self._links: dict[str, Link] = {}
         addresses = config.addresses()
         try:
@@ -161,6 +166,13 @@ class Bridge:
         restarts the approach; one with the same y_start keeps the track clock running."""
         clean = clean_formation(poses, len(self._vehicles))
         with self._lock:
+            flown = self._pass.formation is not None and any(self._pass.formation)
+            if any(clean):
+                self._hold.release()
+            elif flown:
+                self._hold.engage()
+                self._event(-1, "warn", "every pose NaN: the mission stopped; commanding "
+                            f"{self._hold.mode_name} to every vehicle")
             if self._pass.set_formation(clean):
                 self._event(-1, "info", "new track start: approaching the formation again")
             self._check_separation(clean)
@@ -345,6 +357,9 @@ class Bridge:
 
     def _send_setpoints(self, now: float) -> None:
         for v in self._vehicles:
+            if self._hold.due(v, now):
+                self._send_command(v, self._hold.command, self._hold.params)
+                self._hold.sent(v, now)
             target = self._pass.target(v.uav, now)
             ardupilot = self.config.autopilot == "ardupilot"
             holding = ardupilot and (v.sequence_active or v.custom_mode != COPTER_MODE_GUIDED)

@@ -1,6 +1,7 @@
 """The ROS parameters of every node of the suite, and how a node declares and guards them.
 
-Tables: the planner's are `params.PARAM_SPECS` (Table I, all settable at run time); the
+Tables: the planner's are `params.PARAM_SPECS` (Table I, all settable at run time) and
+PLANNER_SPECS (its own, not the scenario's: uav_timeout_s, settable at run time); the
 agent's are AGENT_SPECS, MAVLINK_SPECS and the scenario subset AGENT_SCENARIO_NAMES; the
 bridge's are `mavlink.config.BRIDGE_SPECS`. Agent and bridge parameters are read-only: they
 shape a mission or a MAVLink link that is set up once, so a run-time set is refused, never
@@ -72,13 +73,20 @@ MAVLINK_SPECS = (
     ParamSpec("origin_ned_m", float, [0.0, 0.0, 0.0], "MAVLink mode: track origin in the "
               "vehicle's local NED [m], as the bridge's", length=3),
 )
+#: The planner's own parameters beside the scenario's PARAM_SPECS; closed ranges, which rclpy
+#: checks at start and on every set, so nothing else validates them.
+PLANNER_SPECS = (
+    ParamSpec("uav_timeout_s", float, 5.0, "a UAV heard once and then silent (no pose, rate "
+              "or offload) this long [s] is lost: the swarm is re-planned without it", 0.1,
+              3600.0),
+)
 AGENT_SCENARIO_NAMES = ("num_slots", "slot_duration_s", "speed_mps", "ground_station_m",
                         "comm_bandwidth_hz", "ref_snr_db", "rate_min_mbps", "p_com_max_db",
                         "e_com_max_j")
 
 #: Every parameter name of every node of the suite (a shared `/**` section may hold any).
 SUITE_PARAMETER_NAMES = frozenset(
-    [s.name for s in PARAM_SPECS + AGENT_SPECS + MAVLINK_SPECS + BRIDGE_SPECS]
+    [s.name for s in PARAM_SPECS + PLANNER_SPECS + AGENT_SPECS + MAVLINK_SPECS + BRIDGE_SPECS]
     + ["use_sim_time"])
 def allowed(spec: ParamSpec) -> str:
     """What `spec` allows, in words (params.ParamSpec.allowed, plus bool and lists)."""

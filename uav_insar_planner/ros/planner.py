@@ -10,7 +10,10 @@ Publishes (names relative to the node's namespace, except /diagnostics):
   formation/power   std_msgs/Float64MultiArray, reliable + transient_local, depth 1
   /diagnostics      diagnostic_msgs/DiagnosticArray: the plan (OK / ERROR) and, once a second,
                     each UAV's rate margin and position error (WARN when it misses R_min)
-Subscribes uav{K}/pose (PoseStamped) and uav{K}/achieved_rate (Float64, bit/s).
+Subscribes uav{K}/pose (PoseStamped) and uav{K}/achieved_rate (Float64, bit/s); the swarm
+watch (swarm_watch.py: lost UAVs, saturated closed loops, the re-plans they call for, the
+`planner: swarm` status) also uav{K}/offload and /diagnostics. Planner-only parameter:
+uav_timeout_s (parameters.PLANNER_SPECS).
 Service ~/replan (std_srvs/Trigger): solve again with the current parameters.
 Solves run on a worker thread (solve_worker), so the node keeps serving while one runs.
 """
@@ -39,6 +42,7 @@ from uav_insar_planner.plan import Plan
 from uav_insar_planner.ros import diagnostics as report
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.parameters import (
+    PLANNER_SPECS,
     declare_specs,
     guard_sets,
     shown,
@@ -47,6 +51,7 @@ from uav_insar_planner.ros.parameters import (
 )
 from uav_insar_planner.ros.run import run_node
 from uav_insar_planner.ros.solve_worker import SolveWorker
+from uav_insar_planner.ros.swarm_watch import SwarmWatch
 from uav_insar_planner.solver import solve
 
 DIAGNOSTICS_PERIOD_S = 1.0
@@ -58,7 +63,8 @@ class PlannerNode(Node):
 
     def __init__(self, node_name: str = "planner", **kwargs):
         super().__init__(node_name, **kwargs)
-        self.problems = declare_specs(self, PARAM_SPECS) + unknown_overrides(self)
+        self.problems = declare_specs(self, PARAM_SPECS) + declare_specs(self, PLANNER_SPECS)
+        self.problems += unknown_overrides(self)
         params = None
         try:
             params = params_from_mapping(spec_values(self, PARAM_SPECS))
@@ -89,12 +95,14 @@ class PlannerNode(Node):
         self.add_post_set_parameters_callback(self._after_set_parameters)
         self.create_timer(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)
         self._worker = SolveWorker(solve, self._on_solved)
+        self._swarm = SwarmWatch(self, params)
         self._worker.request(params, "start")
 
     def stop(self) -> None:
         """Stop the solve worker (call before destroy_node)."""
         if not self.problems:
             self._worker.stop()
+            self._swarm.stop()
 
     # --- parameters and replanning -------------------------------------------------------
     def _on_set_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
@@ -155,6 +163,23 @@ class PlannerNode(Node):
                 self._reports = [report.UavReport() for _ in range(3)]
         if plan is not None and plan.feasible:
             self._publish_plan(plan)
+            self._swarm.on_plan(plan, params)
+        self._publish_diagnostics()
+
+    # --- the swarm watch's re-plans (swarm_watch.py) -------------------------------------
+    def publish_replan(self, plan: Plan, status: report.Status) -> None:
+        """Adopt and publish a re-plan (a reduced or power re-plan, or the hold plan)."""
+        with self._state_lock:
+            self._plan_status = status
+            self._plan = plan
+            self._reports = [report.UavReport() for _ in range(3)]
+        self._publish_plan(plan)
+        self._publish_diagnostics()
+
+    def set_plan_status(self, status: report.Status) -> None:
+        """Report a re-plan that could not be published."""
+        with self._state_lock:
+            self._plan_status = status
         self._publish_diagnostics()
 
     # --- publishing ----------------------------------------------------------------------
@@ -178,6 +203,7 @@ class PlannerNode(Node):
                 self._plan_status = report.failure_status(
                     self._scenario.scheme, "solve worker died: " + self._worker.failure)
             statuses = [self._plan_status] if self._plan_status else []
+            statuses.append(self._swarm.status())
             if self._plan is not None:
                 rate_min = self._scenario.rate_min_bps
                 for k in self._plan.active_uavs:
@@ -199,10 +225,12 @@ class PlannerNode(Node):
         p = msg.pose.position
         with self._state_lock:
             self._reports[k].position = (p.x, p.y, p.z)
+        self._swarm.on_pose(k, msg)
 
     def _on_rate(self, k: int, msg) -> None:
         with self._state_lock:
             self._reports[k].record_rate(msg.data, self._scenario.rate_min_bps[k])
+        self._swarm.on_rate(k, msg)
 
 
 def main(args: list[str] | None = None) -> int:

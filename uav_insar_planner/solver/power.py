@@ -30,8 +30,9 @@ def station_radius_sq(p: Params, k: int, scheme: str, off: frozenset[str] = froz
     when no position can (e.g. static power above P_max).
 
     With dy2[n] = (y[n] - g_y)^2: rho^2 <= min(P_max / c_k - max dy2,
-    E_max / (N delta_t c_k) - mean dy2); static power P: rho^2 <= P / c_k - max dy2 (C10 alone)
-    and P <= P_max (C9, independent of the position).
+    E_max,k / (N delta_t c_k) - mean dy2) with E_max,k = p.energy_budget_j(k); static
+    power P: rho^2 <= P / c_k - max dy2 (C10 alone) and P <= P_max (C9, independent of the
+    position).
     """
     dy2 = (p.y_track - p.ground_station[1]) ** 2
     c = 0.0 if "C10" in off else rate_cost(p, k)
@@ -43,8 +44,9 @@ def station_radius_sq(p: Params, k: int, scheme: str, off: frozenset[str] = froz
     if c == 0:
         return math.inf
     peak = math.inf if "C9" in off else p.p_max_w / c - float(dy2.max())
+    budget = p.energy_budget_j(k)
     energy = (math.inf if "C11" in off
-              else p.e_max_j / (p.slot_duration_s * p.num_slots * c) - float(dy2.mean()))
+              else budget / (p.slot_duration_s * p.num_slots * c) - float(dy2.mean()))
     return min(peak, energy)
 
 

@@ -28,7 +28,7 @@ def comm_constraints(p: Params, k: int, q: cp.Expression, scheme: str
     else:
         power = cp.Variable(n, name=f"P_com_{k}")
         cons = [power >= 0, power <= p.p_max_w,                                      # C9
-                cp.sum(power) * p.slot_duration_s <= p.e_max_j]                      # C11
+                cp.sum(power) * p.slot_duration_s <= p.energy_budget_j(k)]            # C11
     spectral = math.expm1(p.rate_min_bps[k] / p.comm_bandwidth_hz * math.log(2.0))
     gxz = np.array([p.ground_station[0], p.ground_station[2]])
     dy2 = (p.y_track - p.ground_station[1]) ** 2

@@ -1,0 +1,167 @@
+"""Re-planning in mid-mission: the problem left when a slave is lost or a closed loop
+saturates, and its answer mapped back onto the whole mission (no ROS; the planner node calls it).
+
+Lost slave (`remaining_problem`, `full_plan`): from slot n0 on, the master U0 and the
+surviving slave U_s fly the single-baseline problem (benchmark 1, `schemes.active_uavs`) over
+the N - n0 slots left, each within the energy it has left. The reduced problem is Params with
+
+    num_slots N' = N - n0,  g_y' = g_y - y[n0]  (the along-track origin moved to slot n0: only
+                                                 y[n] - g_y enters the model, so this is exact)
+    scheme single-baseline,  R_min,1' = R_min,s  (the survivor plays U1's part)
+    energy_budget_uav_j = (E_left,0, E_left,s, 0)  (C11 per UAV, `Params.energy_budget_j`)
+
+and the objective and solver of the scenario. `full_plan` maps its answer back: formation
+rows 0 and s, the lost slave NaN (DESIGN.md section 4: a UAV not flown); P_com[k][:n0] keeps
+the schedule flown so far, P_com[k][n0:] is the new one, the lost UAV's row is zero. The plan's
+metrics and constraint report are the reduced problem's (the remaining slots).
+
+Power re-plan (`power_replan`), formation unchanged, for a UAV whose closed loop saturates:
+over the slots n >= n0 left, the least power meeting R_min at the planned position over the
+link gain g the planner measured (`measured_gain`, at most 1: never less than the model asks),
+
+    P[n] = min(P_max, c_k d_n^2 / g),  then scaled by min(1, E_left / (sum_n P[n] delta_t))
+
+so it never plans more than the energy left (C11) nor above P_max (C9); when the budget is
+short every slot left gets the same fraction of its need.
+
+Hold (`hold_plan`): the plan published when the mission cannot continue (the master, or
+every slave, lost): every pose NaN and every power zero; an agent whose target turns NaN in
+mid-mission holds where it is, and the MAVLink bridge commands LOITER.
+"""
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from uav_insar_planner import model
+from uav_insar_planner.params import Params
+from uav_insar_planner.plan import UAV_NAMES, Plan
+from uav_insar_planner.schemes import slave_uavs
+from uav_insar_planner.solver import solve
+from uav_insar_planner.solver.power import power_schedule
+
+REDUCED_SCHEME = "single-baseline"
+
+
+@dataclass(frozen=True)
+class ReducedProblem:
+    """The problem left after UAV `lost` was lost at slot `first_slot`: `params` (SI, its
+    slot 0 is the mission's slot first_slot), flown by the mission's UAVs `rows` (reduced
+    row i is UAV rows[i])."""
+
+    params: Params
+    rows: tuple[int, int]
+    first_slot: int
+    lost: int
+
+
+def energy_left_j(params: Params, power_w: np.ndarray, k: int, first_slot: int) -> float:
+    """E_com^max - sum_{n < first_slot} P_com[k][n] delta_t: what UAV k has left when it flew
+    the schedule `power_w` (3, N) up to slot first_slot."""
+    used = float(np.sum(np.asarray(power_w, dtype=float)[k, :first_slot]))
+    return params.e_max_j - used * params.slot_duration_s
+
+
+def surviving_slave(flown: list[int], lost: int) -> int | None:
+    """The slave still flying when `lost` is lost from the UAVs `flown`, or None if none is."""
+    left = [k for k in flown if k > 0 and k != lost]
+    return left[0] if len(left) == 1 else None
+
+
+def remaining_problem(params: Params, lost: int, survivor: int, first_slot: int,
+                      energy_left: Mapping[int, float]) -> ReducedProblem:
+    """The reduced problem of the module doc. ValueError for the master, a slot outside
+    0..N-1 or a negative energy (one line naming the value)."""
+    if lost == 0 or survivor not in (1, 2) or survivor == lost:
+        raise ValueError(f"lost: value {lost!r} is not allowed; expected a slave (1 or 2) "
+                         f"other than the survivor uav{survivor}")
+    if not 0 <= first_slot < params.num_slots:
+        raise ValueError(f"first_slot: value {first_slot!r} is not allowed; expected 0.."
+                         f"{params.num_slots - 1}")
+    budgets = (float(energy_left[0]), float(energy_left[survivor]))
+    if not all(np.isfinite(e) and e > 0.0 for e in budgets):
+        raise ValueError(f"energy_left: value {list(budgets)!r} is not allowed; expected "
+                         "finite energies > 0 for the master and the survivor")
+    gx, gy, gz = params.ground_station
+    y0 = first_slot * params.speed * params.slot_duration_s  # y[first_slot], equation (1)
+    rate = list(params.raw["rate_min_mbps"])
+    rate[1] = rate[survivor]
+    reduced = params.replace(num_slots=params.num_slots - first_slot, scheme=REDUCED_SCHEME,
+                             ground_station_m=[gx, gy - y0, gz], rate_min_mbps=rate)
+    reduced = dataclasses.replace(reduced, energy_budget_uav_j=(*budgets, 0.0))
+    return ReducedProblem(reduced, (0, survivor), first_slot, lost)
+
+
+def full_plan(problem: ReducedProblem, answer: Plan, flown_power_w: np.ndarray) -> Plan:
+    """`answer` to `problem` as a plan of the whole mission (see the module doc)."""
+    n0, rows = problem.first_slot, problem.rows
+    power = np.array(flown_power_w, dtype=float, copy=True)
+    formation = np.full((3, 2), np.nan)
+    power[:, n0:] = 0.0
+    for i, k in enumerate(rows):
+        formation[k] = answer.formation[i]
+        power[k, n0:] = answer.p_com_w[i]
+    power[problem.lost] = 0.0
+    names = {UAV_NAMES[i]: UAV_NAMES[k] for i, k in enumerate(rows)}
+    metrics = {key: ({names.get(n, n): v for n, v in value.items()}
+                     if isinstance(value, dict) else value)
+               for key, value in answer.metrics.items()}
+    note = (f"re-planned from slot {n0} without {UAV_NAMES[problem.lost]}: "
+            f"{REDUCED_SCHEME} for uav0 and {UAV_NAMES[rows[1]]}")
+    return dataclasses.replace(answer, formation=formation, p_com_w=power, metrics=metrics,
+                               message=note + ("; " + answer.message if answer.message else ""))
+
+
+def replan_without(params: Params, flown_power_w: np.ndarray, lost: int, survivor: int,
+                   first_slot: int, energy_left: Mapping[int, float]
+                   ) -> tuple[Plan, ReducedProblem]:
+    """Solve the problem left after slave `lost` was lost at `first_slot` (`solver.solve`,
+    checked by the independent evaluator) and map it onto the whole mission."""
+    problem = remaining_problem(params, lost, survivor, first_slot, energy_left)
+    answer = solve(problem.params, REDUCED_SCHEME)
+    return full_plan(problem, answer, flown_power_w), problem
+
+
+def measured_gain(params: Params, k: int, position: tuple[float, float, float],
+                  power_w: float, rate_bps: float) -> float:
+    """The channel power gain a slot showed: g = c_k(R) d^2 / P, the power the model needs for
+    the rate achieved over the power applied (1 on the paper's link); nan if P <= 0."""
+    if power_w <= 0.0:
+        return float("nan")
+    d = model.distance_to_station(*position, params.ground_station)
+    return float(model.power_for_rate(rate_bps, d, params.comm_bandwidth_hz,
+                                      params.beta_c)) / power_w
+
+
+def power_replan(params: Params, plan: Plan, k: int, first_slot: int, energy_left: float,
+                 gain: float = 1.0) -> Plan:
+    """`plan` with UAV k's power for the slots n >= first_slot re-planned (module doc)."""
+    x, z = plan.formation[k]
+    gain = min(1.0, gain) if np.isfinite(gain) and gain > 0.0 else 1.0
+    need = power_schedule(params, k, float(x), float(z), "proposed")[first_slot:] / gain
+    need = np.minimum(need, params.p_max_w)
+    total_j = float(need.sum()) * params.slot_duration_s
+    if total_j > max(energy_left, 0.0):
+        need *= max(energy_left, 0.0) / total_j
+    power = np.array(plan.p_com_w, dtype=float, copy=True)
+    power[k, first_slot:] = need
+    note = (f"power of {UAV_NAMES[k]} re-planned from slot {first_slot} with "
+            f"{energy_left:.1f} J left, link gain {10 * np.log10(gain):+.1f} dB")
+    return dataclasses.replace(plan, p_com_w=power, message=note)
+
+
+def hold_plan(params: Params, why: str) -> Plan:
+    """The plan of a mission that cannot continue: every pose NaN (hold), every power zero."""
+    return Plan(feasible=False, scheme=params.scheme, objective=params.objective,
+                solver=params.solver, formation=np.full((3, 2), np.nan),
+                p_com_w=np.zeros((3, params.num_slots)), sigma_h_m=float("nan"),
+                sigma_h_bound_m=float("nan"), iterations=0, solve_time_s=0.0,
+                constraints={}, message=why)
+
+
+def flown_slaves(plan: Plan) -> list[int]:
+    """The slaves `plan` flies (rows not NaN)."""
+    return [k for k in plan.active_uavs if k in slave_uavs("proposed")]

@@ -1,0 +1,259 @@
+"""The planner's watch over the swarm in flight: lost UAVs and saturated closed loops, and the
+re-plans they call for (the ROS side of `swarm_monitor`; the mathematics is `replan`'s).
+
+Created by the planner node, which feeds it uavK/pose and uavK/achieved_rate (`on_pose`,
+`on_rate`) and every plan it publishes (`on_plan`); it subscribes uavK/offload and
+/diagnostics (the MAVLink bridge's `mavlink_bridge: uavK` statuses with link `lost`) itself,
+and checks the swarm every CHECK_PERIOD_S against the planner parameter `uav_timeout_s`.
+
+- Lost slave, the plan flew it and one slave survives: the single-baseline problem of
+  `replan.remaining_problem` is solved (on a worker thread) from the slot the swarm reached
+  with the energy left; the plan is published on formation / formation/power (the lost UAV
+  NaN, its power row zero) with the plan status `uavK lost at slot n (why); re-planned from
+  slot n without uavK: ...`; WARN instead of OK when a new target lies within
+  plan.SAFE_SEPARATION_M (across-track) of where the lost UAV was last heard (the solver knows
+  nothing of it, and a UAV that is only silent may still be there). An infeasible reduced
+  problem is reported (ERROR) and not published: the survivors fly on with the plan they
+  have.
+- Lost master (or no slave left): nothing can be measured any more; the plan status is ERROR
+  `mission cannot continue: master uav0 lost at slot n (why)` and the hold plan
+  (`replan.hold_plan`: every pose NaN, every power zero) is published: agents hold where
+  they are, the bridge commands LOITER.
+- Saturated closed loop (`swarm_monitor.Saturated`): WARN on the `planner: swarm` status,
+  then the power re-plan of `replan.power_replan` for that UAV, formation unchanged.
+- `status()`: the `planner: swarm` status, one value per UAV (heard / not heard / lost).
+"""
+from __future__ import annotations
+
+import math
+import threading
+import time
+from dataclasses import dataclass
+from typing import Any
+
+from diagnostic_msgs.msg import DiagnosticArray
+from std_msgs.msg import Float64MultiArray
+
+from uav_insar_planner import replan
+from uav_insar_planner.params import Params
+from uav_insar_planner.plan import SAFE_SEPARATION_M, UAV_NAMES, Plan
+from uav_insar_planner.ros import diagnostics as report
+from uav_insar_planner.ros import topics
+from uav_insar_planner.ros.solve_worker import SolveWorker
+from uav_insar_planner.ros.swarm_monitor import Lost, Saturated, SwarmMonitor
+
+CHECK_PERIOD_S = 0.1
+SWARM_STATUS_NAME = "planner: swarm"
+BRIDGE_STATUS_PREFIX = "mavlink_bridge: uav"
+
+
+@dataclass(frozen=True)
+class LostSlaveReplan:
+    """A reduced problem to solve on the worker thread."""
+
+    params: Params
+    plan: Plan
+    lost: Lost
+    survivor: int
+    energy_left: dict[int, float]
+
+
+class SwarmWatch:
+    """See the module docstring. `node` is the PlannerNode (publish_replan, parameters)."""
+
+    def __init__(self, node: Any, params: Params):
+        self._node = node
+        self._lock = threading.Lock()
+        self._params = params
+        self._plan: Plan | None = None
+        self.monitor = SwarmMonitor(params)
+        self._ended: str | None = None  # why the mission cannot continue
+        self._warnings: list[str] = []
+        for k in range(3):
+            node.create_subscription(Float64MultiArray, topics.offload(k),
+                                     lambda msg, k=k: self._on_offload(k, msg),
+                                     topics.RATE_DEPTH)
+        node.create_subscription(DiagnosticArray, topics.DIAGNOSTICS, self._on_diagnostics,
+                                 topics.RATE_DEPTH)
+        node.create_timer(CHECK_PERIOD_S, self._check)
+        self._worker = SolveWorker(self._solve, self._on_solved)
+
+    def stop(self) -> None:
+        self._worker.stop()
+
+    # --- inputs ----------------------------------------------------------------------------
+    def on_pose(self, k: int, msg: Any) -> None:
+        p = msg.pose.position
+        with self._lock:
+            self.monitor.heard_pose(k, time.monotonic(), (p.x, p.y, p.z))
+
+    def on_rate(self, k: int, msg: Any) -> None:
+        with self._lock:
+            self.monitor.heard_rate(k, time.monotonic(), msg.data)
+
+    def _on_offload(self, k: int, msg: Any) -> None:
+        data = list(msg.data)
+        if len(data) != len(topics.OFFLOAD_FIELDS):
+            return
+        with self._lock:
+            self.monitor.heard_offload(k, time.monotonic(), int(data[0]), data[1], data[3])
+
+    def _on_diagnostics(self, msg: Any) -> None:
+        for s in msg.status:
+            if not s.name.startswith(BRIDGE_STATUS_PREFIX):
+                continue
+            values = {kv.key: kv.value for kv in s.values}
+            suffix = s.name[len(BRIDGE_STATUS_PREFIX):]
+            if values.get("link") == "lost" and suffix.isdigit():
+                with self._lock:
+                    lost = self.monitor.bridge_lost(int(suffix), time.monotonic(), s.message)
+                if lost is not None:
+                    self._react(lost)
+
+    def on_plan(self, plan: Plan, params: Params) -> None:
+        """A full plan was published: the swarm flies it now (a UAV already lost is taken
+        out of it again at once)."""
+        with self._lock:
+            self._plan, self._params = plan, params
+            self.monitor.set_plan(plan.p_com_w, params)
+            lost = list(self.monitor.lost.values())
+        for item in lost:
+            self._react(item, again=True)
+
+    # --- reactions -------------------------------------------------------------------------
+    def _check(self) -> None:
+        timeout = float(self._node.get_parameter("uav_timeout_s").value)
+        with self._lock:
+            lost = self.monitor.check(time.monotonic(), timeout)
+            saturated = self.monitor.take_saturated()
+        for item in lost:
+            self._react(item)
+        for event in saturated:
+            self._power_replan(event)
+
+    def _react(self, lost: Lost, again: bool = False) -> None:
+        name = UAV_NAMES[lost.uav]
+        log = self._node.get_logger()
+        with self._lock:
+            plan, params = self._plan, self._params
+        if not again:
+            log.warning(f"{name} lost at slot {lost.slot}: {lost.why}")
+        if plan is None or lost.uav not in plan.active_uavs:
+            return  # not flown by the plan: nothing to re-plan
+        survivor = replan.surviving_slave(plan.active_uavs, lost.uav)
+        if lost.uav == 0 or survivor is None:
+            who = f"master {name}" if lost.uav == 0 else f"{name}, the last slave,"
+            self._hold(params, lost, f"mission cannot continue: {who} lost at slot "
+                                     f"{lost.slot} ({lost.why}); every UAV holds position")
+            return
+        if lost.slot >= params.num_slots:
+            log.info(f"{name} lost after the last slot: nothing left to re-plan")
+            return
+        with self._lock:
+            energy = {k: self.monitor.energy_left_j(k, lost.slot) for k in (0, survivor)}
+        self._worker.request(LostSlaveReplan(params, plan, lost, survivor, energy),
+                             f"{name} lost")
+
+    def _hold(self, params: Params, lost: Lost, why: str) -> None:
+        with self._lock:
+            self._ended = why
+        status = report.Status(report.ERROR, report.PLAN_STATUS_NAME, why,
+                               [("lost_uav", UAV_NAMES[lost.uav]), ("lost_at_slot",
+                                                                    str(lost.slot))])
+        self._node.get_logger().error(why)
+        self._node.publish_replan(replan.hold_plan(params, why), status)
+
+    def _solve(self, request: LostSlaveReplan) -> Plan:
+        lost = request.lost
+        plan, _ = replan.replan_without(request.params, request.plan.p_com_w, lost.uav,
+                                        request.survivor, lost.slot, request.energy_left)
+        return plan
+
+    def _on_solved(self, request: LostSlaveReplan, plan: Plan | None, error: str | None,
+                   reason: str) -> None:
+        lost, log = request.lost, self._node.get_logger()
+        head = f"{UAV_NAMES[lost.uav]} lost at slot {lost.slot} ({lost.why})"
+        if plan is None or not plan.feasible:
+            why = error or (report.plan_status(plan).message if plan else "no plan")
+            status = report.Status(report.ERROR, report.PLAN_STATUS_NAME,
+                                   f"{head}: re-plan failed, flying on with the old plan: {why}")
+            log.error(status.message)
+            self._node.set_plan_status(status)
+            return
+        status = report.plan_status(plan)
+        latency = time.monotonic() - lost.at
+        status.message = f"{head}; {plan.message}: {status.message}"
+        with self._lock:
+            last = self.monitor.uavs[lost.uav].position
+        near = self._near_the_lost(plan, lost.uav, last)
+        if near:
+            status.level = report.WARN
+            status.message += "; " + near
+        status.values += [("lost_uav", UAV_NAMES[lost.uav]), ("lost_at_slot", str(lost.slot)),
+                          ("replan_latency_s", report.fmt(latency))]
+        with self._lock:
+            self._plan = plan
+            self.monitor.set_plan(plan.p_com_w)
+        self._node.publish_replan(plan, status)
+        log.info(f"{status.message}; published {latency * 1e3:.0f} ms after detection")
+
+    @staticmethod
+    def _near_the_lost(plan: Plan, lost: int, last: tuple[float, float, float] | None) -> str:
+        """A warning when a new target is within SAFE_SEPARATION_M (across-track) of where the
+        lost UAV was last heard: a UAV that is only silent may still be there."""
+        if last is None:
+            return ""
+        close = [(k, math.hypot(plan.formation[k][0] - last[0], plan.formation[k][1] - last[2]))
+                 for k in plan.active_uavs]
+        close = [(k, d) for k, d in close if d < SAFE_SEPARATION_M]
+        return "; ".join(f"{UAV_NAMES[k]}'s new target is {d:.2f} m across-track from where "
+                         f"{UAV_NAMES[lost]} was last heard (it may still be there)"
+                         for k, d in close)
+
+    def _power_replan(self, event: Saturated) -> None:
+        with self._lock:
+            plan, params = self._plan, self._params
+        name = UAV_NAMES[event.uav]
+        cause = "at P_max" if event.at_p_max else "short of energy"
+        warning = (f"{name} closed loop saturated: R_min missed {len(event.slots)} slots in a "
+                   f"row (slots {event.slots[0]}-{event.slots[-1]}) {cause}")
+        log = self._node.get_logger()
+        log.warning(warning)
+        with self._lock:
+            self._warnings.append(warning)
+        if plan is None or event.uav not in plan.active_uavs or (
+                event.next_slot >= params.num_slots):
+            return
+        new = replan.power_replan(params, plan, event.uav, event.next_slot,
+                                  event.energy_left_j, event.gain)
+        status = report.plan_status(new)
+        status.message = f"{warning}; {new.message}: {status.message}"
+        with self._lock:
+            self._plan = new
+            self.monitor.set_plan(new.p_com_w)
+        self._node.publish_replan(new, status)
+        log.info(status.message)
+
+    # --- the operator's view ---------------------------------------------------------------
+    def status(self) -> report.Status:
+        """The `planner: swarm` diagnostic status."""
+        now = time.monotonic()
+        with self._lock:
+            m = self.monitor
+            values = [(UAV_NAMES[k], m.describe(k, now)) for k in range(len(m.uavs))]
+            values.append(("next_slot", str(m.next_slot())))
+            lost = [f"{UAV_NAMES[k]} lost at slot {item.slot}" for k, item in
+                    sorted(m.lost.items())]
+            heard = [UAV_NAMES[k] for k, u in enumerate(m.uavs)
+                     if u.last_heard is not None and k not in m.lost]
+            ended, warnings = self._ended, list(self._warnings[-3:])
+        values.append(("uav_timeout_s", report.fmt(
+            float(self._node.get_parameter("uav_timeout_s").value))))
+        if ended:
+            return report.Status(report.ERROR, SWARM_STATUS_NAME, ended, values)
+        if lost or warnings:
+            return report.Status(report.WARN, SWARM_STATUS_NAME, "; ".join(lost + warnings),
+                                 values)
+        if not heard:
+            return report.Status(report.STALE, SWARM_STATUS_NAME, "no UAV heard yet", values)
+        return report.Status(report.OK, SWARM_STATUS_NAME, ", ".join(heard) + " heard", values)
