@@ -11,6 +11,9 @@ or opened.
 
 Subscribes  formation (geometry_msgs/PoseArray, reliable + transient_local, depth 1):
             poses[k] = (x_k, y_start, z_k) in the track frame; NaN for a UAV not flown.
+            Validated at entry (ros/plan_msgs.py): a bad one is dropped with one rate-limited
+            log line, counted (`bad_plan_messages` on /diagnostics), and the formation flown
+            stays.
 Publishes   uav{K}/mavlink/pose (geometry_msgs/PoseStamped, frame insar_track), the
             vehicle's LOCAL_POSITION_NED in the track frame, each time a new one arrives;
             /diagnostics (diagnostic_msgs/DiagnosticArray) once a second, one status per UAV:
@@ -24,6 +27,7 @@ from __future__ import annotations
 
 import math
 import sys
+import time
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -39,6 +43,7 @@ from uav_insar_planner.ros.parameters import (
     spec_values,
     unknown_overrides,
 )
+from uav_insar_planner.ros.plan_msgs import DropLog, PlanMessageError, decode_formation
 from uav_insar_planner.ros.run import run_node
 
 POSE_PERIOD_S = 0.05  # poll the bridge at 20 Hz: vehicles report at ~10 Hz
@@ -70,6 +75,7 @@ class MavlinkBridgeNode(Node):
                            for k in range(n)]
         self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, topics.DEPTH)
         self._last_pose_age: list[float | None] = [None] * n
+        self._drops = DropLog(self.get_logger().warning, time.monotonic)
         self.create_subscription(PoseArray, topics.FORMATION, self._on_formation,
                                  topics.LATCHED)
         self.create_timer(POSE_PERIOD_S, self._publish_poses)
@@ -82,11 +88,11 @@ class MavlinkBridgeNode(Node):
             self.bridge.stop()
 
     def _on_formation(self, msg: Any) -> None:
-        poses = []
-        for pose in msg.poses:
-            p = pose.position
-            point = (float(p.x), float(p.y), float(p.z))
-            poses.append(point if all(math.isfinite(c) for c in point) else None)
+        try:  # validated at entry: a bad formation never reaches the MAVLink thread
+            poses = list(decode_formation(msg).points)
+        except PlanMessageError as exc:
+            self._drops.drop(exc)
+            return
         self.bridge.set_formation(poses)
         flown = sum(p is not None for p in poses)
         self.get_logger().info(f"formation received: {flown} UAV(s) with a target")
@@ -160,7 +166,8 @@ class MavlinkBridgeNode(Node):
                   ("position_track_m", s.position_track), ("position_error_m", error),
                   ("rx_messages", link.rx_messages), ("bad_data", link.bad_data),
                   ("truncated", link.truncated), ("unknown_msgid", link.unknown_msgid),
-                  ("foreign", link.foreign), ("io_errors", link.io_errors)]
+                  ("foreign", link.foreign), ("io_errors", link.io_errors),
+                  ("bad_plan_messages", self._drops.count)]
         return DiagnosticStatus(level=level, name=f"mavlink_bridge: uav{s.uav}",
                                 message=text, hardware_id=f"mavlink sysid {s.sysid}",
                                 values=[KeyValue(key=k, value=fmt(v)) for k, v in values])

@@ -8,8 +8,10 @@ from __future__ import annotations
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 FRAME_ID = "insar_track"
-FORMATION = "formation"  # geometry_msgs/PoseArray, LATCHED
-POWER = "formation/power"  # std_msgs/Float64MultiArray, LATCHED
+# A plan's identity (ros/plan_msgs.py): formation's header.stamp, and the same stamp with the
+# planner's name in the power message's third layout dimension, "plan /planner <sec>.<ns>".
+FORMATION = "formation"  # geometry_msgs/PoseArray, LATCHED; header.stamp = the plan's stamp
+POWER = "formation/power"  # std_msgs/Float64MultiArray [uav, slot, plan id], LATCHED
 DIAGNOSTICS = "/diagnostics"  # diagnostic_msgs/DiagnosticArray, depth 10
 REPLAN = "~/replan"  # std_srvs/Trigger
 
@@ -43,6 +45,12 @@ def offload(k: int) -> str:
     applied [W], energy used so far this slot included and left of E_com^max [J]),
     RATE_DEPTH."""
     return f"uav{k}/offload"
+
+
+def flown_plan(k: int) -> str:
+    """std_msgs/String, LATCHED: the identity label of the plan agent k flies
+    ("plan /planner <sec>.<nanosec>"), published each time it adopts one (ros/plan_gate.py)."""
+    return f"uav{k}/plan"
 
 
 def mavlink_pose(k: int) -> str:
