@@ -112,9 +112,12 @@ def test_planner_bridge_vehicles_end_to_end(watcher):
 def test_a_formation_beyond_float32_is_dropped_at_entry(watcher):
     """A formation x of 1e39 is finite but does not fit MAVLink's float32 (packing it raised
     inside the I/O thread once): the bridge validates at entry, so it is dropped with one log
-    line, counted on /diagnostics, the link stays OK and the previous formation is flown."""
+    line, counted on /diagnostics, the link stays OK and the previous formation is flown.
+    The test node publishes one plan (formation + power of one identity, ros/plan_msgs.py)."""
     from geometry_msgs.msg import Pose, PoseArray
+    from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
+    from uav_insar_planner.ros.plan_msgs import PlanId
     from uav_insar_planner.ros.topics import LATCHED
 
     vehicle = SimVehicle(2, "udpin:127.0.0.1:0", "ardupilot", start_ned=(0.0, 0.0, -10.0),
@@ -138,10 +141,18 @@ def test_a_formation_beyond_float32_is_dropped_at_entry(watcher):
         assert watcher.spin_until(lambda: any(s.level == DiagnosticStatus.OK
                                               for s in bridge_says()), 20.0), "never linked"
         good = PoseArray(poses=[Pose()])
+        good.header.stamp.sec = 7
         good.poses[0].position.x, good.poses[0].position.z = 3.0, 12.0
+        power = Float64MultiArray(data=[0.1])
+        power.layout.dim = [MultiArrayDimension(label="uav", size=1, stride=1),
+                            MultiArrayDimension(label="slot", size=1, stride=1),
+                            MultiArrayDimension(label=PlanId(7, 0, "/watcher").label, size=1,
+                                                stride=1)]
         pub.publish(good)
+        watcher.node.create_publisher(Float64MultiArray, "/formation/power",
+                                      LATCHED).publish(power)
         assert watcher.spin_until(lambda: target_xz() == ("3.000", "12.000"), 10.0)
-        poison = PoseArray(poses=[Pose()])
+        poison = PoseArray(poses=[Pose()])  # stamp 0: a plan of its own if it were valid
         poison.poses[0].position.x, poison.poses[0].position.z = 1e39, 10.0
         pub.publish(poison)
         assert watcher.spin_until(

@@ -97,7 +97,8 @@ class AgentNode(Node):
                                                topics.RATE_DEPTH)
         self._offload_pub = self.create_publisher(Float64MultiArray, topics.offload(self.k),
                                                   topics.RATE_DEPTH)
-        self.gate = PlanGate(self, self._adopt_plan, self.k)  # one plan at a time
+        self.gate = PlanGate(self, self._adopt_plan, f"uav{self.k}: ",  # one plan at a time
+                             topics.flown_plan(self.k))
         self.create_timer(TICK_PERIOD_S, self._tick)
         note = self.flight.start()
         if note:

@@ -1,8 +1,9 @@
-"""One plan at a time for a consumer of `formation` + `formation/power` (the agents).
+"""One plan at a time for a consumer of `formation` + `formation/power` (the agents and the
+MAVLink bridge).
 
-`PlanGate(node, on_plan, uav)` subscribes both latched topics, decodes and validates each
-message (plan_msgs; a bad one is dropped, logged rate-limited and counted, nothing changes),
-pairs a formation with the power message of the same stamp, and calls
+`PlanGate(node, on_plan, prefix, flown_topic)` subscribes both latched topics, decodes and
+validates each message (plan_msgs; a bad one is dropped, logged rate-limited and counted,
+nothing changes), pairs a formation with the power message of the same stamp, and calls
 `on_plan(formation, power)` only for a complete pair whose named planner is, at that moment,
 the sole publisher of both topics in the ROS graph:
 - a formation without its power (or the reverse) waits; a pair never mixes two plans;
@@ -12,8 +13,9 @@ the sole publisher of both topics in the ROS graph:
 - the latched-message race: data can arrive before the graph shows (or names) its publisher,
   so a plan is adopted only on a graph check that names its planner as the sole publisher,
   done on arrival and again every GRAPH_PERIOD_S.
-The plan in use is published on `uav{K}/plan` (std_msgs/String, latched) as its identity label,
-for the planner to report which plan each agent flies.
+With `flown_topic` (an agent's `uav{K}/plan`), the plan in use is published there
+(std_msgs/String, latched) as its identity label, for the planner to report which plan each
+agent flies. `prefix` starts every log line (e.g. "uav1: ").
 """
 from __future__ import annotations
 
@@ -98,15 +100,16 @@ class PlanGate:
     """See the module docstring. `dropped` counts the messages refused by validation."""
 
     def __init__(self, node: Node, on_plan: Callable[[Formation, PowerSchedule], None],
-                 uav: int) -> None:
-        self._node, self._on_plan, self._prefix = node, on_plan, f"uav{uav}: "
+                 prefix: str = "", flown_topic: str | None = None) -> None:
+        self._node, self._on_plan, self._prefix = node, on_plan, prefix
         self._pairing = PlanPairing()
         log = node.get_logger()
         self._drops = DropLog(log.warning, time.monotonic)
         self._held: tuple[str, ...] = ()
         self._formation_topic = node.resolve_topic_name(topics.FORMATION)
         self._power_topic = node.resolve_topic_name(topics.POWER)
-        self._flown_pub = node.create_publisher(String, topics.flown_plan(uav), topics.LATCHED)
+        self._flown_pub = (node.create_publisher(String, flown_topic, topics.LATCHED)
+                           if flown_topic else None)
         node.create_subscription(PoseArray, topics.FORMATION, self._on_formation,
                                  topics.LATCHED)
         node.create_subscription(Float64MultiArray, topics.POWER, self._on_power,
@@ -157,4 +160,5 @@ class PlanGate:
         chosen = self._pairing.choose(formation_pubs, power_pubs)
         if chosen is not None:
             self._on_plan(*chosen)
-            self._flown_pub.publish(String(data=chosen[1].plan_id.label))
+            if self._flown_pub is not None:
+                self._flown_pub.publish(String(data=chosen[1].plan_id.label))

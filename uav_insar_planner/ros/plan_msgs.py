@@ -56,7 +56,7 @@ class PlanMessageError(ValueError):
         self.topic, self.field = topic, field
 
 
-@dataclass(frozen=True, order=True)
+@dataclass(frozen=True)
 class PlanId:
     """A plan's identity: its stamp (sec, nanosec) and the planner's fully qualified name."""
 
@@ -78,7 +78,7 @@ class PlanId:
     @classmethod
     def from_label(cls, label: str) -> PlanId | None:
         found = _ID_LABEL.match(label)
-        if found is None or int(found[3]) >= 1_000_000_000:
+        if found is None:
             return None
         return cls(int(found[2]), int(found[3]), found[1])
 

@@ -2,6 +2,9 @@
 
 Names are relative (a namespace moves the whole swarm) except /diagnostics. Frame
 `insar_track`: x = range / across-track, y = azimuth / along-track, z = up; SI on every topic.
+A plan is `formation` + `formation/power` under one identity, validated wherever it enters
+(ros/plan_msgs.py); agents and the bridge apply one plan at a time, of the sole planner on the
+domain (ros/plan_gate.py).
 """
 from __future__ import annotations
 
@@ -15,8 +18,8 @@ POWER = "formation/power"  # std_msgs/Float64MultiArray [uav, slot, plan id], LA
 DIAGNOSTICS = "/diagnostics"  # diagnostic_msgs/DiagnosticArray, depth 10
 REPLAN = "~/replan"  # std_srvs/Trigger
 
-# /formation and /formation/power: a late joiner (an agent started after the planner, or a
-# planner restarted) still gets the last plan.
+# /formation, /formation/power and uavK/plan: a late joiner (an agent started after the
+# planner, or a planner restarted) still gets the last plan, and which plan each agent flies.
 LATCHED = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
                      reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
