@@ -63,6 +63,10 @@ def test_plan_identity_is_the_same_on_both_topics_and_changes_on_replan(watcher,
 
 
 def test_two_planners_are_reported_and_never_mixed(watcher, procs):
+    """proposed (/planner) and fixed-master (/planner2): both report ERROR naming the other,
+    the agents hold the first plan; planner2 stops: they fly on with /planner's plan (rates
+    of its power at its formation); planner2 again and /planner stops: they take planner2's
+    latched plan."""
     w = watcher
     params = load_params(overrides={"num_slots": N})
     proposed = solve(params)
@@ -99,13 +103,27 @@ def test_two_planners_are_reported_and_never_mixed(watcher, procs):
     for k in range(3):
         got = w.rates[k]
         assert np.allclose(got, expected[k][:len(got)], rtol=1e-9), k
+
+    # planner2 again, then the first goes: the agents take planner2's latched plan, whole.
+    again = procs("planner", *COMMON, "-p", "scheme:=fixed-master", "-r", "__node:=planner2")
+    seen = len(w.powers)
+    assert w.spin_until(lambda: len(w.powers) > seen and w.formations, 30.0)
+    second_id = w.plan_ids()[1][-1]
+    assert second_id.planner == "/planner2"
+    w.spin_until(lambda: False, 1.0)
+    assert all(f == [first_id] for f in w.flown_plans.values()), w.flown_plans
+    assert stop_node(first) == 0
+    assert w.spin_until(lambda: all(len(f) == 2 for f in w.flown_plans.values()), 15.0), \
+        w.flown_plans
+    assert all(f == [first_id, second_id.label] for f in w.flown_plans.values())
     outs = [a.stdout for a in agents]
-    assert [stop_node(p) for p in (first, *agents)] == [0, 0, 0, 0]
+    assert [stop_node(p) for p in (again, *agents)] == [0, 0, 0, 0]
     for k, out in enumerate(outs):
         text = out.read()
         assert f"uav{k}: 2 publishers of formation (/planner, /planner2): keeping " \
                f"{first_id}" in text, text
-        assert text.count(f"uav{k}: flying plan") == 1, text
+        assert text.count(f"uav{k}: flying plan") == 2, text
+        assert f"uav{k}: flying {second_id}" in text, text
 
 
 def test_bad_plan_messages_are_dropped_by_an_agent_and_the_bridge(watcher, procs):

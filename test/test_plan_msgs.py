@@ -155,3 +155,19 @@ def test_pairing_holds_while_two_planners_publish_and_takes_the_survivors_plan(p
     # An older plan of a planner never replaces its newer one.
     _pair(pairing, proposed, PlanId(9, 0, "/planner2"))
     assert pairing.latest["/planner2"][1].plan_id == b
+
+
+def test_a_planner_gone_from_the_graph_is_forgotten(plans):
+    """Restarted under the same name, a planner's predecessor's plan is never adopted for it."""
+    proposed, single = plans
+    pairing = PlanPairing()
+    both = ["/planner", "/planner2"]
+    _pair(pairing, proposed, PlanId(10, 0, "/planner"))
+    _pair(pairing, single, PlanId(11, 0, "/planner2"))
+    assert pairing.choose(both, both) is None
+    assert pairing.choose(["/planner"], ["/planner"])[1].plan_id.planner == "/planner"
+    assert "/planner2" not in pairing.latest  # it left the graph: forgotten
+    assert pairing.choose(both, both) is None  # /planner2 restarted, its plan not here yet
+    assert pairing.choose(["/planner2"], ["/planner2"]) is None  # /planner left
+    _pair(pairing, single, PlanId(12, 0, "/planner2"))
+    assert pairing.choose(["/planner2"], ["/planner2"])[1].plan_id == PlanId(12, 0, "/planner2")

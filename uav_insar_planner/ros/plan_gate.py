@@ -12,7 +12,10 @@ the sole publisher of both topics in the ROS graph:
   (the latched messages of both planners are kept, per planner, for that moment);
 - the latched-message race: data can arrive before the graph shows (or names) its publisher,
   so a plan is adopted only on a graph check that names its planner as the sole publisher,
-  done on arrival and again every GRAPH_PERIOD_S.
+  done on arrival and again every GRAPH_PERIOD_S; and a planner that leaves the graph has
+  its plans forgotten, so one restarted under the same name is followed only with its own.
+  Limit: two live processes under one name, whose data beats the graph, cannot be told apart
+  until the graph shows both.
 With `flown_topic` (an agent's `uav{K}/plan`), the plan in use is published there
 (std_msgs/String, latched) as its identity label, for the planner to report which plan each
 agent flies. `prefix` starts every log line (e.g. "uav1: ").
@@ -50,6 +53,7 @@ class PlanPairing:
         self.latest: dict[str, tuple[Formation, PowerSchedule]] = {}  # per planner
         self.current: PlanId | None = None
         self.mismatch: str | None = None  # the last pair refused, why (for one log line)
+        self._in_graph: set[str] = set()  # publishers at the last choose()
 
     def add_formation(self, f: Formation) -> None:
         _keep(self._formations, f.stamp, f)
@@ -74,7 +78,18 @@ class PlanPairing:
     def choose(self, formation_pubs: Sequence[str],
                power_pubs: Sequence[str]) -> tuple[Formation, PowerSchedule] | None:
         """The pair to apply now, or None: only the latest plan of the sole publisher of both
-        topics, and only when it is not the plan in use."""
+        topics, and only when it is not the plan in use.
+
+        The plans of a planner that was in the graph and has left it are forgotten first: one
+        restarted under the same name must not have its predecessor's plan adopted in its
+        name before its own latched plan has arrived. A planner not yet seen in the graph
+        keeps its plans (its data can arrive first)."""
+        present = set(formation_pubs) | set(power_pubs)
+        for gone in self._in_graph - present:
+            self.latest.pop(gone, None)
+            for stamp in [s for s, p in self._powers.items() if p.plan_id.planner == gone]:
+                del self._powers[stamp]
+        self._in_graph = present
         if len(formation_pubs) != 1 or list(power_pubs) != list(formation_pubs):
             return None
         pair = self.latest.get(formation_pubs[0])

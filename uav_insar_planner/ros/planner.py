@@ -159,18 +159,20 @@ class PlannerNode(Node):
             self._plan_status = status
             if plan is not None and plan.feasible:
                 self._plan = plan
-                self._plan_id = PlanId(*plan_msgs.next_stamp(
-                    self.get_clock().now().seconds_nanoseconds(),
-                    self._plan_id.stamp if self._plan_id else None),
-                    self.get_fully_qualified_name())
                 self._reports = [report.UavReport() for _ in range(3)]
-                plan_id = self._plan_id
         if plan is not None and plan.feasible:
-            self._publish_plan(plan, plan_id)
+            self._publish_plan(plan)
         self._publish_diagnostics()
 
     # --- publishing ----------------------------------------------------------------------
-    def _publish_plan(self, plan: Plan, plan_id: PlanId) -> None:
+    def _publish_plan(self, plan: Plan) -> None:
+        """Both messages under a new identity (plan_msgs: stamps unique per planner)."""
+        with self._state_lock:
+            last = self._plan_id.stamp if self._plan_id else None
+            self._plan_id = PlanId(*plan_msgs.next_stamp(
+                self.get_clock().now().seconds_nanoseconds(), last),
+                self.get_fully_qualified_name())
+            plan_id = self._plan_id
         msg, power = plan_msgs.encode(plan, plan_id)
         self._formation_pub.publish(msg)
         self._power_pub.publish(power)
