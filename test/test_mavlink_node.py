@@ -109,12 +109,15 @@ def test_planner_bridge_vehicles_end_to_end(watcher):
     assert "formation established" in bridge_out, bridge_out
 
 
-def test_a_dead_mavlink_thread_turns_the_bridge_error(watcher):
-    """Fault injection: a formation x of 1e39 is finite (so it passes as a target) but does not
-    fit MAVLink's float32, and packing it raises inside the bridge's I/O thread. The node must
-    then report every UAV ERROR, never "linked"."""
+def test_a_formation_beyond_float32_is_dropped_at_entry(watcher):
+    """A formation x of 1e39 is finite but does not fit MAVLink's float32 (packing it raised
+    inside the I/O thread once): the bridge validates at entry, so it is dropped with one log
+    line, counted on /diagnostics, the link stays OK and the previous formation is flown.
+    The test node publishes one plan (formation + power of one identity, ros/plan_msgs.py)."""
     from geometry_msgs.msg import Pose, PoseArray
+    from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
+    from uav_insar_planner.ros.plan_msgs import PlanId
     from uav_insar_planner.ros.topics import LATCHED
 
     vehicle = SimVehicle(2, "udpin:127.0.0.1:0", "ardupilot", start_ned=(0.0, 0.0, -10.0),
@@ -122,19 +125,48 @@ def test_a_dead_mavlink_thread_turns_the_bridge_error(watcher):
     vehicle.start()
     bridge = start("uav_insar_planner.ros.mavlink_bridge", ros_env(),
                    f"connections:=['udpout:127.0.0.1:{vehicle.port}']", "target_sysids:=[2]")
+    pub = watcher.node.create_publisher(PoseArray, "/formation", LATCHED)
     try:
-        def bridge_says(level):
+        def bridge_says():
             return [s for m in watcher.diagnostics for s in m.status
-                    if s.name == "mavlink_bridge: uav0" and s.level == level]
+                    if s.name == "mavlink_bridge: uav0"]
 
-        assert watcher.spin_until(lambda: bridge_says(DiagnosticStatus.OK), 20.0), "never linked"
-        poison = PoseArray(poses=[Pose()])
+        def value(status, key):
+            return next(v.value for v in status.values if v.key == key)
+
+        def target_xz():  # y moves along the track
+            x, _, z = value(bridge_says()[-1], "target_track_m").split() or (None,) * 3
+            return x, z
+
+        assert watcher.spin_until(lambda: any(s.level == DiagnosticStatus.OK
+                                              for s in bridge_says()), 20.0), "never linked"
+        good = PoseArray(poses=[Pose()])
+        good.header.stamp.sec = 7
+        good.poses[0].position.x, good.poses[0].position.z = 3.0, 12.0
+        power = Float64MultiArray(data=[0.1])
+        power.layout.dim = [MultiArrayDimension(label="uav", size=1, stride=1),
+                            MultiArrayDimension(label="slot", size=1, stride=1),
+                            MultiArrayDimension(label=PlanId(7, 0, "/watcher").label, size=1,
+                                                stride=1)]
+        pub.publish(good)
+        watcher.node.create_publisher(Float64MultiArray, "/formation/power",
+                                      LATCHED).publish(power)
+        assert watcher.spin_until(lambda: target_xz() == ("3.000", "12.000"), 10.0)
+        poison = PoseArray(poses=[Pose()])  # stamp 0: a plan of its own if it were valid
         poison.poses[0].position.x, poison.poses[0].position.z = 1e39, 10.0
-        watcher.node.create_publisher(PoseArray, "/formation", LATCHED).publish(poison)
-        assert watcher.spin_until(lambda: bridge_says(DiagnosticStatus.ERROR), 10.0), \
-            "the bridge kept reporting OK with its I/O thread dead"
-        assert "thread died" in bridge_says(DiagnosticStatus.ERROR)[-1].message
+        pub.publish(poison)
+        assert watcher.spin_until(
+            lambda: value(bridge_says()[-1], "bad_plan_messages") == "1", 10.0), \
+            "the bad formation was not counted"
+        watcher.spin_until(lambda: False, 1.5)  # the I/O thread would have died by now
+        last = bridge_says()[-1]
+        assert last.level == DiagnosticStatus.OK and last.message.startswith("linked"), \
+            last.message
+        assert target_xz() == ("3.000", "12.000")
+        assert value(last, "bad_plan_messages") == "1"
     finally:
         out = finish(bridge)
         vehicle.stop()
-    assert "MAVLink I/O thread died" in out, out
+    dropped = [line for line in out.splitlines() if "message dropped" in line]
+    assert len(dropped) == 1 and "poses[0].position.x: value 1e+39" in dropped[0], out
+    assert "thread died" not in out, out

@@ -81,7 +81,10 @@ def test_planner_and_agents_fly_the_solved_plan(bringup):
     assert np.allclose(got[:, [0, 2]], plan.formation, rtol=1e-6, atol=1e-6)
     assert not got[:, 1].any() and all(p.orientation.w == 1.0 for p in msg.poses)
     power = b.powers[0]
-    assert [(d.label, d.size) for d in power.layout.dim] == [("uav", 3), ("slot", N)]
+    stamp = msg.header.stamp
+    identity = f"plan /planner {stamp.sec}.{stamp.nanosec:09d}"  # the same plan on both
+    assert [(d.label, d.size, d.stride) for d in power.layout.dim] == [
+        ("uav", 3, 3 * N), ("slot", N, N), (identity, 1, 1)]
     assert np.allclose(np.reshape(power.data, (3, N)), plan.p_com_w, rtol=1e-6)
 
     assert b.spin_until(lambda: all(len(r) >= N for r in b.rates.values()), 30.0), b.rates

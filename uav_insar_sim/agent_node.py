@@ -1,6 +1,8 @@
 """The simulated UAV agent (`ros2 run uav_insar_planner agent --ros-args -p uav_id:=1`).
 
-Waits for the latched `formation` and `formation/power`, flies to its across-track target
+Waits for the latched `formation` and `formation/power` of one plan (ros/plan_gate.py: both
+validated, of the same plan identity, from the sole planner on the domain; the plan flown is
+logged and published on `uav{K}/plan`), flies to its across-track target
 (x_k, z_k), then runs the stripmap track slot by slot (slots.SlotSchedule), applying P_com[k][n]
 in slot n and computing the rate it achieves from where it actually is. Publishes
 `uav{K}/pose` (PoseStamped, every tick and at each slot start) and `uav{K}/achieved_rate`
@@ -33,7 +35,7 @@ from __future__ import annotations
 
 import sys
 
-from geometry_msgs.msg import PoseArray, PoseStamped
+from geometry_msgs.msg import PoseStamped
 from rclpy.node import Node
 from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension
 
@@ -50,6 +52,8 @@ from uav_insar_planner.ros.parameters import (
     spec_values,
     unknown_overrides,
 )
+from uav_insar_planner.ros.plan_gate import PlanGate
+from uav_insar_planner.ros.plan_msgs import Formation, PowerSchedule
 from uav_insar_planner.ros.run import run_node
 from uav_insar_sim.flight import choose_flight
 from uav_insar_sim.vehicle import SimVehicle
@@ -86,8 +90,6 @@ class AgentNode(Node):
         self.vehicle = self.flight.vehicle
         self.mission = self.flight.mission
         self.k = own["uav_id"]
-        self._formation = None
-        self._power = None
         self._announced = False
         self._phase = self.mission.phase
         self._pose_pub = self.create_publisher(PoseStamped, topics.pose(self.k), topics.DEPTH)
@@ -95,9 +97,8 @@ class AgentNode(Node):
                                                topics.RATE_DEPTH)
         self._offload_pub = self.create_publisher(Float64MultiArray, topics.offload(self.k),
                                                   topics.RATE_DEPTH)
-        self.create_subscription(PoseArray, topics.FORMATION, self._on_formation,
-                                 topics.LATCHED)
-        self.create_subscription(Float64MultiArray, topics.POWER, self._on_power, topics.LATCHED)
+        self.gate = PlanGate(self, self._adopt_plan, f"uav{self.k}: ",  # one plan at a time
+                             topics.flown_plan(self.k))
         self.create_timer(TICK_PERIOD_S, self._tick)
         note = self.flight.start()
         if note:
@@ -110,32 +111,25 @@ class AgentNode(Node):
         super().destroy_node()
 
     # --- plan ----------------------------------------------------------------------------
-    def _on_formation(self, msg) -> None:
-        self._formation = msg
-        self._adopt_plan()
-
-    def _on_power(self, msg) -> None:
-        self._power = msg
-        self._adopt_plan()
-
-    def _adopt_plan(self) -> None:
-        if self._formation is None or self._power is None:
+    def _adopt_plan(self, formation: Formation, power: PowerSchedule) -> None:
+        """A matched, validated pair of the sole planner (ros/plan_gate.py)."""
+        if len(formation.points) <= self.k:
+            self.get_logger().error(f"uav{self.k}: {power.plan_id} has no entry for this UAV; "
+                                    "ignored")
             return
-        dims = self._power.layout.dim
-        if len(self._formation.poses) <= self.k or len(dims) != 2 or dims[0].size <= self.k:
-            self.get_logger().error(f"uav{self.k}: plan has no entry for this UAV; ignored")
-            return
-        n = dims[1].size
-        powers = list(self._power.data[self.k * n:(self.k + 1) * n])
-        p = self._formation.poses[self.k].position
+        # None: not flown by this plan (single-baseline's U2); the NaN target holds it at home.
+        x, y, z = formation.points[self.k] or (float("nan"), 0.0, float("nan"))
+        n = power.p_com_w.shape[1]
+        powers = [float(v) for v in power.p_com_w[self.k]]
         if n != self.mission.params.num_slots:
             self.get_logger().warning(f"uav{self.k}: plan has {n} slots, num_slots is "
                                       f"{self.mission.params.num_slots}; flying the plan's {n}")
-        self.flight.set_plan(p.x, p.y, p.z, powers)
+        self.flight.set_plan(x, y, z, powers)
+        self.get_logger().info(f"uav{self.k}: flying {power.plan_id}")
         if not self._announced and self.mission.phase == "transit":
             self._announced = True
             self.get_logger().info(f"uav{self.k}: plan received, {self.flight.how} to "
-                                   f"x={p.x:.3f} m, z={p.z:.3f} m for {n} slots")
+                                   f"x={x:.3f} m, z={z:.3f} m for {n} slots")
 
     # --- flight --------------------------------------------------------------------------
     def _tick(self) -> None:

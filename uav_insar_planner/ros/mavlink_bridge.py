@@ -10,7 +10,13 @@ A bad value or unknown name logs one line and exits with code 2 before anything 
 or opened.
 
 Subscribes  formation (geometry_msgs/PoseArray, reliable + transient_local, depth 1):
-            poses[k] = (x_k, y_start, z_k) in the track frame; NaN for a UAV not flown.
+            poses[k] = (x_k, y_start, z_k) in the track frame; NaN for a UAV not flown;
+            and formation/power, only to know each formation's plan: like the agents, the
+            bridge flies a formation only with the power message of the same plan identity
+            and only while its planner is the sole publisher (ros/plan_gate.py), so with two
+            planners on the domain it keeps the formation it flies. Both are validated at
+            entry (ros/plan_msgs.py): a bad one is dropped with one rate-limited log line,
+            counted (`bad_plan_messages` on /diagnostics), and the formation flown stays.
 Publishes   uav{K}/mavlink/pose (geometry_msgs/PoseStamped, frame insar_track), the
             vehicle's LOCAL_POSITION_NED in the track frame, each time a new one arrives;
             /diagnostics (diagnostic_msgs/DiagnosticArray) once a second, one status per UAV:
@@ -27,7 +33,7 @@ import sys
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import PoseArray, PoseStamped
+from geometry_msgs.msg import PoseStamped
 from rclpy.node import Node
 
 from uav_insar_planner.mavlink.bridge import Bridge, BridgeConfig, VehicleStatus
@@ -39,6 +45,8 @@ from uav_insar_planner.ros.parameters import (
     spec_values,
     unknown_overrides,
 )
+from uav_insar_planner.ros.plan_gate import PlanGate
+from uav_insar_planner.ros.plan_msgs import Formation, PowerSchedule
 from uav_insar_planner.ros.run import run_node
 
 POSE_PERIOD_S = 0.05  # poll the bridge at 20 Hz: vehicles report at ~10 Hz
@@ -70,8 +78,7 @@ class MavlinkBridgeNode(Node):
                            for k in range(n)]
         self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, topics.DEPTH)
         self._last_pose_age: list[float | None] = [None] * n
-        self.create_subscription(PoseArray, topics.FORMATION, self._on_formation,
-                                 topics.LATCHED)
+        self._gate = PlanGate(self, self._on_plan)  # validated, one plan at a time
         self.create_timer(POSE_PERIOD_S, self._publish_poses)
         self.create_timer(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)
         guard_sets(self)
@@ -81,15 +88,12 @@ class MavlinkBridgeNode(Node):
         if self.bridge is not None:
             self.bridge.stop()
 
-    def _on_formation(self, msg: Any) -> None:
-        poses = []
-        for pose in msg.poses:
-            p = pose.position
-            point = (float(p.x), float(p.y), float(p.z))
-            poses.append(point if all(math.isfinite(c) for c in point) else None)
+    def _on_plan(self, formation: Formation, power: PowerSchedule) -> None:
+        poses = list(formation.points)
         self.bridge.set_formation(poses)
         flown = sum(p is not None for p in poses)
-        self.get_logger().info(f"formation received: {flown} UAV(s) with a target")
+        self.get_logger().info(f"formation received: {flown} UAV(s) with a target "
+                               f"({power.plan_id})")
 
     def _publish_poses(self) -> None:
         logger = self.get_logger()
@@ -160,7 +164,8 @@ class MavlinkBridgeNode(Node):
                   ("position_track_m", s.position_track), ("position_error_m", error),
                   ("rx_messages", link.rx_messages), ("bad_data", link.bad_data),
                   ("truncated", link.truncated), ("unknown_msgid", link.unknown_msgid),
-                  ("foreign", link.foreign), ("io_errors", link.io_errors)]
+                  ("foreign", link.foreign), ("io_errors", link.io_errors),
+                  ("bad_plan_messages", self._gate.dropped)]
         return DiagnosticStatus(level=level, name=f"mavlink_bridge: uav{s.uav}",
                                 message=text, hardware_id=f"mavlink sysid {s.sysid}",
                                 values=[KeyValue(key=k, value=fmt(v)) for k, v in values])

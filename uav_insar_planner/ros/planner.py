@@ -7,13 +7,17 @@ callback (refused with the same lines, nothing changes) and solved after it took
 
 Publishes (names relative to the node's namespace, except /diagnostics):
   formation         geometry_msgs/PoseArray, reliable + transient_local, depth 1
-  formation/power   std_msgs/Float64MultiArray, reliable + transient_local, depth 1
-  /diagnostics      diagnostic_msgs/DiagnosticArray: the plan (OK / ERROR) and, once a second,
-                    each UAV's rate margin and position error (WARN when it misses R_min)
-Subscribes uav{K}/pose (PoseStamped) and uav{K}/achieved_rate (Float64, bit/s); the swarm
-watch (swarm_watch.py: lost UAVs, saturated closed loops, the re-plans they call for, the
-`planner: swarm` status) also uav{K}/offload and /diagnostics. Planner-only parameter:
-uav_timeout_s (parameters.PLANNER_SPECS).
+  formation/power   std_msgs/Float64MultiArray, reliable + transient_local, depth 1; both
+                    carry the plan's identity (ros/plan_msgs.py)
+  /diagnostics      diagnostic_msgs/DiagnosticArray: the plan (OK / ERROR), other planners on
+                    `formation` (ERROR, ros/plan_watch.py), the swarm (`planner: swarm`,
+                    ros/swarm_watch.py) and, once a second, each UAV's rate margin, position
+                    error and the plan it flies (WARN when it misses R_min or flies another
+                    plan), with or without a plan of this planner's
+Subscribes uav{K}/pose (PoseStamped), uav{K}/achieved_rate (Float64, bit/s), uav{K}/plan; the
+swarm watch (swarm_watch.py: lost UAVs, saturated closed loops, the re-plans they call for)
+also uav{K}/offload and /diagnostics. Planner-only parameter: uav_timeout_s
+(parameters.PLANNER_SPECS).
 Service ~/replan (std_srvs/Trigger): solve again with the current parameters.
 Solves run on a worker thread (solve_worker), so the node keeps serving while one runs.
 """
@@ -24,11 +28,11 @@ import threading
 
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import Point, Pose, PoseArray, PoseStamped, Quaternion
+from geometry_msgs.msg import PoseArray, PoseStamped
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension
+from std_msgs.msg import Float64, Float64MultiArray
 from std_srvs.srv import Trigger
 
 from uav_insar_planner.params import (
@@ -40,7 +44,7 @@ from uav_insar_planner.params import (
 )
 from uav_insar_planner.plan import Plan
 from uav_insar_planner.ros import diagnostics as report
-from uav_insar_planner.ros import topics
+from uav_insar_planner.ros import plan_msgs, topics
 from uav_insar_planner.ros.parameters import (
     PLANNER_SPECS,
     declare_specs,
@@ -49,6 +53,8 @@ from uav_insar_planner.ros.parameters import (
     spec_values,
     unknown_overrides,
 )
+from uav_insar_planner.ros.plan_msgs import PlanId
+from uav_insar_planner.ros.plan_watch import PlanWatch
 from uav_insar_planner.ros.run import run_node
 from uav_insar_planner.ros.solve_worker import SolveWorker
 from uav_insar_planner.ros.swarm_watch import SwarmWatch
@@ -83,6 +89,8 @@ class PlannerNode(Node):
         self._power_pub = self.create_publisher(Float64MultiArray, topics.POWER, topics.LATCHED)
         self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS,
                                                topics.DEPTH)
+        self._plan_id: PlanId | None = None  # the identity _plan was published under
+        self._plans = PlanWatch(self)  # other planners, the plan each agent flies
         for k in range(3):
             self.create_subscription(PoseStamped, topics.pose(k),
                                      lambda msg, k=k: self._on_pose(k, msg), topics.DEPTH)
@@ -162,7 +170,10 @@ class PlannerNode(Node):
                 self._plan = plan
                 self._reports = [report.UavReport() for _ in range(3)]
         if plan is not None and plan.feasible:
-            self._publish_plan(plan)
+            # With a UAV lost, the full plan is not flown: the swarm watch re-plans it (or
+            # re-publishes the hold) at once, so a three-UAV plan never reaches the agents.
+            if not self._swarm.has_lost():
+                self._publish_plan(plan)
             self._swarm.on_plan(plan, params)
         self._publish_diagnostics()
 
@@ -184,16 +195,14 @@ class PlannerNode(Node):
 
     # --- publishing ----------------------------------------------------------------------
     def _publish_plan(self, plan: Plan) -> None:
-        stamp = self.get_clock().now().to_msg()
-        msg = PoseArray()
-        msg.header.stamp = stamp
-        msg.header.frame_id = topics.FRAME_ID
-        msg.poses = [Pose(position=Point(x=x, y=y, z=z), orientation=Quaternion(w=1.0))
-                     for x, y, z in report.formation_points(plan)]
-        rows, cols, data = report.power_rows(plan)
-        power = Float64MultiArray(data=data)
-        power.layout.dim = [MultiArrayDimension(label="uav", size=rows, stride=rows * cols),
-                            MultiArrayDimension(label="slot", size=cols, stride=cols)]
+        """Both messages under a new identity (plan_msgs: stamps unique per planner)."""
+        with self._state_lock:
+            last = self._plan_id.stamp if self._plan_id else None
+            self._plan_id = PlanId(*plan_msgs.next_stamp(
+                self.get_clock().now().seconds_nanoseconds(), last),
+                self.get_fully_qualified_name())
+            plan_id = self._plan_id
+        msg, power = plan_msgs.encode(plan, plan_id)
         self._formation_pub.publish(msg)
         self._power_pub.publish(power)
 
@@ -204,11 +213,9 @@ class PlannerNode(Node):
                     self._scenario.scheme, "solve worker died: " + self._worker.failure)
             statuses = [self._plan_status] if self._plan_status else []
             statuses.append(self._swarm.status())
-            if self._plan is not None:
-                rate_min = self._scenario.rate_min_bps
-                for k in self._plan.active_uavs:
-                    target = tuple(float(v) for v in self._plan.formation[k])
-                    statuses.append(report.uav_status(k, target, rate_min, self._reports[k]))
+            # Per-UAV status even without a plan of this planner's (restarted infeasible).
+            statuses += self._plans.statuses(self._plan, self._plan_id,
+                                             self._scenario.rate_min_bps, self._reports)
         if not statuses:
             return
         msg = DiagnosticArray()

@@ -110,6 +110,11 @@ class SwarmWatch:
                 if lost is not None:
                     self._react(lost)
 
+    def has_lost(self) -> bool:
+        """Whether a UAV of the swarm has been declared lost (final for the mission)."""
+        with self._lock:
+            return bool(self.monitor.lost)
+
     def on_plan(self, plan: Plan, params: Params) -> None:
         """A full plan was published: the swarm flies it now (a UAV already lost is taken
         out of it again at once)."""

@@ -2,19 +2,24 @@
 
 Names are relative (a namespace moves the whole swarm) except /diagnostics. Frame
 `insar_track`: x = range / across-track, y = azimuth / along-track, z = up; SI on every topic.
+A plan is `formation` + `formation/power` under one identity, validated wherever it enters
+(ros/plan_msgs.py); agents and the bridge apply one plan at a time, of the sole planner on the
+domain (ros/plan_gate.py).
 """
 from __future__ import annotations
 
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 FRAME_ID = "insar_track"
-FORMATION = "formation"  # geometry_msgs/PoseArray, LATCHED
-POWER = "formation/power"  # std_msgs/Float64MultiArray, LATCHED
+# A plan's identity (ros/plan_msgs.py): formation's header.stamp, and the same stamp with the
+# planner's name in the power message's third layout dimension, "plan /planner <sec>.<ns>".
+FORMATION = "formation"  # geometry_msgs/PoseArray, LATCHED; header.stamp = the plan's stamp
+POWER = "formation/power"  # std_msgs/Float64MultiArray [uav, slot, plan id], LATCHED
 DIAGNOSTICS = "/diagnostics"  # diagnostic_msgs/DiagnosticArray, depth 10
 REPLAN = "~/replan"  # std_srvs/Trigger
 
-# /formation and /formation/power: a late joiner (an agent started after the planner, or a
-# planner restarted) still gets the last plan.
+# /formation, /formation/power and uavK/plan: a late joiner (an agent started after the
+# planner, or a planner restarted) still gets the last plan, and which plan each agent flies.
 LATCHED = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
                      reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
@@ -43,6 +48,12 @@ def offload(k: int) -> str:
     applied [W], energy used so far this slot included and left of E_com^max [J]),
     RATE_DEPTH."""
     return f"uav{k}/offload"
+
+
+def flown_plan(k: int) -> str:
+    """std_msgs/String, LATCHED: the identity label of the plan agent k flies
+    ("plan /planner <sec>.<nanosec>"), published each time it adopts one (ros/plan_gate.py)."""
+    return f"uav{k}/plan"
 
 
 def mavlink_pose(k: int) -> str:

@@ -6,9 +6,10 @@
 
 It subscribes with each topic's own QoS (ros/topics.py) and keeps every message in arrival
 order: `formations`, `powers`, `diagnostics`, and per UAV k `rates[k]` (bit/s), `offloads[k]`
-(the agent's [slot, power_w, energy_used_j, energy_left_j]), `poses[k]` and
-`mavlink_poses[k]`. An optional `on_mavlink_pose(k, msg)` sees each vehicle position as it
-arrives.
+(the agent's [slot, power_w, energy_used_j, energy_left_j]), `poses[k]`, `mavlink_poses[k]`
+and `flown_plans[k]` (the identity label of each plan agent k adopted; `plan_ids()` decodes
+the plans seen on formation/power). An optional `on_mavlink_pose(k, msg)` sees each vehicle
+position as it arrives.
 """
 from __future__ import annotations
 
@@ -22,10 +23,11 @@ from geometry_msgs.msg import PoseArray, PoseStamped
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
-from std_msgs.msg import Float64, Float64MultiArray
+from std_msgs.msg import Float64, Float64MultiArray, String
 
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.diagnostics import PLAN_STATUS_NAME
+from uav_insar_planner.ros.plan_msgs import PlanMessageError, decode_formation, decode_power
 
 UAVS = range(3)
 SPIN_STEP_S = 0.05
@@ -48,6 +50,7 @@ class TopicWatcher:
         self.poses: dict[int, list[Any]] = {k: [] for k in UAVS}
         self.mavlink_poses: dict[int, list[Any]] = {k: [] for k in UAVS}
         self.offloads: dict[int, list[list[float]]] = {k: [] for k in UAVS}
+        self.flown_plans: dict[int, list[str]] = {k: [] for k in UAVS}
         self._on_mavlink_pose = on_mavlink_pose
         n = self.node
         n.create_subscription(PoseArray, "/" + topics.FORMATION, self.formations.append,
@@ -67,6 +70,9 @@ class TopicWatcher:
                                   topics.RATE_DEPTH)
             n.create_subscription(PoseStamped, "/" + topics.mavlink_pose(k),
                                   lambda m, k=k: self._mavlink_pose(k, m), topics.RATE_DEPTH)
+            n.create_subscription(String, "/" + topics.flown_plan(k),
+                                  lambda m, k=k: self.flown_plans[k].append(m.data),
+                                  topics.LATCHED)
         self.executor = SingleThreadedExecutor(context=context)
         self.executor.add_node(n)
 
@@ -96,6 +102,12 @@ class TopicWatcher:
         that are lost (volatile), so wait for this before a plan starts their slots."""
         return all(self.node.count_publishers("/" + topics.achieved_rate(k)) for k in UAVS)
 
+    def plan_ids(self) -> tuple[list[Any], list[Any]]:
+        """(formation stamps (sec, nanosec), power PlanIds) in arrival order; an entry that
+        fails validation (ros/plan_msgs.py) is its error text instead."""
+        return ([_decoded(decode_formation, m, "stamp") for m in self.formations],
+                [_decoded(decode_power, m, "plan_id") for m in self.powers])
+
     def plan_status(self) -> Any | None:
         """The planner's latest plan status (the bridge publishes on /diagnostics too)."""
         found = [s for msg in self.diagnostics for s in msg.status
@@ -118,3 +130,10 @@ class TopicWatcher:
         self.node.destroy_node()
         if self._own_context:
             context.try_shutdown()
+
+
+def _decoded(decode: Callable[[Any], Any], msg: Any, field: str) -> Any:
+    try:
+        return getattr(decode(msg), field)
+    except PlanMessageError as exc:
+        return str(exc)

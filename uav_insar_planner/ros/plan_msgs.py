@@ -1,0 +1,217 @@
+"""A Plan on the wire: `formation` (PoseArray) and `formation/power` (Float64MultiArray).
+
+Identity. Every plan the planner publishes has one identity, `PlanId` = (planner, stamp):
+  formation        header.stamp = the plan's stamp (strictly increasing per planner);
+  formation/power  layout.dim = [("uav", K, K*N), ("slot", N, N), ("plan <planner> <s>.<ns>",
+                   1, 1)]: a trailing dimension of size 1 whose label carries the identity,
+                   e.g. `plan /planner 1733086200.123456789`. [K, N, 1] is the same row-major
+                   data as [K, N], so readers of dims 0-1 are unchanged.
+rclpy 7.1 tells a subscriber nothing per message about its publisher (message_info has the
+source/received timestamps and sequence numbers, no publisher GID or node), so the formation
+names no planner: a formation belongs to the plan whose power message carries the same stamp,
+and the planner that plan names must be the sole publisher of both topics in the ROS graph for
+a consumer to adopt it (ros/plan_gate.py).
+
+Validation (every decode; a bad message raises `PlanMessageError` naming topic, field, value
+cut short and what is allowed, and the caller drops it without any change of state):
+  formation  each pose's x, y, z finite with |v| <= POSITION_BOUND_M (1e6 m, well inside
+             float32, which MAVLink carries), or a UAV not flown: x and z both NaN (y, the
+             track start, may be finite or NaN); at least one pose, at most MAX_UAVS; the
+             quaternion is ignored;
+  power      exactly the three dimensions above (sizes >= 1, strides row-major, data_offset 0,
+             a parseable identity label), len(data) = K*N, every value finite, >= 0 and at
+             most FLOAT32_MAX W.
+"""
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import Point, Pose, PoseArray, Quaternion
+from std_msgs.msg import Float64MultiArray, MultiArrayDimension
+
+from uav_insar_planner.plan import Plan
+from uav_insar_planner.ros import diagnostics as report
+from uav_insar_planner.ros import topics
+
+POSITION_BOUND_M = 1e6
+FLOAT32_MAX = 3.4e38
+MAX_UAVS = 16
+SHOWN_CHARS = 40
+_ID_LABEL = re.compile(r"^plan (/\S*) (\d{1,12})\.(\d{9})$")
+
+
+class PlanMessageError(ValueError):
+    """One line: `<topic>: <field>: value <v> is not allowed; expected <what>`."""
+
+    def __init__(self, topic: str, field: str, value: object, expected: str) -> None:
+        shown = repr(value)
+        if len(shown) > SHOWN_CHARS:
+            shown = shown[:SHOWN_CHARS - 3] + "..."
+        super().__init__(f"{topic}: {field}: value {shown} is not allowed; expected {expected}")
+        self.topic, self.field = topic, field
+
+
+@dataclass(frozen=True)
+class PlanId:
+    """A plan's identity: its stamp (sec, nanosec) and the planner's fully qualified name."""
+
+    sec: int
+    nanosec: int
+    planner: str
+
+    @property
+    def stamp(self) -> tuple[int, int]:
+        return self.sec, self.nanosec
+
+    @property
+    def label(self) -> str:
+        return f"plan {self.planner} {self.sec}.{self.nanosec:09d}"
+
+    def __str__(self) -> str:
+        return self.label
+
+    @classmethod
+    def from_label(cls, label: str) -> PlanId | None:
+        found = _ID_LABEL.match(label)
+        if found is None:
+            return None
+        return cls(int(found[2]), int(found[3]), found[1])
+
+
+@dataclass(frozen=True)
+class Formation:
+    """A decoded `formation`: its stamp and poses[k] = (x, y, z), or None for a UAV not flown."""
+
+    stamp: tuple[int, int]
+    points: tuple[tuple[float, float, float] | None, ...]
+
+
+@dataclass(frozen=True)
+class PowerSchedule:
+    """A decoded `formation/power`: its plan id and P_com[k][n] in watts, shape (K, N)."""
+
+    plan_id: PlanId
+    p_com_w: np.ndarray
+
+
+def next_stamp(now: tuple[int, int], last: tuple[int, int] | None) -> tuple[int, int]:
+    """`now`, or 1 ns after `last` when the clock has not moved past it: stamps are unique and
+    increasing per planner, so (planner, stamp) names one plan."""
+    if last is None or now > last:
+        return now
+    sec, nanosec = last[0], last[1] + 1
+    return (sec + 1, 0) if nanosec >= 1_000_000_000 else (sec, nanosec)
+
+
+def encode(plan: Plan, plan_id: PlanId) -> tuple[PoseArray, Float64MultiArray]:
+    """The two messages of `plan` under `plan_id` (see the module docstring)."""
+    formation = PoseArray()
+    formation.header.stamp = Time(sec=plan_id.sec, nanosec=plan_id.nanosec)
+    formation.header.frame_id = topics.FRAME_ID
+    formation.poses = [Pose(position=Point(x=x, y=y, z=z), orientation=Quaternion(w=1.0))
+                       for x, y, z in report.formation_points(plan)]
+    rows, cols, data = report.power_rows(plan)
+    power = Float64MultiArray(data=data)
+    power.layout.dim = [MultiArrayDimension(label="uav", size=rows, stride=rows * cols),
+                        MultiArrayDimension(label="slot", size=cols, stride=cols),
+                        MultiArrayDimension(label=plan_id.label, size=1, stride=1)]
+    return formation, power
+
+
+def decode_formation(msg: PoseArray) -> Formation:
+    """Validated `formation`, or PlanMessageError."""
+    poses = msg.poses
+    if not 1 <= len(poses) <= MAX_UAVS:
+        raise PlanMessageError(topics.FORMATION, "poses", f"{len(poses)} poses",
+                               f"1 to {MAX_UAVS} poses")
+    points: list[tuple[float, float, float] | None] = []
+    for k, pose in enumerate(poses):
+        p = pose.position
+        xyz = (float(p.x), float(p.y), float(p.z))
+        if math.isnan(xyz[0]) and math.isnan(xyz[2]):
+            _check_position(k, "y", xyz[1], nan_ok=True)
+            points.append(None)
+            continue
+        for axis, v in zip("xyz", xyz, strict=True):
+            _check_position(k, axis, v, nan_ok=False)
+        points.append(xyz)
+    stamp = msg.header.stamp
+    return Formation((int(stamp.sec), int(stamp.nanosec)), tuple(points))
+
+
+def _check_position(k: int, axis: str, v: float, nan_ok: bool) -> None:
+    if (nan_ok and math.isnan(v)) or (math.isfinite(v) and abs(v) <= POSITION_BOUND_M):
+        return
+    expected = (f"a finite coordinate within +-{POSITION_BOUND_M:g} m, or x and z both NaN "
+                "for a UAV not flown")
+    raise PlanMessageError(topics.FORMATION, f"poses[{k}].position.{axis}", v, expected)
+
+
+def decode_power(msg: Float64MultiArray) -> PowerSchedule:
+    """Validated `formation/power`, or PlanMessageError."""
+    dims = msg.layout.dim
+
+    def bad(field: str, value: object, expected: str) -> PlanMessageError:
+        return PlanMessageError(topics.POWER, field, value, expected)
+
+    if len(dims) != 3:
+        raise bad("layout.dim", [d.label for d in dims],
+                  "3 dimensions: uav, slot, plan identity")
+    uav, slot, ident = dims
+    plan_id = PlanId.from_label(ident.label)
+    if plan_id is None:
+        raise bad("layout.dim[2].label", ident.label, "'plan <planner> <sec>.<nanosec>'")
+    if (uav.label, slot.label) != ("uav", "slot"):
+        raise bad("layout.dim labels", [uav.label, slot.label], "['uav', 'slot']")
+    rows, cols = int(uav.size), int(slot.size)
+    if not 1 <= rows <= MAX_UAVS or cols < 1 or ident.size != 1:
+        raise bad("layout.dim sizes", [rows, cols, int(ident.size)],
+                  f"[1..{MAX_UAVS}, >= 1, 1]")
+    if (uav.stride, slot.stride, ident.stride) != (rows * cols, cols, 1):
+        raise bad("layout.dim strides", [uav.stride, slot.stride, ident.stride],
+                  f"row-major [{rows * cols}, {cols}, 1]")
+    if msg.layout.data_offset != 0:
+        raise bad("layout.data_offset", msg.layout.data_offset, "0")
+    data = np.asarray(msg.data, dtype=float)
+    if data.size != rows * cols:
+        raise bad("data", f"{data.size} values", f"uav x slot = {rows * cols} values")
+    wrong = ~(np.isfinite(data) & (data >= 0.0) & (data <= FLOAT32_MAX))
+    if wrong.any():
+        i = int(np.flatnonzero(wrong)[0])
+        raise bad(f"data[{i}]", float(data[i]), f"a finite power >= 0 W, at most {FLOAT32_MAX:g}")
+    return PowerSchedule(plan_id, data.reshape(rows, cols))
+
+
+class DropLog:
+    """Counts dropped messages and logs at most one line per `period_s` (the first of a burst
+    at once; the next line says how many were not shown in between).
+
+    `warn(text)` logs; `now()` is a monotonic clock in seconds."""
+
+    def __init__(self, warn: Callable[[str], None], now: Callable[[], float],
+                 period_s: float = 1.0) -> None:
+        self.count = 0
+        self._warn, self._now, self._period = warn, now, period_s
+        self._last: float | None = None
+        self._unshown = 0
+
+    def drop(self, error: Exception, prefix: str = "") -> None:
+        self.count += 1
+        t = self._now()
+        if self._last is not None and t - self._last < self._period:
+            self._unshown += 1
+            return
+        extra = f"; {self._unshown} more not shown" if self._unshown else ""
+        self._warn(f"{prefix}{error}; message dropped ({self.count} dropped so far{extra})")
+        self._last, self._unshown = t, 0
+
+
+def describe(points: Sequence[tuple[float, float, float] | None]) -> str:
+    """'uav0 (x, z), uav1 (x, z), uav2 not flown' for a log line."""
+    return ", ".join(f"uav{k} not flown" if p is None else f"uav{k} ({p[0]:.3f}, {p[2]:.3f})"
+                     for k, p in enumerate(points))
