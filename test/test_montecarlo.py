@@ -110,7 +110,7 @@ def test_sweep_montecarlo_column_is_opt_in(tmp_path):
     plain, mc = tmp_path / "a.csv", tmp_path / "b.csv"
     args = ("sweep", "h_amb_min_m", "1.0", "1.2", "2", "--schemes", "proposed", "--no-progress")
     p1 = run(*args, "--csv", str(plain))
-    p2 = run(*args, "--montecarlo", "20000", "--csv", str(mc))
+    p2 = run(*args, "--montecarlo", "--mc-samples", "20000", "--csv", str(mc))
     assert p1.returncode == p2.returncode == 0, p1.stderr + p2.stderr
     assert "mc_sigma_h" not in p1.stdout and "mc_sigma_h" in p2.stdout
     rows_plain = list(csv.DictReader(plain.read_text().splitlines()[1:]))

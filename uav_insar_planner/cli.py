@@ -56,9 +56,11 @@ def _build_parser() -> argparse.ArgumentParser:
     w.add_argument("--band", action="store_true",
                    help="also show the bound's optimum and sigma_h's range over the bound's "
                    "minimisers (the paper's solution set)")
-    w.add_argument("--montecarlo", nargs="?", const="100000", metavar="N",
+    w.add_argument("--montecarlo", action="store_true",
                    help="also the Monte-Carlo fused sigma_h and ambiguity rate of each plan "
-                   "(N samples per pair, default 100000, seed 0)")
+                   "(seed 0)")
+    w.add_argument("--mc-samples", default="100000", metavar="N",
+                   help="samples per pair for --montecarlo (default 100000)")
     w.add_argument("--csv", metavar="FILE", help="write one row per (value, scheme)")
     w.add_argument("--plot", metavar="FILE.png", help="plot as the paper's Figures 3/4")
     w.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
@@ -119,10 +121,10 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     if args.count < 1:
         raise ParamError([f"sweep COUNT: value {args.count} is not allowed; expected >= 1"])
     mc = 0
-    if args.montecarlo is not None:
+    if args.montecarlo:
         from uav_insar_planner.montecarlo_cli import MAX_SAMPLES, parse_int
 
-        mc = parse_int("--montecarlo", args.montecarlo, 2, MAX_SAMPLES)
+        mc = parse_int("--mc-samples", args.mc_samples, 2, MAX_SAMPLES)
     values = np.linspace(args.start, args.stop, args.count)
     bar = tqdm(total=len(values) * len(args.schemes), unit="solve", file=sys.stderr,
                disable=args.no_progress)
