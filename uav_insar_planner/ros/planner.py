@@ -8,6 +8,8 @@ callback (refused with the same lines, nothing changes) and solved after it took
 Publishes (names relative to the node's namespace, except /diagnostics):
   formation         geometry_msgs/PoseArray, reliable + transient_local, depth 1
   formation/power   std_msgs/Float64MultiArray, reliable + transient_local, depth 1
+  formation/markers        visualization_msgs/MarkerArray, latched: the plan (ros/markers.py)
+  formation/markers/flown  visualization_msgs/MarkerArray: the agents' positions and paths
   /diagnostics      diagnostic_msgs/DiagnosticArray: the plan (OK / ERROR) and, once a second,
                     each UAV's rate margin and position error (WARN when it misses R_min)
 Subscribes uav{K}/pose (PoseStamped) and uav{K}/achieved_rate (Float64, bit/s).
@@ -38,6 +40,7 @@ from uav_insar_planner.params import (
 from uav_insar_planner.plan import Plan
 from uav_insar_planner.ros import diagnostics as report
 from uav_insar_planner.ros import topics
+from uav_insar_planner.ros.markers import PlannerMarkers
 from uav_insar_planner.ros.parameters import (
     declare_specs,
     guard_sets,
@@ -77,6 +80,7 @@ class PlannerNode(Node):
         self._power_pub = self.create_publisher(Float64MultiArray, topics.POWER, topics.LATCHED)
         self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS,
                                                topics.DEPTH)
+        self._markers = PlannerMarkers(self)
         for k in range(3):
             self.create_subscription(PoseStamped, topics.pose(k),
                                      lambda msg, k=k: self._on_pose(k, msg), topics.DEPTH)
@@ -155,6 +159,7 @@ class PlannerNode(Node):
                 self._reports = [report.UavReport() for _ in range(3)]
         if plan is not None and plan.feasible:
             self._publish_plan(plan)
+            self._markers.publish_plan(params, plan)
         self._publish_diagnostics()
 
     # --- publishing ----------------------------------------------------------------------
@@ -199,6 +204,7 @@ class PlannerNode(Node):
         p = msg.pose.position
         with self._state_lock:
             self._reports[k].position = (p.x, p.y, p.z)
+        self._markers.on_pose(k, msg)
 
     def _on_rate(self, k: int, msg) -> None:
         with self._state_lock:

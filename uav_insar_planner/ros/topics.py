@@ -10,6 +10,8 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 FRAME_ID = "insar_track"
 FORMATION = "formation"  # geometry_msgs/PoseArray, LATCHED
 POWER = "formation/power"  # std_msgs/Float64MultiArray, LATCHED
+MARKERS = "formation/markers"  # visualization_msgs/MarkerArray, LATCHED: the plan (markers.py)
+FLOWN_MARKERS = "formation/markers/flown"  # visualization_msgs/MarkerArray, depth 10: agents
 DIAGNOSTICS = "/diagnostics"  # diagnostic_msgs/DiagnosticArray, depth 10
 REPLAN = "~/replan"  # std_srvs/Trigger
 
