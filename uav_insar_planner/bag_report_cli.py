@@ -4,10 +4,10 @@
 
 BAG is a rosbag2 folder (`uav-insar record`, `make demo`, `ros2 bag record`). The scenario
 (R_min, E_max, the radar, for sigma_h) is the one the mission flew with: Table I, or --params
-and --set as for `uav-insar solve`; num_slots is taken from the recorded plan. Prints bag_report.report_table, writes
-report_plots.FILES into DIR (default BAG_report beside the bag) and names them. A progress bar
-on stderr follows the read. Exit codes: 0 written; 2 bad input (no such bag, not a bag, no
-plan in it, bad parameters), one line on stderr.
+and --set as for `uav-insar solve`; num_slots is taken from the recorded plan. Prints
+bag_report.report_table, writes report_plots.FILES into DIR (default BAG_report beside the
+bag) and names them. A progress bar on stderr follows the read. Exit codes: 0 written; 2 bad
+input (no such bag, not a bag, no plan in it, bad parameters), one line on stderr.
 """
 from __future__ import annotations
 

@@ -10,7 +10,7 @@ install) and then this Python's own prefix (the PyPI wheels install into the ven
 rosbag2_storage_mcap's LocalMessageDefinitionSource): the type's .msg file as is, then for each
 type it depends on, depth first, each once, dependencies of one type in sorted order:
 
-    \\n================================================================================\\nMSG: pkg/Type\\n<that type's .msg text>
+    "\\n" + "=" * 80 + "\\nMSG: pkg/Type\\n" + <that type's .msg text>
 """
 from __future__ import annotations
 
@@ -87,7 +87,7 @@ def dependencies(text: str, package: str) -> list[str]:
     return sorted(found)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def msg_text(type_name: str) -> str:
     """The .msg file of `type_name`, as is."""
     try:
@@ -96,7 +96,7 @@ def msg_text(type_name: str) -> str:
         raise DefinitionError(f"{type_name}: {exc}") from None
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def full_definition(type_name: str) -> str:
     """The rosbag2 `ros2msg` schema text of `type_name` (see the module docstring)."""
     seen: set[str] = set()
@@ -114,7 +114,7 @@ def full_definition(type_name: str) -> str:
     return expand(type_name)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def type_hash(type_name: str) -> str:
     """The type's RIHS01 hash (`RIHS01_<64 hex>`), from its .json type description."""
     package, name = split_type(type_name)

@@ -29,7 +29,7 @@ FILES = ("report_rate.png", "report_power.png", "report_energy.png", "report_err
 def _panels(f: MissionFigures, title: str):
     fig, axes = plt.subplots(1, len(f.uavs), figsize=(4 * len(f.uavs), 3.2), squeeze=False)
     fig.suptitle(title, fontsize=10)
-    return fig, dict(zip(f.uavs, axes[0]))
+    return fig, dict(zip(f.uavs, axes[0], strict=True))
 
 
 def _save(fig, path: Path) -> Path:
