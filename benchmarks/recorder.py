@@ -5,9 +5,10 @@ publishes geometry_msgs/PoseStamped (the suite's most frequent type) on /bench/p
 keep-last 1000, paced to the rate for --seconds; two processes subscribe: the recorder
 (`python -m uav_insar_planner.ros.record OUT --topics /bench/pose`, raw bytes into an MCAP
 bag) and, side by side, a bare rclpy node that only counts raw messages (the floor of what a
-Python subscriber costs). Both are stopped with SIGINT 2 s after the last message; the recorded
-count comes from the bag's metadata.yaml, the recorder's CPU seconds from /proc (utime+stime). Printed per rate: published, the rate reached,
-recorded and counted (% of published), the ratio of the two, and the recorder's CPU time per
+Python subscriber costs). Both are stopped with SIGINT 2 s after the last message; the
+recorded count comes from the bag's metadata.yaml, the recorder's CPU seconds from /proc
+(utime+stime). Printed per rate: published, the rate reached, recorded and counted (% of
+published), the ratio of the two, and the recorder's CPU time per
 message recorded (from the first message to the stop).
 
 Run: .venv/bin/python benchmarks/recorder.py [--rates 500 2000 5000 20000] [--seconds 3]
@@ -40,13 +41,13 @@ count = 0
 def seen(data):
     global count
     count += 1
-node.create_subscription(PoseStamped, "%s", seen, QoSProfile(depth=1000), raw=True)
+node.create_subscription(PoseStamped, "TOPIC", seen, QoSProfile(depth=1000), raw=True)
 try:
     rclpy.spin(node)
 except (KeyboardInterrupt, ExternalShutdownException):
     pass
 print(count, flush=True)
-""" % TOPIC
+""".replace("TOPIC", TOPIC)
 
 
 def cpu_s(pid: int) -> float:
