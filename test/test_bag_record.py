@@ -47,7 +47,10 @@ def mission(tmp_path_factory):
         assert w.spin_until(lambda: w.agents_matched() and recorder_ready(w.node), 30.0,
                             [*nodes, recorder]), "agents or recorder did not come up"
         nodes.append(start_node("planner", ["-p", f"num_slots:={SLOTS}"], env))
-        assert w.spin_until(lambda: all(len(w.rates[k]) >= SLOTS for k in range(3)), 60.0,
+        # the latched plan reaches the watcher whenever its discovery of the planner ends,
+        # which may be after the agents flew their slots
+        assert w.spin_until(lambda: w.formations and all(len(w.rates[k]) >= SLOTS
+                                                         for k in range(3)), 60.0,
                             nodes), "the mission did not complete"
         w.spin_until(lambda: False, 1.0)  # a last second of poses and markers
         code, line = stop_recorder(recorder)

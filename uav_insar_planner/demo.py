@@ -197,7 +197,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"demo: stopped {what} (exit codes {codes})", flush=True)
         if recorder is not None:
             code, line = stop_recorder(recorder)
-            print(f"demo: {line} (recorder exit code {code})", flush=True)
+            print(f"demo: {line} (recorder exit code {code}); plot it with `uav-insar "
+                  f"report {args.bag}`", flush=True)
 
 
 def main(argv: list[str] | None = None) -> int:
