@@ -22,9 +22,11 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
+from typing import Any
 
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Point, Quaternion, Vector3
+from rclpy.node import Node
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
@@ -128,7 +130,7 @@ class PlannerMarkers:
     """The planner's two marker publishers: `publish_plan(params, plan)` after each plan,
     `on_pose(k, msg)` for each uav{K}/pose (published at most every FLOWN_PERIOD_S)."""
 
-    def __init__(self, node, clock: Callable[[], float] = time.monotonic) -> None:
+    def __init__(self, node: Node, clock: Callable[[], float] = time.monotonic) -> None:
         self._node = node
         self._clock = clock
         self._plan_pub = node.create_publisher(MarkerArray, topics.MARKERS, topics.LATCHED)
@@ -142,7 +144,7 @@ class PlannerMarkers:
     def publish_plan(self, params: Params, plan: Plan) -> None:
         self._plan_pub.publish(plan_markers(scene(params, plan), self._stamp()))
 
-    def on_pose(self, k: int, msg) -> None:
+    def on_pose(self, k: int, msg: Any) -> None:
         p = msg.pose.position
         self.trail.update(k, (p.x, p.y, p.z))
         now = self._clock()

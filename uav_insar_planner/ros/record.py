@@ -25,12 +25,25 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
+import rclpy
+from rclpy.context import Context
+from rclpy.exceptions import InvalidTopicNameException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.signals import SignalHandlerOptions
+from rclpy.utilities import remove_ros_args
+from rclpy.validate_full_topic_name import validate_full_topic_name
+
 from uav_insar_planner.bag_writer import McapBagWriter
 from uav_insar_planner.msg_definitions import DefinitionError
+from uav_insar_planner.ros.echo import _Fail, _message_class
+from uav_insar_planner.ros.run import startup_problems
 
 PROG = "uav-insar record"
 NODE_NAME = "uav_insar_recorder"
@@ -39,7 +52,7 @@ RECORD_DEPTH = 1000  # a burst of this many messages per topic waits in the queu
 NOT_RECORDED = ("/rosout", "/parameter_events")
 
 
-def qos_dict(qos: Any) -> dict[str, Any]:
+def qos_dict(qos: QoSProfile) -> dict[str, Any]:
     """An rclpy QoSProfile as the plain dictionary rosbag2's metadata holds (bag_writer)."""
     def duration(d: Any) -> dict[str, int]:
         sec, nsec = divmod(int(d.nanoseconds), 10**9)
@@ -54,10 +67,8 @@ def qos_dict(qos: Any) -> dict[str, Any]:
             "avoid_ros_namespace_conventions": bool(qos.avoid_ros_namespace_conventions)}
 
 
-def subscription_qos(offered: Sequence[Any]) -> Any:
+def subscription_qos(offered: Sequence[QoSProfile]) -> QoSProfile:
     """The QoS that matches every offered profile (rclpy QoSProfiles) and loses nothing."""
-    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-
     reliable = all(q.reliability == ReliabilityPolicy.RELIABLE for q in offered)
     latched = all(q.durability == DurabilityPolicy.TRANSIENT_LOCAL for q in offered)
     return QoSProfile(
@@ -66,59 +77,59 @@ def subscription_qos(offered: Sequence[Any]) -> Any:
         durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)
 
 
-def make_recorder(context: Any, bag: McapBagWriter, topics: Sequence[str] | None = None,
-                  log: Any = None) -> Any:
+class BagRecorder(Node):
     """The recorder node in `context`, writing to `bag`; `topics` (absolute names) limits what
     it records (None: every topic but NOT_RECORDED and hidden ones). `log(line)` hears of each
     topic it subscribes to or cannot record."""
-    from rclpy.node import Node
 
-    from uav_insar_planner.ros.echo import _Fail, _message_class
+    def __init__(self, context: Context, bag: McapBagWriter,
+                 topics: Sequence[str] | None = None,
+                 log: Callable[[str], None] | None = None) -> None:
+        super().__init__(NODE_NAME, context=context, start_parameter_services=False)
+        self.bag = bag
+        self.topics = None if topics is None else set(topics)
+        self.skipped: set[str] = set()
+        self._log = log or (lambda line: None)
+        self.create_timer(DISCOVERY_PERIOD_S, self.discover)
+        self.discover()
 
-    say = log or (lambda line: None)
+    def wanted(self, topic: str) -> bool:
+        if self.topics is not None:
+            return topic in self.topics
+        return topic not in NOT_RECORDED and "/_" not in topic
 
-    class BagRecorder(Node):
-        def __init__(self) -> None:
-            super().__init__(NODE_NAME, context=context, start_parameter_services=False)
-            self.skipped: set[str] = set()
-            self.create_timer(DISCOVERY_PERIOD_S, self.discover)
-            self.discover()
+    def discover(self) -> None:
+        """Subscribe to each wanted topic that has a publisher and is not recorded yet."""
+        for topic, types in self.get_topic_names_and_types():
+            if topic in self.bag or topic in self.skipped or not self.wanted(topic):
+                continue
+            infos = [i for i in self.get_publishers_info_by_topic(topic)
+                     if i.node_name != NODE_NAME]
+            if not infos:
+                continue  # only subscribers so far
+            if len(types) != 1:
+                self._skip(topic, f"more than one type ({', '.join(types)})")
+                continue
+            offered = [i.qos_profile for i in infos]
+            try:
+                cls = _message_class(types[0], topic)
+                self.bag.add_topic(topic, types[0], [qos_dict(q) for q in offered])
+            except (_Fail, DefinitionError) as exc:
+                self._skip(topic, str(exc))
+                continue
+            self.create_subscription(cls, topic, self._writer(topic), subscription_qos(offered),
+                                     raw=True)
+            self._log(f"recording {topic} ({types[0]}, "
+                      f"{offered[0].durability.name.lower()})")
 
-        def wanted(self, topic: str) -> bool:
-            if topics is not None:
-                return topic in topics
-            return topic not in NOT_RECORDED and "/_" not in topic
+    def _writer(self, topic: str) -> Callable[[bytes, dict], None]:
+        def write(data: bytes, info: dict) -> None:
+            self.bag.write(topic, info["received_timestamp"], data)
+        return write
 
-        def discover(self) -> None:
-            for topic, types in self.get_topic_names_and_types():
-                if topic in bag or topic in self.skipped or not self.wanted(topic):
-                    continue
-                infos = [i for i in self.get_publishers_info_by_topic(topic)
-                         if i.node_name != NODE_NAME]
-                if not infos:
-                    continue  # only subscribers so far
-                if len(types) != 1:
-                    self.skip(topic, f"more than one type ({', '.join(types)})")
-                    continue
-                offered = [i.qos_profile for i in infos]
-                try:
-                    cls = _message_class(types[0], topic)
-                    bag.add_topic(topic, types[0], [qos_dict(q) for q in offered])
-                except (_Fail, DefinitionError) as exc:
-                    self.skip(topic, str(exc))
-                    continue
-                self.create_subscription(
-                    cls, topic, lambda data, info, topic=topic: bag.write(
-                        topic, info["received_timestamp"], data),
-                    subscription_qos(offered), raw=True)
-                durability = offered[0].durability.name.lower()
-                say(f"recording {topic} ({types[0]}, {durability})")
-
-        def skip(self, topic: str, why: str) -> None:
-            self.skipped.add(topic)
-            say(f"not recording {topic}: {why}")
-
-    return BagRecorder()
+    def _skip(self, topic: str, why: str) -> None:
+        self.skipped.add(topic)
+        self._log(f"not recording {topic}: {why}")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -144,16 +155,6 @@ def _stop(signum: int, frame: Any) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     """Run `uav-insar record` with `argv` (default sys.argv[1:]); returns the exit code."""
-    import rclpy
-    from rclpy.exceptions import InvalidTopicNameException
-    from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
-    from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
-    from rclpy.signals import SignalHandlerOptions
-    from rclpy.utilities import remove_ros_args
-    from rclpy.validate_full_topic_name import validate_full_topic_name
-
-    from uav_insar_planner.ros.run import startup_problems
-
     argv = list(sys.argv[1:] if argv is None else argv)
     try:
         args = _parser().parse_args(remove_ros_args([PROG, *argv])[1:])
@@ -185,8 +186,8 @@ def main(argv: list[str] | None = None) -> int:
                    signal_handler_options=SignalHandlerOptions.NO)
         bag = McapBagWriter(args.out)
         print(f"{PROG}: recording to {args.out} (Ctrl-C stops)", file=sys.stderr, flush=True)
-        node = make_recorder(context, bag, topics,
-                             lambda line: print(f"{PROG}: {line}", file=sys.stderr, flush=True))
+        node = BagRecorder(context, bag, topics,
+                           lambda line: print(f"{PROG}: {line}", file=sys.stderr, flush=True))
         executor = SingleThreadedExecutor(context=context)
         executor.add_node(node)
         end = float("inf") if args.duration is None else time.monotonic() + args.duration
