@@ -23,6 +23,9 @@ setup(
         "matplotlib>=3.6",
         "tqdm>=4.60",
         "pymavlink>=2.4.40",
+        # uav-insar record writes and uav-insar report reads rosbag2 bags with it; the report
+        # runs without ROS, so this is no `ros` extra (pure Python, no ROS packages pulled).
+        "rosbags>=0.11",
     ],
     extras_require={
         # ROS 2 Jazzy from PyPI wheels (x86_64 Linux, CPython 3.10-3.13). Not for a sourced
@@ -33,7 +36,9 @@ setup(
             "ros-jazzy-std-srvs>=5.3",
             "ros-jazzy-rcl-interfaces>=2.0",
         ],
-        "test": ["pytest>=7", "pytest-timeout>=2", "ruff>=0.4", "scipy>=1.10", "mavsdk==3.17.4"],
+        "test": ["pytest>=7", "pytest-timeout>=2", "ruff>=0.4", "scipy>=1.10", "mavsdk==3.17.4",
+                 # independent readers of the recorded bags (test/test_bag_record.py)
+                 "mcap>=1.1", "mcap-ros2-support>=0.5"],
     },
     zip_safe=True,
     maintainer="uav_insar_planner developers",

@@ -13,10 +13,12 @@ MAVLINK_LINE = re.compile(r"uav(\d) via MAVLink: across-track error max ([\d.]+)
                           r"final ([\d.]+) m; flew ([-\d.]+) m along track \(pass ([\d.]+) m\)")
 
 
-def test_demo_flies_the_whole_chain_and_exits_0(ros_domain, repo):
+def test_demo_flies_the_whole_chain_and_exits_0(ros_domain, repo, tmp_path):
+    bag = tmp_path / "demo_bag"
     proc = subprocess.run(
         [sys.executable, "-m", "uav_insar_planner.demo", "--num-slots", "10",
-         "--time-scale", "20", "--mavlink-pass-s", "1", "--domain-id", str(ros_domain)],
+         "--time-scale", "20", "--mavlink-pass-s", "1", "--domain-id", str(ros_domain),
+         "--bag", str(bag)],
         cwd=repo, capture_output=True, text=True, timeout=60)
     out = proc.stdout
     assert proc.returncode == 0, out + proc.stderr
@@ -28,12 +30,16 @@ def test_demo_flies_the_whole_chain_and_exits_0(ros_domain, repo):
         assert float(m[2]) < 0.5 and float(m[3]) < 0.5, m[0]  # across-track, on the pass
         assert float(m[4]) == pytest.approx(float(m[5]), abs=0.5), m[0]  # flew the pass
     assert re.search(r"demo: stopped .* \(exit codes \[(0, ){7}0\]\)", out), out[-500:]
+    assert f"to {bag} (recorder exit code 0)" in out
+    from test_bag_record import assert_both_readers_decode
+
+    assert_both_readers_decode(bag, mavlink=True, slots=10)
 
 
 def test_demo_without_mavlink_starts_no_bridge(ros_domain, repo):
     proc = subprocess.run(
         [sys.executable, "-m", "uav_insar_planner.demo", "--num-slots", "5",
-         "--time-scale", "40", "--no-mavlink", "--domain-id", str(ros_domain)],
+         "--time-scale", "40", "--no-mavlink", "--no-bag", "--domain-id", str(ros_domain)],
         cwd=repo, capture_output=True, text=True, timeout=60)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert "[bridge]" not in proc.stdout and "MAVLink" not in proc.stdout
@@ -51,7 +57,7 @@ def test_demo_flies_closed_loop_under_fading_and_wind(ros_domain, repo):
     proc = subprocess.run(
         [sys.executable, "-m", "uav_insar_planner.demo", "--num-slots", "8", "--time-scale",
          "40", "--no-mavlink", "--offloading", "closed", "--fading", "--wind", "5", "0", "0",
-         "--seed", "3", "--domain-id", str(ros_domain)],
+         "--seed", "3", "--no-bag", "--domain-id", str(ros_domain)],
         cwd=repo, capture_output=True, text=True, timeout=60)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     summary = proc.stdout[proc.stdout.index("\nsummary"):]

@@ -77,6 +77,11 @@ def _build_parser() -> argparse.ArgumentParser:
     # echo parses its own options (uav_insar_planner/ros/echo.py): they pass through.
     sub.add_parser("echo", help="print a topic like `ros2 topic echo` (see echo --help)",
                    add_help=False)
+    # record and report parse their own options too (ros/record.py, bag_report_cli.py).
+    sub.add_parser("record", help="record the topics into a rosbag2 MCAP bag (see record "
+                   "--help)", add_help=False)
+    sub.add_parser("report", help="plots and a table of a recorded mission (see report "
+                   "--help)", add_help=False)
     return parser
 
 
@@ -188,6 +193,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         from uav_insar_planner.ros.echo import main as echo_main
 
         return echo_main(rest)
+    if args.command == "record":
+        from uav_insar_planner.ros.record import main as record_main
+
+        return record_main(rest)
+    if args.command == "report":
+        from uav_insar_planner.bag_report_cli import main as report_main
+
+        return report_main(rest)
     if rest:
         parser.error("unrecognized arguments: " + " ".join(rest))
     commands = {"solve": _cmd_solve, "sweep": _cmd_sweep, "plot-formation": _cmd_plot_formation,

@@ -9,6 +9,10 @@ MAVLink bytes; the vehicles' positions come back on /uavK/mavlink/pose. The vehi
 wall-clock time (no time_scale): they gather at their start points, then fly a short pass of
 `--mavlink-pass-s` seconds along the track at speed_mps.
 
+Unless `--no-bag`, `uav-insar record` runs beside the nodes from before the agents start to
+after they stop, so the whole mission lands in a rosbag2 MCAP bag (`--bag PATH`, default
+bags/demo_<UTC time>); its path is printed at the start and the end.
+
 It prints /formation, each UAV's achieved rate per slot (a compact table), the MAVLink
 vehicles (a table), and a summary (per UAV: slots and rates; per vehicle: the across-track
 error to the planned (x_k, z_k) on the pass, max and final, and the distance flown along the
@@ -34,6 +38,12 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
+from uav_insar_planner.demo_bag import (
+    default_bag_path,
+    recorder_ready,
+    start_recorder,
+    stop_recorder,
+)
 from uav_insar_planner.mission_report import MavlinkPass, mavlink_table, rate_table, summary
 from uav_insar_planner.processes import (
     PRINT_LOCK,
@@ -162,6 +172,9 @@ def run(args: argparse.Namespace) -> int:
 
     w = TopicWatcher(None, "demo_watcher", on_mavlink_pose=on_vehicle)
     env = ros_env(domain)
+    recorder = None if args.no_bag else start_recorder(args.bag, env)
+    if recorder is not None:
+        print(f"demo: recording the mission to {args.bag}", flush=True)
     procs = [start_node("agent", [*common, "-p", f"uav_id:={k}", "-p",
                                   f"time_scale:={args.time_scale}", "-p",
                                   f"position_noise_std_m:={args.noise_std}",
@@ -170,7 +183,8 @@ def run(args: argparse.Namespace) -> int:
              for k in range(3)]
     ports: list[int] = []
     try:
-        if not w.spin_until(w.agents_matched, 20.0, procs):
+        if not w.spin_until(lambda: w.agents_matched() and (
+                recorder is None or recorder_ready(w.node)), 20.0, procs):
             print("demo: the agents did not come up (see their log above)", flush=True)
             return 1
         timeout = [] if args.uav_timeout is None else ["-p", f"uav_timeout_s:={args.uav_timeout}"]
@@ -244,6 +258,10 @@ def run(args: argparse.Namespace) -> int:
         w.destroy()
         what = "planner and agents" if args.no_mavlink else "planner, agents, vehicles, bridge"
         print(f"demo: stopped {what} (exit codes {codes})", flush=True)
+        if recorder is not None:
+            code, line = stop_recorder(recorder)
+            print(f"demo: {line} (recorder exit code {code}); plot it with `uav-insar "
+                  f"report {args.bag}`", flush=True)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -287,7 +305,14 @@ def main(argv: list[str] | None = None) -> int:
                         help="the slot for --kill-uav (default 10)")
     parser.add_argument("--uav-timeout", type=float, default=None, metavar="S",
                         help="the planner's uav_timeout_s (default: its own, 5 s)")
+    parser.add_argument("--bag", type=Path, default=None, metavar="PATH",
+                        help="record the mission into this new rosbag2 folder (default: "
+                             "bags/demo_<UTC time>)")
+    parser.add_argument("--no-bag", action="store_true", help="do not record the mission")
     args = parser.parse_args(argv)
+    args.bag = args.bag or default_bag_path()
+    if not args.no_bag and args.bag.exists():
+        parser.error(f"--bag: {str(args.bag)[:200]!r} exists; expected a new folder")
     if args.uav_timeout is not None and not 0.1 <= args.uav_timeout <= 3600.0:
         parser.error("--uav-timeout must be in [0.1, 3600] s")
     if args.time_scale is None:

@@ -16,6 +16,7 @@ import numpy as np  # noqa: E402
 from uav_insar_planner import model  # noqa: E402
 from uav_insar_planner.params import Params  # noqa: E402
 from uav_insar_planner.plan import Plan  # noqa: E402
+from uav_insar_planner.scene import swath_edges  # noqa: E402
 from uav_insar_planner.solver import rays  # noqa: E402
 from uav_insar_planner.solver.power import station_radius_sq  # noqa: E402
 from uav_insar_planner.sweep import SweepRow  # noqa: E402
@@ -117,11 +118,9 @@ def plot_formation(p: Params, plan: Plan, path: str | Path) -> None:
     for k in flown:
         x, z = plan.formation[k]
         th = p.theta0 if k == 0 else float(model.look_angle(x, z, p.x_t))
-        edges = []
-        for sign in (-1, 1):
-            a = th + sign * p.beamwidth / 2
-            edges.append(x + z * np.tan(a))
-            ax.plot([x, edges[-1]], [z, 0], color=colors[k], lw=0.6, alpha=0.6)
+        edges = swath_edges(x, z, th, p.beamwidth)
+        for edge in edges:
+            ax.plot([x, edge], [z, 0], color=colors[k], lw=0.6, alpha=0.6)
         ax.plot(edges, [0, 0], color=colors[k], lw=4, alpha=0.35)
         ax.plot([x], [z], "o", color=colors[k], ms=8,
                 label=f"U{k} {'master' if k == 0 else 'slave'} ({x:.1f}, {z:.1f}) m")

@@ -9,6 +9,8 @@ Publishes (names relative to the node's namespace, except /diagnostics):
   formation         geometry_msgs/PoseArray, reliable + transient_local, depth 1
   formation/power   std_msgs/Float64MultiArray, reliable + transient_local, depth 1; both
                     carry the plan's identity (ros/plan_msgs.py)
+  formation/markers        visualization_msgs/MarkerArray, latched: the plan (ros/markers.py)
+  formation/markers/flown  visualization_msgs/MarkerArray: the agents' positions and paths
   /diagnostics      diagnostic_msgs/DiagnosticArray: the plan (OK / ERROR), other planners on
                     `formation` (ERROR, ros/plan_watch.py), the swarm (`planner: swarm`,
                     ros/swarm_watch.py) and, once a second, each UAV's rate margin, position
@@ -45,6 +47,7 @@ from uav_insar_planner.params import (
 from uav_insar_planner.plan import Plan
 from uav_insar_planner.ros import diagnostics as report
 from uav_insar_planner.ros import plan_msgs, topics
+from uav_insar_planner.ros.markers import PlannerMarkers
 from uav_insar_planner.ros.parameters import (
     PLANNER_SPECS,
     declare_specs,
@@ -91,6 +94,7 @@ class PlannerNode(Node):
                                                topics.DEPTH)
         self._plan_id: PlanId | None = None  # the identity _plan was published under
         self._plans = PlanWatch(self)  # other planners, the plan each agent flies
+        self._markers = PlannerMarkers(self)
         for k in range(3):
             self.create_subscription(PoseStamped, topics.pose(k),
                                      lambda msg, k=k: self._on_pose(k, msg), topics.DEPTH)
@@ -201,10 +205,11 @@ class PlannerNode(Node):
             self._plan_id = PlanId(*plan_msgs.next_stamp(
                 self.get_clock().now().seconds_nanoseconds(), last),
                 self.get_fully_qualified_name())
-            plan_id = self._plan_id
+            plan_id, scenario = self._plan_id, self._scenario
         msg, power = plan_msgs.encode(plan, plan_id)
         self._formation_pub.publish(msg)
         self._power_pub.publish(power)
+        self._markers.publish_plan(scenario, plan)
 
     def _publish_diagnostics(self) -> None:
         with self._state_lock:
@@ -233,6 +238,7 @@ class PlannerNode(Node):
         with self._state_lock:
             self._reports[k].position = (p.x, p.y, p.z)
         self._swarm.on_pose(k, msg)
+        self._markers.on_pose(k, msg)
 
     def _on_rate(self, k: int, msg) -> None:
         with self._state_lock:

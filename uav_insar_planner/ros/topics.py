@@ -15,6 +15,8 @@ FRAME_ID = "insar_track"
 # planner's name in the power message's third layout dimension, "plan /planner <sec>.<ns>".
 FORMATION = "formation"  # geometry_msgs/PoseArray, LATCHED; header.stamp = the plan's stamp
 POWER = "formation/power"  # std_msgs/Float64MultiArray [uav, slot, plan id], LATCHED
+MARKERS = "formation/markers"  # visualization_msgs/MarkerArray, LATCHED: the plan (markers.py)
+FLOWN_MARKERS = "formation/markers/flown"  # visualization_msgs/MarkerArray, depth 10: agents
 DIAGNOSTICS = "/diagnostics"  # diagnostic_msgs/DiagnosticArray, depth 10
 REPLAN = "~/replan"  # std_srvs/Trigger
 
