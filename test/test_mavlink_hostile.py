@@ -1,0 +1,119 @@
+"""Hostile and careless MAVLink input (issue 12), bridge side, on real loopback UDP: values
+that do not fit MAVLink's float32 going out, non-finite positions coming in, heartbeats for a
+known sysid from a stranger. Each is dropped and counted, logged at a bounded rate, and the
+I/O thread lives on."""
+import time
+
+import pytest
+from mavlink_fakes import MAV, FakePeer, wait_until
+
+from uav_insar_planner.mavlink.bridge import Bridge, BridgeConfig
+
+pytestmark = pytest.mark.timeout(60)
+NAN, INF = float("nan"), float("inf")
+
+
+def bridge_for(peers, sysids, **kw):
+    cfg = dict(connections=tuple(f"udpout:127.0.0.1:{p.port}" for p in peers),
+               target_sysids=tuple(sysids), speed_mps=0.0, capture_radius_m=0.0)
+    cfg.update(kw)
+    return Bridge(BridgeConfig(**cfg))
+
+
+def key(peer):
+    return f"udpout:127.0.0.1:{peer.port}"
+
+
+@pytest.mark.parametrize("bad_pose", [(1e39, 0.0, 10.0), (0.0, -3.5e38, 10.0),
+                                      (0.0, 0.0, 1e300)])
+def test_a_setpoint_that_does_not_fit_float32_is_dropped_and_the_thread_lives(bad_pose):
+    peers = [FakePeer(2, heartbeat_hz=5.0), FakePeer(3, heartbeat_hz=5.0)]
+    try:
+        with bridge_for(peers, (2, 3), setpoint_rate_hz=20.0) as bridge:
+            bridge.set_formation([bad_pose, (1.0, 0.0, 10.0)])
+            time.sleep(1.5)
+            assert bridge.failure is None
+            stats = bridge.link_stats()
+            assert stats[key(peers[0])].unsendable >= 20  # 20 Hz for 1.5 s, every one dropped
+            assert stats[key(peers[1])].unsendable == 0
+            assert peers[0].messages("SET_POSITION_TARGET_LOCAL_NED") == []
+            assert len(peers[1].messages("SET_POSITION_TARGET_LOCAL_NED")) >= 20
+            # the next formation flies again: nothing was corrupted
+            bridge.set_formation([(2.0, 0.0, 10.0), (1.0, 0.0, 10.0)])
+            m = peers[0].wait_for("SET_POSITION_TARGET_LOCAL_NED", 2.0)
+            assert (m.x, m.y, m.z) == (0.0, 2.0, -10.0)
+            events = [e.text for e in bridge.drain_events() if "unsendable" in e.text]
+        assert len(events) == 1, events  # rate-limited: one line for the whole burst
+        assert "sysid 2" in events[0]
+    finally:
+        for p in peers:
+            p.close()
+
+
+def send_positions(peer, position, n=8, period=0.05):
+    for _ in range(n):
+        peer.mav.send(peer.mav.local_position_ned_encode(0, *position, 0.0, 0.0, 0.0))
+        time.sleep(period)
+
+
+@pytest.mark.parametrize("spoof", [(NAN, NAN, NAN), (0.0, INF, -10.0), (NAN, 0.0, -10.0)])
+def test_non_finite_positions_are_no_telemetry_and_never_pass_the_capture_gate(spoof):
+    """math.dist with a NaN is NaN, and NaN > r is False: the old gate let it through."""
+    peer = FakePeer(2, heartbeat_hz=5.0)
+    try:
+        with bridge_for([peer], (2,), capture_radius_m=1.0) as bridge:
+            bridge.set_formation([(0.0, 0.0, 10.0)])  # start point N, E, D = 0, 0, -10
+            peer.wait_for("HEARTBEAT", 3.0)
+            send_positions(peer, spoof, n=20)
+            assert not bridge.track_started()
+            assert bridge.status()[0].position_ned is None  # kept nothing
+            assert bridge.link_stats()[key(peer)].bad_value == 20
+            assert bridge.failure is None
+            send_positions(peer, (0.0, 0.0, -10.0))  # really there now
+            assert wait_until(bridge.track_started, 2.0)
+            texts = [e.text for e in bridge.drain_events()]
+        assert sum("bad_value" in t for t in texts) == 1, texts
+        assert any("formation established" in t for t in texts)
+    finally:
+        peer.close()
+
+
+def test_heartbeats_from_another_address_do_not_keep_a_dead_vehicle_linked():
+    """A stranger sending HEARTBEATs with the vehicle's sysid and compid from another UDP
+    socket is counted as spoofed: the vehicle that stopped is reported lost on time."""
+    vehicle = FakePeer(2, heartbeat_hz=5.0)
+    spoofer = None
+    try:
+        with bridge_for([vehicle], (2,), heartbeat_timeout_s=1.0) as bridge:
+            bridge.set_formation([(0.0, 0.0, 10.0)])
+            assert wait_until(lambda: bridge.status()[0].link == "linked", 3.0)
+            spoofer = FakePeer(2, heartbeat_hz=10.0, dest=vehicle.dest)  # the bridge's socket
+            vehicle.heartbeats_on = False  # the real vehicle dies
+            assert wait_until(lambda: bridge.status()[0].link == "lost", 3.0), \
+                "spoofed heartbeats kept the vehicle linked"
+            time.sleep(0.5)
+            assert bridge.status()[0].link == "lost"  # and they do not find it again
+            assert bridge.link_stats()[key(vehicle)].spoofed >= 10
+            vehicle.heartbeats_on = True
+            assert wait_until(lambda: bridge.status()[0].link == "linked", 2.0)
+    finally:
+        vehicle.close()
+        if spoofer is not None:
+            spoofer.close()
+
+
+def test_a_heartbeat_from_another_component_of_the_vehicle_sysid_is_ignored():
+    vehicle = FakePeer(2, compid=1, heartbeat_hz=5.0)
+    try:
+        with bridge_for([vehicle], (2,)) as bridge:
+            bridge.set_formation([(0.0, 0.0, 10.0)])
+            assert wait_until(lambda: bridge.status()[0].link == "linked", 3.0)
+            other = MAV.MAVLink(vehicle.mav.file, srcSystem=2, srcComponent=42)
+            for _ in range(5):  # from the vehicle's own address, claiming a GUIDED autopilot
+                other.send(other.heartbeat_encode(MAV.MAV_TYPE_QUADROTOR,
+                                                  MAV.MAV_AUTOPILOT_ARDUPILOTMEGA, 0, 9, 4))
+            assert wait_until(lambda: bridge.link_stats()[key(vehicle)].spoofed == 5, 2.0)
+            s = bridge.status()[0]
+            assert s.compid == 1 and s.mode != "LAND"  # custom mode 9 was not taken
+    finally:
+        vehicle.close()
