@@ -117,3 +117,51 @@ def test_a_heartbeat_from_another_component_of_the_vehicle_sysid_is_ignored():
             assert s.compid == 1 and s.mode != "LAND"  # custom mode 9 was not taken
     finally:
         vehicle.close()
+
+
+def free_udp_port():
+    import socket
+
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_on_udpin_the_first_address_heard_is_the_vehicle_until_it_is_lost():
+    """udpin: the vehicle's address is not configured, so the first one heard is pinned;
+    after a loss the pin is released (a restarted vehicle may use a new port), which is
+    where signing is needed (README, "Bad values, strangers and signing")."""
+    port = free_udp_port()
+    bridge = Bridge(BridgeConfig(connections=(f"udpin:127.0.0.1:{port}",), target_sysids=(2,),
+                                 capture_radius_m=0.0, speed_mps=0.0, heartbeat_timeout_s=1.0))
+    vehicle = FakePeer(2, heartbeat_hz=5.0, dest=("127.0.0.1", port))
+    spoofer = None
+    try:
+        with bridge:
+            assert wait_until(lambda: bridge.status()[0].link == "linked", 3.0)
+            spoofer = FakePeer(2, heartbeat_hz=10.0, dest=("127.0.0.1", port))
+            time.sleep(0.5)
+            vehicle.heartbeats_on = False
+            assert wait_until(lambda: bridge.status()[0].link == "lost", 3.0)
+            assert bridge.link_stats()[f"udpin:127.0.0.1:{port}"].spoofed >= 5
+    finally:
+        vehicle.close()
+        if spoofer is not None:
+            spoofer.close()
+
+
+def test_drop_log_says_the_first_drop_then_once_per_period_with_the_count():
+    from uav_insar_planner.mavlink.guard import DropLog
+
+    now = [0.0]
+    log = DropLog(period_s=10.0, clock=lambda: now[0])
+    said = []
+    for i in range(100):
+        now[0] = i * 0.25  # 4 drops a second for 25 s
+        said.append(log.drop("bad_value", "x" * 500))
+    lines = [s for s in said if s is not None]
+    assert len(lines) == 3  # at 0 s, 10 s and 20 s
+    assert lines[0] == "dropped bad_value: " + "x" * 160  # cut short
+    assert lines[1].endswith("(40 since the last report, 41 in all)")
+    assert log.counts == {"bad_value": 100}
+    assert log.drop("spoofed", "y") is not None  # each kind has its own budget

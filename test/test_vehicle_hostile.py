@@ -177,3 +177,23 @@ def test_the_vehicle_program_exits_1_when_its_loop_dies():
     assert out.returncode == 1, out
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1 and "vehicle loop died" in lines[0], out.stderr
+
+
+def test_a_flood_of_bad_input_is_one_log_line_per_kind():
+    lines = []
+    with SimVehicle(5, "udpin:127.0.0.1:0", "ardupilot", airborne=True,
+                    start_ned=(0.0, 0.0, -10.0), log=lines.append) as vehicle:
+        stranger = FakePeer(99, 191, dest=("127.0.0.1", vehicle.port))
+        gcs = FakePeer(255, 191, dest=("127.0.0.1", vehicle.port))
+        try:
+            for _ in range(50):
+                setpoint(stranger, 3576, (1.0, 2.0, -3.0))
+                setpoint(gcs, 3576, (NAN, 2.0, -3.0))
+            assert wait_until(lambda: vehicle.stats.foreign == 50
+                              and vehicle.stats.bad_value == 50, 3.0)
+        finally:
+            stranger.close()
+            gcs.close()
+    assert len(lines) == 2, lines
+    assert any("dropped foreign" in line and "sysid 99" in line for line in lines)
+    assert any("dropped bad_value" in line for line in lines)

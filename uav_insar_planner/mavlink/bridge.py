@@ -22,7 +22,6 @@ Contract:
   formation, and `separation` in their status).
 - TCP links connect and reconnect without blocking (`link.TcpClient`), so a dead vehicle is
   reported lost after `heartbeat_timeout_s` while the others go on.
-
 - Bad values are dropped where they cross, counted in the link's counters and logged once per
   kind every DROP_LOG_PERIOD_S (`guard`): a setpoint or command whose values do not fit
   MAVLink's float32 (`unsendable`), a non-finite LOCAL_POSITION_NED (`bad_value`: no

@@ -118,6 +118,11 @@ class BridgeConfig:
                 problem = check_value(spec, getattr(self, spec.name))[1]
                 if problem:
                     raise ValueError(problem)
+        length = self.speed_mps * self.track_duration_s
+        if length > ORIGIN_LIMIT_M:
+            raise ValueError(f"track_duration_s: {self.track_duration_s:g} s at speed_mps "
+                             f"{self.speed_mps:g} is a {length:.3g} m pass; expected at most "
+                             f"{ORIGIN_LIMIT_M:g} m, where MAVLink's float32 resolves 8 mm")
 
     def addresses(self) -> tuple[str, ...]:
         """The connection string of each UAV, in UAV order."""
