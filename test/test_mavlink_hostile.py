@@ -165,3 +165,32 @@ def test_drop_log_says_the_first_drop_then_once_per_period_with_the_count():
     assert lines[1].endswith("(40 since the last report, 41 in all)")
     assert log.counts == {"bad_value": 100}
     assert log.drop("spoofed", "y") is not None  # each kind has its own budget
+
+
+def test_udpin_replies_only_to_valid_senders_and_to_a_bounded_number():
+    import socket
+
+    from uav_insar_planner.mavlink.link import MAX_UDPIN_PEERS, Link
+
+    link = Link("udpin:127.0.0.1:0", 2, 1)
+    senders = [socket.socket(socket.AF_INET, socket.SOCK_DGRAM) for _ in range(12)]
+    try:
+        where = ("127.0.0.1", link.local_port())
+        junk = senders[0]
+        junk.bind(("127.0.0.1", 0))
+        junk.sendto(b"\xfd\x09garbage, not a frame", where)
+        mav = MAV.MAVLink(None, srcSystem=9, srcComponent=1)
+        frame = mav.heartbeat_encode(6, 8, 0, 0, 4).pack(mav)
+        for s in senders[1:]:
+            s.bind(("127.0.0.1", 0))
+            s.sendto(frame, where)
+            time.sleep(0.01)
+            link.poll()
+        clients = link.conn.clients
+        assert len(clients) == MAX_UDPIN_PEERS
+        assert junk.getsockname() not in clients  # garbage subscribes nobody
+        assert {s.getsockname() for s in senders[-MAX_UDPIN_PEERS:]} == clients  # the latest
+    finally:
+        for s in senders:
+            s.close()
+        link.close()

@@ -46,6 +46,7 @@ import select
 import sys
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
 from dataclasses import replace
 
@@ -63,6 +64,7 @@ from uav_insar_sim.vehicle_args import build_parser
 __all__ = ["SimVehicle", "build_parser", "main"]
 
 PHYSICS_HZ = 50.0
+MAX_COMMANDS_KEPT = 1000
 OBEYED = frozenset(("COMMAND_LONG", "COMMAND_INT", "SET_MODE",
                     "SET_POSITION_TARGET_LOCAL_NED", "PARAM_SET"))
 HANDLED = OBEYED | {"PARAM_REQUEST_LIST", "PARAM_REQUEST_READ"}
@@ -105,7 +107,9 @@ class SimVehicle:
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._radio = True
-        self.commands: list[tuple[int, int]] = []  # (command, result) answered, in order
+        #: the last MAX_COMMANDS_KEPT (command, result) answered, in order (bounded: a flood
+        #: of commands must not grow memory)
+        self.commands: deque[tuple[int, int]] = deque(maxlen=MAX_COMMANDS_KEPT)
         self.errors = 0  # messages whose handling raised (answered FAILED, never fatal)
 
     # ------------------------------------------------------------------------- public API
@@ -273,8 +277,12 @@ class SimVehicle:
     def _handle_safely(self, msg: MAV.MAVLink_message, now: float) -> None:
         try:
             self._handle(msg, now)
-        except Exception:  # noqa: BLE001 - a GCS must never be able to stop the vehicle
+        except Exception as exc:  # noqa: BLE001 - a GCS must never be able to stop the vehicle
             self.errors += 1
+            line = self._drops.drop("message whose handling raised",
+                                    f"{msg.get_type()}: {type(exc).__name__}: {exc}")
+            if line is not None and self._log is not None:
+                self._log(f"sysid {self.sysid}: {line}")
             if msg.get_type() in ("COMMAND_LONG", "COMMAND_INT"):
                 self._ack(msg, msg.command, MAV.MAV_RESULT_FAILED)
 
@@ -328,7 +336,6 @@ class SimVehicle:
             i = self.params.set(_param_name(msg.param_id), msg.param_value, msg.param_type)
             if i is not None:
                 self._send_param(i)
-
 
     def _command(self, msg: MAV.MAVLink_message, params: tuple, now: float) -> None:
         result, problem = run_command(self, msg.command, params, now)

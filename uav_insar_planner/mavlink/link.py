@@ -15,7 +15,8 @@ frames are returned (the rest counted as `bad_signature`). A message that cannot
 (a value outside its wire type) is counted as `unsendable`, never raised. On UDP each
 message comes with the address of its datagram (`poll_sources`), and a `udpin` link replies
 only to peers that sent at least one valid (and, with signing, signed) message, so garbage
-from a stranger does not subscribe it to our traffic. TCP and serial carry no such address.
+from a stranger does not subscribe it to our traffic, and to at most MAX_UDPIN_PEERS of
+them. TCP and serial carry no such address.
 A host name is resolved when the link opens (ValueError if it does not resolve).
 """
 from __future__ import annotations
@@ -40,6 +41,7 @@ _LIVE_PREFIXES = ("udpin:", "udpout:", "udpbcast:", "udp:", "tcp:", "tcpin:", "m
                   "uds:", "unix:")
 _READ_CHUNK = 4096
 _UDP_MAX = 65535
+MAX_UDPIN_PEERS = 8
 _MAX_READS_PER_POLL = 256  # bounds one poll, so a flooded link cannot starve the others
 #: A dead TCP link is tried again at most this often, each try one non-blocking connect().
 TCP_RECONNECT_S = 1.0
@@ -94,7 +96,7 @@ def resolve_host(address: str) -> None:
     if host in ("", "0.0.0.0"):
         return
     try:
-        socket.getaddrinfo(host, int(port))
+        socket.getaddrinfo(host, int(port), socket.AF_INET)  # our sockets are IPv4
     except (OSError, UnicodeError) as exc:
         raise ValueError(f"cannot open {address[:120]!r}: host {host[:80]!r} does not "
                          f"resolve ({getattr(exc, 'strerror', None) or exc})") from None
@@ -329,10 +331,20 @@ class Link:
             msgs = self._feed(bytes(data) if not isinstance(data, str)
                               else data.encode("latin-1"))
             if msgs and source is not None and self.conn.udp_server:
-                self.conn.clients.add(source)  # pymavlink's udpin replies to its clients
-                self.conn.clients_last_alive[source] = time.time()
+                self._add_udpin_peer(source)
             out += [(m, source) for m in msgs]
         return out
+
+    def _add_udpin_peer(self, source: Source) -> None:
+        """pymavlink's udpin sends to every client it has heard, for ever: keep the
+        MAX_UDPIN_PEERS heard most recently, so many senders cannot grow it (nor our sends)."""
+        clients, alive = self.conn.clients, self.conn.clients_last_alive
+        clients.add(source)
+        alive[source] = time.time()
+        while len(clients) > MAX_UDPIN_PEERS:
+            oldest = min(clients, key=lambda a: alive.get(a, 0.0))
+            clients.discard(oldest)
+            alive.pop(oldest, None)
 
     def _recv(self) -> tuple[bytes, Source | None]:
         if not self._udp:
