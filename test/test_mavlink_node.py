@@ -43,7 +43,9 @@ def finish(proc: subprocess.Popen) -> str:
 
 
 @pytest.mark.parametrize("param", ["setpoint_rate_hz:=1.0", "autopilot:=inav",
-                                   "target_sysids:=[2, 2, 3]", "connections:=['nowhere']"])
+                                   "target_sysids:=[2, 2, 3]", "connections:=['nowhere']",
+                                   "signing_key_file:=/no/such/key",
+                                   "track_bearing_deg:=1e308"])
 def test_bad_parameter_exits_2_with_one_line(param, ros_domain):
     proc = start("uav_insar_planner.ros.mavlink_bridge", ros_env(), param)
     try:
