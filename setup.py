@@ -37,6 +37,7 @@ setup(
             "ros-jazzy-rcl-interfaces>=2.0",
         ],
         "test": ["pytest>=7", "pytest-timeout>=2", "ruff>=0.4", "scipy>=1.10", "mavsdk==3.17.4",
+                 "hypothesis>=6",
                  # independent readers of the recorded bags (test/test_bag_record.py)
                  "mcap>=1.1", "mcap-ros2-support>=0.5"],
     },

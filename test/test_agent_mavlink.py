@@ -98,3 +98,20 @@ def test_a_bad_mavlink_listen_is_one_problem_line(ros_context):
         assert agent.vehicle is None
     finally:
         agent.destroy_node()
+
+
+def test_an_agent_whose_embedded_vehicle_dies_exits_1(ros_domain):
+    """FAULT INJECTION (test/fault_injection.py): the embedded vehicle's link raises 2 s
+    after start, killing its thread; the agent must say so and exit 1, not fly on as a
+    zombie publishing a frozen pose."""
+    import os
+    import subprocess
+    import sys
+
+    fault = os.path.join(os.path.dirname(__file__), "fault_injection.py")
+    out = subprocess.run([sys.executable, fault, "2.0", "uav_insar_sim.agent_node",
+                          "--ros-args", "-p", "mavlink_listen:=udpin:127.0.0.1:0"],
+                         capture_output=True, text=True, timeout=40)
+    assert out.returncode == 1, out
+    errors = [line for line in (out.stdout + out.stderr).splitlines() if "ERROR" in line]
+    assert len(errors) == 1 and "embedded MAVLink vehicle died" in errors[0], out

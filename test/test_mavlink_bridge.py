@@ -158,6 +158,12 @@ def test_malformed_traffic_is_counted_and_ignored(peers):
     (dict(origin_ned_m=(0.0, 1.0)), "origin_ned_m"),
     (dict(connections=("udpout:nowhere",) * 3), "HOST:PORT"),
     (dict(connections=("flight.tlog",) * 3), "log file"),
+    (dict(connections=("udpout:no.such.host.invalid:14550",) * 3), "does not resolve"),
+    (dict(track_bearing_deg=1e308), "track_bearing_deg"),
+    (dict(origin_ned_m=(1e39, 0.0, 0.0)), "origin_ned_m"),
+    (dict(capture_radius_m=float("inf")), "capture_radius_m"),
+    (dict(signing_key_file="/no/such/key"), "signing_key_file"),
+    (dict(speed_mps=1000.0, track_duration_s=1e6), "1e+09 m pass"),
 ])
 def test_bad_configuration_is_one_line(change, words):
     cfg = dict(connections=("udpout:127.0.0.1:9",) * 3, target_sysids=SYSIDS)

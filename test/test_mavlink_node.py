@@ -43,7 +43,9 @@ def finish(proc: subprocess.Popen) -> str:
 
 
 @pytest.mark.parametrize("param", ["setpoint_rate_hz:=1.0", "autopilot:=inav",
-                                   "target_sysids:=[2, 2, 3]", "connections:=['nowhere']"])
+                                   "target_sysids:=[2, 2, 3]", "connections:=['nowhere']",
+                                   "signing_key_file:=/no/such/key",
+                                   "track_bearing_deg:=1e308"])
 def test_bad_parameter_exits_2_with_one_line(param, ros_domain):
     proc = start("uav_insar_planner.ros.mavlink_bridge", ros_env(), param)
     try:
@@ -107,6 +109,39 @@ def test_planner_bridge_vehicles_end_to_end(watcher):
         for v in vehicles:
             v.stop()
     assert "formation established" in bridge_out, bridge_out
+
+
+def test_a_dead_mavlink_thread_turns_the_bridge_error_and_exits_1(watcher):
+    """FAULT INJECTION (test/fault_injection.py): the bridge's links start raising 4 s after
+    start, which kills its I/O thread the way a bug would. The node must then report every
+    UAV ERROR, never "linked" again, and exit with code 1 instead of living on as a zombie."""
+    vehicle = SimVehicle(2, "udpin:127.0.0.1:0", "ardupilot", start_ned=(0.0, 0.0, -10.0),
+                         max_speed=20.0, max_accel=10.0, airborne=True)
+    vehicle.start()
+    fault = os.path.join(os.path.dirname(__file__), "fault_injection.py")
+    cmd = [PY, fault, "4.0", "uav_insar_planner.ros.mavlink_bridge", "--ros-args",
+           "-p", f"connections:=['udpout:127.0.0.1:{vehicle.port}']", "-p", "target_sysids:=[2]"]
+    bridge = subprocess.Popen(cmd, env=ros_env(), stdout=subprocess.PIPE,
+                              stderr=subprocess.STDOUT, text=True, start_new_session=True)
+    try:
+        def bridge_says(level):
+            return [s for m in watcher.diagnostics for s in m.status
+                    if s.name == "mavlink_bridge: uav0" and s.level == level]
+
+        assert watcher.spin_until(lambda: bridge_says(DiagnosticStatus.OK), 20.0), "never linked"
+        assert watcher.spin_until(lambda: bridge_says(DiagnosticStatus.ERROR), 10.0), \
+            "the bridge kept reporting OK with its I/O thread dead"
+        assert "thread died" in bridge_says(DiagnosticStatus.ERROR)[-1].message
+        assert bridge.wait(timeout=10) == 1
+        watcher.spin_until(lambda: False, 0.5)
+        levels = [s.level for m in watcher.diagnostics for s in m.status
+                  if s.name == "mavlink_bridge: uav0"]
+        after = levels[levels.index(DiagnosticStatus.ERROR):]
+        assert set(after) == {DiagnosticStatus.ERROR}  # nothing said OK after the death
+    finally:
+        out = finish(bridge)
+        vehicle.stop()
+    assert "MAVLink I/O thread died: RuntimeError: fault injection" in out, out
 
 
 def test_a_formation_beyond_float32_is_dropped_at_entry(watcher):

@@ -142,7 +142,7 @@ def test_messages_for_other_systems_are_ignored():
                 0, 6, 1, MAV.MAV_FRAME_LOCAL_NED, 3576, 9, 9, -9, 0, 0, 0, 0, 0, 0, 0, 0))
             gcs.mav.send(gcs.mav.command_long_encode(6, 1, 400, 0, 0, 0, 0, 0, 0, 0, 0))
             time.sleep(0.3)
-            assert vehicle.setpoints_accepted == 0 and vehicle.commands == []
+            assert vehicle.setpoints_accepted == 0 and not vehicle.commands
         finally:
             gcs.close()
 
@@ -318,7 +318,7 @@ def test_only_the_configured_ground_station_commands():
             other.mav.send(other.mav.param_set_encode(5, 1, b"MAV_GCS_SYSID", 0,
                                                       MAV.MAV_PARAM_TYPE_INT32))
             time.sleep(0.3)
-            assert vehicle.setpoints_accepted == 0 and vehicle.commands == []
+            assert vehicle.setpoints_accepted == 0 and not vehicle.commands
             assert vehicle.gcs_sysid == 200
             setpoint(mine, 1, 2, -9)
             assert wait_until(lambda: vehicle.setpoints_accepted == 1, 1.0)

@@ -29,7 +29,7 @@ small_scale_fading, rician_k_db, fading_seed and the wind's wind_mps, gust_std_m
 mavlink_sysid, track_bearing_deg, origin_ned_m (MAVLINK_SPECS) and the scenario parameters of
 AGENT_SCENARIO_NAMES from params.PARAM_SPECS (P_max and E_max included, for the closed loop),
 so one params file serves every node. Invalid values or unknown names log one line each and exit
-with code 2.
+with code 2; an embedded vehicle whose loop dies makes the agent log why and exit with code 1.
 """
 from __future__ import annotations
 
@@ -40,6 +40,7 @@ from rclpy.node import Node
 from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension
 
 from uav_insar_planner.evaluate import rate_tolerance_bps
+from uav_insar_planner.mavlink.guard import EXIT_WORKER_DIED
 from uav_insar_planner.params import ParamError, params_from_mapping
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.parameters import (
@@ -133,6 +134,10 @@ class AgentNode(Node):
 
     # --- flight --------------------------------------------------------------------------
     def _tick(self) -> None:
+        if self.vehicle is not None and self.vehicle.failure is not None:
+            self.get_logger().error(f"uav{self.k}: embedded MAVLink vehicle died: "
+                                    f"{self.vehicle.failure}; exiting")
+            raise SystemExit(EXIT_WORKER_DIED)  # never a zombie agent that flies nothing
         for sample in self.flight.tick():
             self._publish_pose(sample.position)
             self._rate_pub.publish(Float64(data=sample.rate_bps))

@@ -58,14 +58,19 @@ class Autopilot:
         if autopilot not in AUTOPILOTS:
             raise ValueError(f"autopilot: {autopilot!r} is not allowed; expected ardupilot "
                              "or px4")
-        if not (max_speed > 0 and max_accel > 0 and math.isfinite(max_speed + max_accel)):
-            raise ValueError("speed and accel must be finite and > 0")
-        if len(start_ned) != 3 or not all(math.isfinite(c) for c in start_ned):
-            raise ValueError("start_ned: expected 3 finite numbers N E D")
+        for name, value, high in (("max_speed", max_speed, 1000.0),
+                                  ("max_accel", max_accel, 1000.0),
+                                  ("offboard_timeout_s", offboard_timeout_s, 60.0)):
+            if not 0.0 < value < high:  # (False for NaN)
+                raise ValueError(f"{name}: value {value!r:.24} is not allowed; expected "
+                                 f"0 < value < {high:g}")
+        if len(start_ned) != 3 or not all(math.isfinite(c) and abs(c) < 1e6
+                                          for c in start_ned):
+            raise ValueError(f"start_ned: value {tuple(start_ned)!r:.60} is not allowed; "
+                             "expected 3 finite numbers N E D within +-1e6 m")
         if not (0.0 <= boot_s < 3600.0):
-            raise ValueError(f"boot_s: {boot_s!r} is not allowed; expected 0 <= s < 3600")
-        if not (0.0 < offboard_timeout_s < 60.0):
-            raise ValueError("offboard_timeout_s: expected 0 < s < 60")
+            raise ValueError(f"boot_s: value {boot_s!r:.24} is not allowed; expected "
+                             "0 <= s < 3600")
         self.autopilot = autopilot
         self.px4 = autopilot == "px4"
         self.max_speed, self.max_accel = float(max_speed), float(max_accel)

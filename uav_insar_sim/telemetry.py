@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
+from uav_insar_planner.mavlink.autopilots import COPTER_MODES, px4_custom_mode
 from uav_insar_planner.mavlink.link import MAV
 
 EARTH_RADIUS_M = 6378137.0
@@ -174,6 +175,27 @@ class Telemetry:
         return 1500 if self.ap.armed else 50  # 15 A hovering, 0.5 A idle
 
     # ------------------------------------------------------------------------ messages
+    def heartbeat(self, now: float) -> MAV.MAVLink_message:
+        """MAV_TYPE_QUADROTOR; ArduCopter mode numbers or PX4 main << 16 | sub << 24."""
+        ap = self.ap
+        flags = M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
+        if ap.armed:
+            flags |= M.MAV_MODE_FLAG_SAFETY_ARMED
+        if ap.px4:
+            custom, autopilot = px4_custom_mode(ap.mode), M.MAV_AUTOPILOT_PX4
+        else:
+            custom, autopilot = COPTER_MODES[ap.mode], M.MAV_AUTOPILOT_ARDUPILOTMEGA
+            flags |= M.MAV_MODE_FLAG_STABILIZE_ENABLED
+            if ap.mode == "GUIDED":
+                flags |= M.MAV_MODE_FLAG_GUIDED_ENABLED
+        if not ap.booted(now):
+            state = M.MAV_STATE_BOOT if ap.px4 else M.MAV_STATE_CALIBRATING
+        elif ap.armed and not ap.on_ground():
+            state = M.MAV_STATE_ACTIVE
+        else:
+            state = M.MAV_STATE_STANDBY
+        return self.mav.heartbeat_encode(M.MAV_TYPE_QUADROTOR, autopilot, flags, custom, state)
+
     def sys_status(self, now: float) -> MAV.MAVLink_message:
         health = SENSORS if self.ap.booted(now) else SENSORS & ~NOT_HEALTHY_WHILE_BOOTING
         return self.mav.sys_status_encode(SENSORS, SENSORS, health, 200, self._voltage_mv(),

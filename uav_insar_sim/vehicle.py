@@ -5,6 +5,7 @@ Command line (the `uav-insar-vehicle` console script, or `python -m uav_insar_si
     uav-insar-vehicle --sysid 2 --listen udpin:127.0.0.1:14552 [--autopilot ardupilot|px4]
                       [--start-ned N E D] [--speed 10] [--accel 5] [--airborne]
                       [--boot-s 3] [--home LAT,LON,ALT] [--gcs-sysid 255]
+                      [--signing-key-file FILE]
 
 In-process (a background thread; what tests and an agent node use):
 
@@ -29,26 +30,41 @@ started `airborne` never boots. The MAVLink side, like the real autopilots (flig
   a mask of 0 uses every field; non-finite used fields are refused and counted), PARAM_SET.
   Answered from anyone: PARAM_REQUEST_LIST, PARAM_REQUEST_READ (PARAM_VALUE).
 - Messages for another system or component are ignored; a malformed one never stops it.
+- Drops are counted in `stats` (link.LinkStats) and, on the command line, logged to stderr
+  once per kind every 10 s (`guard.DropLog`): `foreign` (an obeyed message not from
+  `gcs_sysid`), `bad_value` (a used setpoint field that is not finite, a command parameter
+  that is NaN where required, infinite or out of range, which is ACKed DENIED, a PARAM_SET
+  value that is not a number of its type) and, with `signing_key`, `bad_signature`.
+- With `signing_key` (CLI `--signing-key-file`) everything sent is signed and only correctly
+  signed frames are read (`signing`), from anyone: the GCS sysid rule still applies.
+- If the vehicle loop dies, `failure` says why and the loop ends; the command line then
+  prints one line and exits with code 1 (guard.EXIT_WORKER_DIED).
 """
 from __future__ import annotations
 
-import argparse
 import select
 import sys
 import threading
 import time
+from collections import deque
+from collections.abc import Callable
 from dataclasses import replace
 
-from uav_insar_planner.mavlink.autopilots import AUTOPILOTS, COPTER_MODES, px4_custom_mode
+from uav_insar_planner.mavlink.guard import EXIT_WORKER_DIED, DropLog, finite
 from uav_insar_planner.mavlink.link import MAV, Link, LinkStats
+from uav_insar_planner.mavlink.sequencer import command_name
+from uav_insar_planner.mavlink.setpoints import used_values
+from uav_insar_planner.mavlink.signing import read_key_file, signing_state
 from uav_insar_sim.autopilot import Autopilot
 from uav_insar_sim.commands import run_command
 from uav_insar_sim.sim_params import ParamTable, vehicle_params
 from uav_insar_sim.telemetry import SITL_HOME, Streams, Telemetry, parse_home
+from uav_insar_sim.vehicle_args import build_parser
 
 __all__ = ["SimVehicle", "build_parser", "main"]
 
 PHYSICS_HZ = 50.0
+MAX_COMMANDS_KEPT = 1000
 OBEYED = frozenset(("COMMAND_LONG", "COMMAND_INT", "SET_MODE",
                     "SET_POSITION_TARGET_LOCAL_NED", "PARAM_SET"))
 HANDLED = OBEYED | {"PARAM_REQUEST_LIST", "PARAM_REQUEST_READ"}
@@ -67,7 +83,8 @@ class SimVehicle:
                  max_speed: float = 10.0, max_accel: float = 5.0, airborne: bool = False,
                  offboard_timeout_s: float = 0.5, compid: int = MAV.MAV_COMP_ID_AUTOPILOT1,
                  *, boot_s: float = 0.0, home: tuple[float, float, float] = SITL_HOME,
-                 gcs_sysid: int = 255):
+                 gcs_sysid: int = 255, signing_key: bytes | None = None,
+                 log: Callable[[str], None] | None = None):
         if not 1 <= sysid <= 255:
             raise ValueError(f"sysid: {sysid!r} is not allowed; expected 1..255")
         if not 0 <= gcs_sysid <= 255:
@@ -77,7 +94,12 @@ class SimVehicle:
         self._boot = time.monotonic()
         self._ap = Autopilot(autopilot, start_ned, max_speed, max_accel, airborne,
                              offboard_timeout_s, boot_s, self._boot)
-        self._link = Link(listen, sysid, compid)
+        signing = None if signing_key is None else signing_state(signing_key, link_id=0)
+        self._link = Link(listen, sysid, compid, signing)
+        self._drops = DropLog()
+        self._log = log
+        #: why the vehicle loop died (None while it runs or never ran)
+        self.failure: str | None = None
         self.telemetry = Telemetry(self._link.mav, self._ap, tuple(home), self._boot, sysid)
         self.streams = Streams()
         self.params = ParamTable(vehicle_params(self), bytewise=self._ap.px4)
@@ -85,7 +107,9 @@ class SimVehicle:
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._radio = True
-        self.commands: list[tuple[int, int]] = []  # (command, result) answered, in order
+        #: the last MAX_COMMANDS_KEPT (command, result) answered, in order (bounded: a flood
+        #: of commands must not grow memory)
+        self.commands: deque[tuple[int, int]] = deque(maxlen=MAX_COMMANDS_KEPT)
         self.errors = 0  # messages whose handling raised (answered FAILED, never fatal)
 
     # ------------------------------------------------------------------------- public API
@@ -148,6 +172,11 @@ class SimVehicle:
         with self._lock:
             self._radio = on
 
+    @property
+    def alive(self) -> bool:
+        """True while the background thread runs and has not failed."""
+        return self._thread is not None and self._thread.is_alive() and self.failure is None
+
     def start(self) -> None:
         if self._thread is None:
             self._thread = threading.Thread(target=self.run, name=f"sim-vehicle-{self.sysid}",
@@ -169,8 +198,16 @@ class SimVehicle:
         self.stop()
 
     def run(self, stop: threading.Event | None = None) -> None:
-        """The vehicle loop; returns when `stop` (or `self.stop()`) is set."""
-        stop = stop or self._stop
+        """The vehicle loop; returns when `stop` (or `self.stop()`) is set, or when the loop
+        failed: then `failure` says why (logged through `log`), never silently."""
+        try:
+            self._loop(stop or self._stop)
+        except Exception as exc:  # recorded: whoever runs the vehicle must stop too
+            self.failure = f"{type(exc).__name__}: {str(exc)[:200]}"
+            if self._log is not None:
+                self._log(f"sysid {self.sysid}: vehicle loop died: {self.failure}")
+
+    def _loop(self, stop: threading.Event) -> None:
         dt = 1.0 / PHYSICS_HZ
         next_tick = time.monotonic()
         fd = self._link.fileno()
@@ -213,25 +250,7 @@ class SimVehicle:
         return True
 
     def _send_heartbeat(self) -> None:
-        ap = self._ap
-        flags = MAV.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
-        if ap.armed:
-            flags |= MAV.MAV_MODE_FLAG_SAFETY_ARMED
-        if ap.px4:
-            custom, autopilot = px4_custom_mode(ap.mode), MAV.MAV_AUTOPILOT_PX4
-        else:
-            custom, autopilot = COPTER_MODES[ap.mode], MAV.MAV_AUTOPILOT_ARDUPILOTMEGA
-            flags |= MAV.MAV_MODE_FLAG_STABILIZE_ENABLED
-            if ap.mode == "GUIDED":
-                flags |= MAV.MAV_MODE_FLAG_GUIDED_ENABLED
-        if not ap.booted(time.monotonic()):
-            state = MAV.MAV_STATE_BOOT if ap.px4 else MAV.MAV_STATE_CALIBRATING
-        elif ap.armed and not ap.on_ground():
-            state = MAV.MAV_STATE_ACTIVE
-        else:
-            state = MAV.MAV_STATE_STANDBY
-        self._send(self._link.mav.heartbeat_encode(MAV.MAV_TYPE_QUADROTOR, autopilot, flags,
-                                                   custom, state))
+        self._send(self.telemetry.heartbeat(time.monotonic()))
 
     def _send_statustexts(self) -> None:
         while self._ap.statustexts:
@@ -258,18 +277,36 @@ class SimVehicle:
     def _handle_safely(self, msg: MAV.MAVLink_message, now: float) -> None:
         try:
             self._handle(msg, now)
-        except Exception:  # noqa: BLE001 - a GCS must never be able to stop the vehicle
+        except Exception as exc:  # noqa: BLE001 - a GCS must never be able to stop the vehicle
             self.errors += 1
+            line = self._drops.drop("message whose handling raised",
+                                    f"{msg.get_type()}: {type(exc).__name__}: {exc}")
+            if line is not None and self._log is not None:
+                self._log(f"sysid {self.sysid}: {line}")
             if msg.get_type() in ("COMMAND_LONG", "COMMAND_INT"):
                 self._ack(msg, msg.command, MAV.MAV_RESULT_FAILED)
+
+    def _drop(self, counter: str, detail: str) -> None:
+        """Count a dropped / refused message; log it at a bounded rate."""
+        setattr(self._link.stats, counter, getattr(self._link.stats, counter) + 1)
+        line = self._drops.drop(counter, detail)
+        if line is not None and self._log is not None:
+            self._log(f"sysid {self.sysid}: {line}")
 
     def _handle(self, msg: MAV.MAVLink_message, now: float) -> None:
         kind = msg.get_type()
         if kind not in HANDLED or not self._for_me(msg):
             return
-        if kind in OBEYED and self.gcs_sysid not in (0, msg.get_srcSystem()):
-            return  # only the configured ground station commands this vehicle
+        src = msg.get_srcSystem()
+        if kind in OBEYED and self.gcs_sysid not in (0, src):
+            # only the configured ground station commands this vehicle
+            self._drop("foreign", f"{kind} from sysid {src}, not the GCS {self.gcs_sysid}")
+            return
         if kind == "SET_POSITION_TARGET_LOCAL_NED":
+            position, velocity = (msg.x, msg.y, msg.z), (msg.vx, msg.vy, msg.vz)
+            if not finite(used_values(msg.type_mask, position, velocity)):
+                self._drop("bad_value", f"setpoint with a used field not finite: position "
+                                        f"{position}, velocity {velocity}")
             self._ap.setpoint(msg.coordinate_frame, msg.type_mask, (msg.x, msg.y, msg.z),
                               (msg.vx, msg.vy, msg.vz), now)
         elif kind == "SET_MODE":
@@ -280,12 +317,11 @@ class SimVehicle:
             self._ack(msg, MAV.MAVLINK_MSG_ID_SET_MODE,
                       self._ap.set_mode(msg.custom_mode, main, sub, now))
         elif kind == "COMMAND_INT":
-            params = (msg.param1, msg.param2, msg.param3, msg.param4, msg.x, msg.y, msg.z)
-            self._ack(msg, msg.command, run_command(self, msg.command, params, now))
+            self._command(msg, (msg.param1, msg.param2, msg.param3, msg.param4, msg.x, msg.y,
+                                msg.z), now)
         elif kind == "COMMAND_LONG":
-            params = (msg.param1, msg.param2, msg.param3, msg.param4, msg.param5,
-                      msg.param6, msg.param7)
-            self._ack(msg, msg.command, run_command(self, msg.command, params, now))
+            self._command(msg, (msg.param1, msg.param2, msg.param3, msg.param4, msg.param5,
+                                msg.param6, msg.param7), now)
         elif kind == "PARAM_REQUEST_LIST":
             for i in range(len(self.params)):
                 self._send_param(i)
@@ -294,9 +330,18 @@ class SimVehicle:
             if i is not None:
                 self._send_param(i)
         else:  # PARAM_SET
+            if self.params.decode(msg.param_value, msg.param_type) is None:
+                self._drop("bad_value", f"PARAM_SET {_param_name(msg.param_id)!r} = "
+                                        f"{msg.param_value!r}")
             i = self.params.set(_param_name(msg.param_id), msg.param_value, msg.param_type)
             if i is not None:
                 self._send_param(i)
+
+    def _command(self, msg: MAV.MAVLink_message, params: tuple, now: float) -> None:
+        result, problem = run_command(self, msg.command, params, now)
+        if problem:
+            self._drop("bad_value", f"{command_name(msg.command)}: {problem}; DENIED")
+        self._ack(msg, msg.command, result)
 
 
 def _param_name(param_id: str | bytes) -> str:
@@ -306,45 +351,25 @@ def _param_name(param_id: str | bytes) -> str:
 
 
 # ----------------------------------------------------------------------------- command line
-def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
-        prog="uav-insar-vehicle",
-        description="A SITL-style MAVLink multicopter (ArduPilot-like or PX4-like).")
-    p.add_argument("--sysid", type=int, required=True, help="MAVLink system id, 1..255")
-    p.add_argument("--listen", required=True,
-                   help="pymavlink connection string, e.g. udpin:127.0.0.1:14552 (wait for "
-                        "the bridge) or udpout:127.0.0.1:14550 (talk to it)")
-    p.add_argument("--autopilot", choices=AUTOPILOTS, default="ardupilot",
-                   help="heartbeat, modes and command semantics to imitate")
-    p.add_argument("--start-ned", type=float, nargs=3, metavar=("N", "E", "D"),
-                   default=(0.0, 0.0, 0.0), help="initial position in local NED [m]")
-    p.add_argument("--speed", type=float, default=10.0, help="maximum speed [m/s]")
-    p.add_argument("--accel", type=float, default=5.0, help="maximum acceleration [m/s^2]")
-    p.add_argument("--airborne", action="store_true",
-                   help="start armed and flying in GUIDED (ardupilot) or OFFBOARD (px4), "
-                        "with no boot phase")
-    p.add_argument("--offboard-timeout", type=float, default=0.5,
-                   help="PX4: leave OFFBOARD after this long without setpoints [s]")
-    p.add_argument("--boot-s", type=float, default=3.0,
-                   help="boot phase: no position and arming refused for this long [s]")
-    p.add_argument("--home", default=",".join(str(c) for c in SITL_HOME),
-                   help="LAT,LON,ALT (deg, deg, m AMSL) of the local NED origin "
-                        "(default: ArduPilot SITL's)")
-    p.add_argument("--gcs-sysid", type=int, default=255,
-                   help="the only ground-station sysid obeyed; 0 obeys anyone")
-    return p
+def _stderr(line: str) -> None:
+    print(f"uav-insar-vehicle: {line}", file=sys.stderr, flush=True)
 
 
 def main(argv: list[str] | None = None) -> int:
     """Run one vehicle until SIGINT / SIGTERM; 2 on bad arguments, 0 on a clean stop."""
     args = build_parser().parse_args(argv)
     try:
+        key = None
+        if args.signing_key_file:
+            key, warning = read_key_file(args.signing_key_file)
+            if warning:
+                _stderr("warning: " + warning)
         vehicle = SimVehicle(args.sysid, args.listen, args.autopilot, tuple(args.start_ned),
                              args.speed, args.accel, args.airborne, args.offboard_timeout,
                              boot_s=args.boot_s, home=parse_home(args.home),
-                             gcs_sysid=args.gcs_sysid)
+                             gcs_sysid=args.gcs_sysid, signing_key=key, log=_stderr)
     except ValueError as exc:
-        print(f"uav-insar-vehicle: error: {exc}", file=sys.stderr)
+        _stderr(f"error: {exc}")
         return 2
     import signal
 
@@ -356,7 +381,7 @@ def main(argv: list[str] | None = None) -> int:
         vehicle.run(stop)
     finally:
         vehicle.stop()
-    return 0
+    return 0 if vehicle.failure is None else EXIT_WORKER_DIED
 
 
 if __name__ == "__main__":

@@ -2,11 +2,14 @@
 
 - `frames`: track frame <-> local NED.
 - `link`: one transport per endpoint with counted, tolerant parsing.
+- `guard`: values representable going out, finite coming in; counted, rate-limited drops.
+- `signing`: MAVLink 2 message signing with the key from a file.
 - `autopilots`: ArduPilot / PX4 names and mode numbers.
 - `config`: `BridgeConfig` and its validation.
 - `trajectory`: the pass each UAV flies and when it starts.
 - `setpoints`: SET_POSITION_TARGET_LOCAL_NED and its type masks.
 - `supervision`: heartbeats, lost and found vehicles, positions read back.
+- `report`: the bridge's events and per-UAV snapshots.
 - `sequencer`: the optional arm-and-take-off sequence with ACK retries.
 - `bridge`: the I/O loop that ties them together (`Bridge`).
 

@@ -25,6 +25,13 @@ Contract:
   formation, and `separation` in their status).
 - TCP links connect and reconnect without blocking (`link.TcpClient`), so a dead vehicle is
   reported lost after `heartbeat_timeout_s` while the others go on.
+- Bad values are dropped where they cross, counted in the link's counters and logged once per
+  kind every DROP_LOG_PERIOD_S (`guard`): a setpoint or command whose values do not fit
+  MAVLink's float32 (`unsendable`), a non-finite LOCAL_POSITION_NED (`bad_value`: no
+  telemetry, so it can never pass the capture gate), a message for a known sysid from an
+  unexpected address or component (`spoofed`, supervision.unexpected_source).
+- Optional MAVLink 2 signing (`signing_key_file`, see `signing`): everything sent is signed,
+  unsigned or wrongly signed frames are dropped (`bad_signature`).
 
 All I/O runs in one background thread (`start()` / `stop()`); `set_formation`, `status`,
 `link_stats`, `drain_events`, `track_started` and `target` are thread-safe and are what the
@@ -38,12 +45,14 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 from uav_insar_planner.mavlink.config import BridgeConfig
 from uav_insar_planner.mavlink.frames import TrackFrame, Vec3
+from uav_insar_planner.mavlink.guard import DropLog, fits_float32
 from uav_insar_planner.mavlink.hold import HoldOrder
-from uav_insar_planner.mavlink.link import MAV, Link, LinkStats
+from uav_insar_planner.mavlink.link import MAV, Link, LinkStats, Source
+from uav_insar_planner.mavlink.report import BridgeEvent, VehicleStatus
 from uav_insar_planner.mavlink.sequencer import (
     COPTER_MODE_GUIDED,
     ArmingSequence,
@@ -51,6 +60,7 @@ from uav_insar_planner.mavlink.sequencer import (
     result_name,
 )
 from uav_insar_planner.mavlink.setpoints import setpoint_message
+from uav_insar_planner.mavlink.signing import read_key_file, signing_state
 from uav_insar_planner.mavlink.supervision import WatchedVehicle, is_vehicle_heartbeat, phase
 from uav_insar_planner.mavlink.trajectory import PassTrajectory, clean_formation, too_close
 
@@ -58,41 +68,6 @@ __all__ = ["Bridge", "BridgeConfig", "BridgeEvent", "VehicleStatus"]
 
 BRIDGE_COMPID = MAV.MAV_COMP_ID_ONBOARD_COMPUTER  # 191
 POSITION_INTERVAL_US = 100_000  # ask for LOCAL_POSITION_NED at 10 Hz
-
-
-@dataclass(frozen=True)
-class BridgeEvent:
-    """Something worth a log line: link found/lost, a command's ACK, the track starting."""
-
-    time: float
-    uav: int  # -1 for the swarm as a whole
-    level: str  # "info" | "warn" | "error"
-    text: str
-
-
-@dataclass(frozen=True)
-class VehicleStatus:
-    """A snapshot of one UAV as the bridge sees it (positions in metres)."""
-
-    uav: int
-    sysid: int
-    compid: int
-    connection: str
-    link: str  # "waiting" (never heard) | "linked" | "lost"
-    heartbeat_age_s: float | None
-    mode: str
-    armed: bool
-    position_track: Vec3 | None
-    position_ned: Vec3 | None
-    position_age_s: float | None
-    target_track: Vec3 | None
-    setpoints_sent: int
-    sequence: str  # "off" | step being run | "done" | "failed: ..."
-    last_ack: str
-    phase: str = ""  # see supervision.phase
-    prearm: str = ""  # the latest arming refusal reason the vehicle sent
-    link_up: bool = True  # False while its TCP link is (re)connecting
-    separation: str = ""  # "" or why this UAV is planned too close to another
 
 
 class Bridge:
@@ -118,15 +93,28 @@ class Bridge:
         self._events: deque[BridgeEvent] = deque(maxlen=1000)
         self._pass = PassTrajectory(config.speed_mps, config.track_duration_s)
         self._hold = HoldOrder(config.autopilot)
+        self._drops = DropLog(clock=clock)
+        key = None
+        if config.signing_key_file:
+            try:
+                key, warning = read_key_file(config.signing_key_file)
+            except ValueError as exc:
+                raise ValueError(f"signing_key_file: {exc}") from None
+            if warning:
+                self._event(-1, "warn", warning)
         self._links: dict[str, Link] = {}
         addresses = config.addresses()
         try:
-            for address in dict.fromkeys(addresses):
-                self._links[address] = Link(address, config.source_sysid, BRIDGE_COMPID)
+            for i, address in enumerate(dict.fromkeys(addresses)):
+                signing = None if key is None else signing_state(key, link_id=i)
+                self._links[address] = Link(address, config.source_sysid, BRIDGE_COMPID,
+                                            signing)
         except ValueError as exc:
             self.close()
             raise ValueError(f"connections: {exc}") from None
-        self._vehicles = [WatchedVehicle(k, sysid, self._links[address]) for k, (sysid, address)
+        self._vehicles = [WatchedVehicle(k, sysid, self._links[address],
+                                         expected_source=self._links[address].peer_address)
+                          for k, (sysid, address)
                           in enumerate(zip(config.target_sysids, addresses, strict=True))]
         self._separation = [""] * len(self._vehicles)
         self._by_link: dict[int, dict[int, WatchedVehicle]] = {}
@@ -235,8 +223,8 @@ class Bridge:
             with self._lock:
                 now = self._clock()
                 for link in self._links.values():
-                    for msg in link.poll():
-                        self._handle(link, msg, now)
+                    for msg, source in link.poll_sources():
+                        self._handle(link, msg, source, now)
                 self._check_links(now)
                 for v in self._vehicles:
                     if v.sequence_active and v.linked:
@@ -253,6 +241,13 @@ class Bridge:
 
     def _event(self, uav: int, level: str, text: str) -> None:
         self._events.append(BridgeEvent(self._clock(), uav, level, text))
+
+    def _drop(self, v: WatchedVehicle, counter: str, detail: str) -> None:
+        """Count a dropped message in its link's `counter`; log it at a bounded rate."""
+        setattr(v.link.stats, counter, getattr(v.link.stats, counter) + 1)
+        line = self._drops.drop(f"{counter} (sysid {v.sysid})", detail)
+        if line is not None:
+            self._event(v.uav, "warn", line)
 
     def _check_separation(self, formation: list[Vec3 | None]) -> None:
         self._separation = [""] * len(self._vehicles)
@@ -276,7 +271,8 @@ class Bridge:
             emit=lambda level, text: self._event(v.uav, level, text), start_down=start_down,
             readiness_timeout_s=self.config.readiness_timeout_s)
 
-    def _handle(self, link: Link, msg: MAV.MAVLink_message, now: float) -> None:
+    def _handle(self, link: Link, msg: MAV.MAVLink_message, source: Source | None,
+                now: float) -> None:
         src = msg.get_srcSystem()
         if src == self.config.source_sysid:
             return  # our own traffic echoed by a router
@@ -285,10 +281,14 @@ class Bridge:
             link.stats.foreign += 1
             return
         kind = msg.get_type()
+        if kind == "HEARTBEAT" and not is_vehicle_heartbeat(msg):
+            return  # a camera, GCS or companion on the vehicle's sysid
+        why = v.unexpected_source(msg, source)
+        if why:
+            self._drop(v, "spoofed", f"{kind} {why}")
+            return
         if kind == "HEARTBEAT":
-            if not is_vehicle_heartbeat(msg):
-                return  # a camera, GCS or companion on the vehicle's sysid
-            found = v.on_heartbeat(msg, now)
+            found = v.on_heartbeat(msg, now, source)
             if found is not None:
                 self._event(v.uav, "info", found)
                 self._send_command(v, MAV.MAV_CMD_SET_MESSAGE_INTERVAL,
@@ -296,7 +296,8 @@ class Bridge:
                 if v.sequence_active:
                     v.sequence.retry_now()
         elif kind == "LOCAL_POSITION_NED":
-            v.on_position(msg, now)
+            if not v.on_position(msg, now):
+                self._drop(v, "bad_value", f"LOCAL_POSITION_NED ({msg.x}, {msg.y}, {msg.z})")
         elif kind == "STATUSTEXT":
             reason = v.on_statustext(msg)
             if reason is not None:
@@ -331,6 +332,9 @@ class Bridge:
     def _send_command(self, v: WatchedVehicle, command: int, params: Sequence[float],
                       confirmation: int = 0) -> None:
         p = [float(x) for x in params] + [0.0] * (7 - len(params))
+        if not fits_float32(p):
+            self._drop(v, "unsendable", f"{command_name(command)} params {p}")
+            return
         v.link.send(v.link.mav.command_long_encode(v.sysid, v.compid, command, confirmation,
                                                    *p))
 
@@ -349,8 +353,8 @@ class Bridge:
                 if not v.position_fresh(now, self.config.heartbeat_timeout_s):
                     return
                 start = self.frame.to_ned(*self._pass.start_pose(v.uav))
-                if math.dist(start, v.position_ned) > self.config.capture_radius_m:
-                    return
+                if not math.dist(start, v.position_ned) <= self.config.capture_radius_m:
+                    return  # (written so that a NaN distance never counts as inside)
         self._pass.t_start = now
         self._event(-1, "info", f"formation established; flying the track at "
                                 f"{self.config.speed_mps:g} m/s")
@@ -366,8 +370,12 @@ class Bridge:
             if target is None or holding:
                 v.stream_since = None
                 continue
-            v.link.send(setpoint_message(v.link.mav, self.frame, target, self._boot_ms(now),
-                                         v.sysid, v.compid, self.config.velocity_feedforward))
+            msg = setpoint_message(v.link.mav, self.frame, target, self._boot_ms(now),
+                                   v.sysid, v.compid, self.config.velocity_feedforward)
+            if msg is None:
+                self._drop(v, "unsendable", f"setpoint for target {target}: not float32")
+                continue
+            v.link.send(msg)
             v.setpoints_sent += 1
             if v.stream_since is None:
                 v.stream_since = now

@@ -9,6 +9,8 @@ from uav_insar_planner.mavlink.link import parse_address
 from uav_insar_planner.params import ParamSpec, check_value
 from uav_insar_planner.plan import SAFE_SEPARATION_M as DEFAULT_MIN_SEPARATION_M
 
+ORIGIN_LIMIT_M = 1e5  # float32 spacing at 1e5 m is 2**-7 m = 7.8 mm
+
 # The bridge's parameters (ROS descriptors, README table, BridgeConfig.validate). Defaults
 # pair with `uav-insar-vehicle --sysid 2..4 --listen udpin:127.0.0.1:14552/14562/14572`.
 BRIDGE_SPECS = (
@@ -22,8 +24,9 @@ BRIDGE_SPECS = (
               1, 255),
     ParamSpec("track_bearing_deg", float, 0.0, "bearing of the along-track axis y from north "
               "[deg]", -360.0, 360.0),
-    ParamSpec("origin_ned_m", float, [0.0, 0.0, 0.0], "track origin in local NED (N, E, D) [m]",
-              length=3),
+    ParamSpec("origin_ned_m", float, [0.0, 0.0, 0.0], "track origin in local NED (N, E, D); "
+              f"within +-{ORIGIN_LIMIT_M:g} m, where MAVLink's float32 still resolves 8 mm [m]",
+              -ORIGIN_LIMIT_M, ORIGIN_LIMIT_M, length=3),
     ParamSpec("setpoint_rate_hz", float, 10.0, "SET_POSITION_TARGET_LOCAL_NED rate per UAV "
               "[Hz]", 2.0, 50.0),
     ParamSpec("velocity_feedforward", bool, False, "send the along-track velocity too "
@@ -45,6 +48,8 @@ BRIDGE_SPECS = (
     ParamSpec("min_separation_m", float, DEFAULT_MIN_SEPARATION_M, "warn when two planned "
               "UAVs are closer than this (standard GNSS ~1.5-3 m, RTK ~0.05 m); 0: no check "
               "[m]", 0.0, 1e4),
+    ParamSpec("signing_key_file", str, "", "MAVLink 2 signing key (32 raw bytes or 64 hex "
+              "characters); sign everything, accept only signed frames; empty: no signing"),
 )
 
 
@@ -66,6 +71,7 @@ class BridgeConfig:
       retried meanwhile) before its sequence fails; a cold-booting ArduCopter needs ~45 s.
     - min_separation_m: the bridge warns when two planned UAVs are closer (0: no check); see
       DEFAULT_MIN_SEPARATION_M for the figure.
+    - signing_key_file: MAVLink 2 signing on every link with this key (`signing`); "" off.
     """
 
     connections: tuple[str, ...]
@@ -83,6 +89,7 @@ class BridgeConfig:
     heartbeat_timeout_s: float = 5.0
     readiness_timeout_s: float = 120.0
     min_separation_m: float = DEFAULT_MIN_SEPARATION_M
+    signing_key_file: str = ""
 
     def validate(self) -> None:
         """Raise ValueError with one line naming the first bad value and what is allowed."""
@@ -111,6 +118,11 @@ class BridgeConfig:
                 problem = check_value(spec, getattr(self, spec.name))[1]
                 if problem:
                     raise ValueError(problem)
+        length = self.speed_mps * self.track_duration_s
+        if length > ORIGIN_LIMIT_M:
+            raise ValueError(f"track_duration_s: {self.track_duration_s:g} s at speed_mps "
+                             f"{self.speed_mps:g} is a {length:.3g} m pass; expected at most "
+                             f"{ORIGIN_LIMIT_M:g} m, where MAVLink's float32 resolves 8 mm")
 
     def addresses(self) -> tuple[str, ...]:
         """The connection string of each UAV, in UAV order."""

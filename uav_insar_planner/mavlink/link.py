@@ -9,17 +9,29 @@ Malformed input never raises: bad CRC, garbage and bad lengths are counted as `b
 unknown message ids as `unknown_msgid`; on datagram transports (UDP) a datagram that ends
 inside a frame is counted as `truncated` and its tail dropped, so it cannot swallow the next,
 valid datagram (MAVLink over UDP carries whole frames per datagram).
+
+With `signing` (signing.signing_state) every frame sent is signed and only correctly signed
+frames are returned (the rest counted as `bad_signature`). A message that cannot be packed
+(a value outside its wire type) is counted as `unsendable`, never raised. On UDP each
+message comes with the address of its datagram (`poll_sources`), and a `udpin` link replies
+only to peers that sent at least one valid (and, with signing, signed) message, so garbage
+from a stranger does not subscribe it to our traffic, and to at most MAX_UDPIN_PEERS of
+them. TCP and serial carry no such address.
+A host name is resolved when the link opens (ValueError if it does not resolve).
 """
 from __future__ import annotations
 
 import errno
 import os
 import socket
+import struct
 import time
 from dataclasses import dataclass
 
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from uav_insar_planner.mavlink.signing import SigningParser
 
 #: The MAVLink 2 dialect module (message classes, MAV_* constants) every user of this link
 #: shares, so constants and codecs always come from one place.
@@ -28,6 +40,8 @@ MAV = mavlink2
 _LIVE_PREFIXES = ("udpin:", "udpout:", "udpbcast:", "udp:", "tcp:", "tcpin:", "mcast:",
                   "uds:", "unix:")
 _READ_CHUNK = 4096
+_UDP_MAX = 65535
+MAX_UDPIN_PEERS = 8
 _MAX_READS_PER_POLL = 256  # bounds one poll, so a flooded link cannot starve the others
 #: A dead TCP link is tried again at most this often, each try one non-blocking connect().
 TCP_RECONNECT_S = 1.0
@@ -70,9 +84,30 @@ def parse_address(address: str) -> tuple[str, int]:
     return device, int(baud) if sep else 57600
 
 
+Source = tuple  # (host, port) of a UDP datagram
+
+
+def resolve_host(address: str) -> None:
+    """Resolve the host of a udp*/tcp* connection string; ValueError when it does not."""
+    text = address.strip()
+    if not text.startswith(("udp", "tcp")):
+        return
+    host, _, port = text.split(":", 1)[1].rpartition(":")
+    if host in ("", "0.0.0.0"):
+        return
+    try:
+        socket.getaddrinfo(host, int(port), socket.AF_INET)  # our sockets are IPv4
+    except (OSError, UnicodeError) as exc:
+        raise ValueError(f"cannot open {address[:120]!r}: host {host[:80]!r} does not "
+                         f"resolve ({getattr(exc, 'strerror', None) or exc})") from None
+
+
 @dataclass
 class LinkStats:
-    """Counters of one link. `foreign` is kept by the owner (traffic from unknown sysids)."""
+    """Counters of one link. The owner keeps `foreign` (traffic from unknown sysids, or not
+    from the configured ground station), `spoofed` (heartbeats for a known sysid from an
+    unexpected component or address) and `bad_value` (messages with non-finite or
+    out-of-range fields, dropped)."""
 
     rx_bytes: int = 0
     rx_messages: int = 0
@@ -82,6 +117,10 @@ class LinkStats:
     foreign: int = 0
     io_errors: int = 0
     tx_messages: int = 0
+    bad_signature: int = 0  # unsigned, wrongly signed or replayed (signing on)
+    unsendable: int = 0  # outgoing messages whose values do not fit their wire types
+    spoofed: int = 0
+    bad_value: int = 0
 
     @property
     def malformed(self) -> int:
@@ -191,11 +230,14 @@ class Link:
     everything waiting now and returns the decoded messages, never raising on bad input.
     """
 
-    def __init__(self, address: str, source_system: int, source_component: int):
+    def __init__(self, address: str, source_system: int, source_component: int,
+                 signing: MAV.MAVLinkSigning | None = None):
         device, baud = parse_address(address)
+        resolve_host(device)
         self.address = address
         self.source_system = source_system
         self.source_component = source_component
+        self.signing = signing
         try:
             if device.startswith("tcp:"):
                 host, _, port = device[4:].rpartition(":")
@@ -207,13 +249,23 @@ class Link:
         except Exception as exc:  # pymavlink raises OSError, ValueError, SerialException...
             raise ValueError(f"cannot open {address!r}: {exc}") from None
         self._datagrams = isinstance(self.conn, (mavutil.mavudp, mavutil.mavmcast))
+        self._udp = isinstance(self.conn, mavutil.mavudp)
+        #: udpout: the (IP, port) we send to, the only address the peer's replies come from
+        self.peer_address: Source | None = None
+        if device.startswith("udpout:"):
+            host, _, port = device[7:].rpartition(":")
+            self.peer_address = (socket.gethostbyname(host), int(port))
         self._tx = MAV.MAVLink(self.conn, srcSystem=source_system, srcComponent=source_component)
+        if signing is not None:
+            self._tx.signing = signing
         self._rx = self._new_parser()
         self.stats = LinkStats()
 
     def _new_parser(self) -> MAV.MAVLink:
-        parser = MAV.MAVLink(None, srcSystem=self.source_system,
-                             srcComponent=self.source_component)
+        codec = MAV.MAVLink if self.signing is None else SigningParser
+        parser = codec(None, srcSystem=self.source_system, srcComponent=self.source_component)
+        if self.signing is not None:
+            parser.signing = self.signing  # one state: our timestamp and the streams seen
         parser.robust_parsing = True
         return parser
 
@@ -248,6 +300,8 @@ class Link:
         try:
             self._tx.send(msg)
             self.stats.tx_messages += 1
+        except (OverflowError, struct.error, TypeError):
+            self.stats.unsendable += 1  # a value outside its wire type: nothing was written
         except (OSError, ValueError):
             self.stats.io_errors += 1
 
@@ -260,26 +314,59 @@ class Link:
 
     def poll(self) -> list[MAV.MAVLink_message]:
         """Read what is waiting now; return the valid messages in arrival order."""
-        out: list[MAV.MAVLink_message] = []
+        return [msg for msg, _ in self.poll_sources()]
+
+    def poll_sources(self) -> list[tuple[MAV.MAVLink_message, Source | None]]:
+        """Like `poll`, each message with the (host, port) it came from (UDP; else None)."""
+        out: list[tuple[MAV.MAVLink_message, Source | None]] = []
         for _ in range(_MAX_READS_PER_POLL):
             try:
-                data = self.conn.recv(_READ_CHUNK)
+                data, source = self._recv()
             except (OSError, ValueError):
                 self.stats.io_errors += 1
                 break
             if not data:
                 break
             self.stats.rx_bytes += len(data)
-            self._feed(bytes(data) if not isinstance(data, str) else data.encode("latin-1"),
-                       out)
+            msgs = self._feed(bytes(data) if not isinstance(data, str)
+                              else data.encode("latin-1"))
+            if msgs and source is not None and self.conn.udp_server:
+                self._add_udpin_peer(source)
+            out += [(m, source) for m in msgs]
         return out
 
-    def _feed(self, data: bytes, out: list[MAV.MAVLink_message]) -> None:
+    def _add_udpin_peer(self, source: Source) -> None:
+        """pymavlink's udpin sends to every client it has heard, for ever: keep the
+        MAX_UDPIN_PEERS heard most recently, so many senders cannot grow it (nor our sends)."""
+        clients, alive = self.conn.clients, self.conn.clients_last_alive
+        clients.add(source)
+        alive[source] = time.time()
+        while len(clients) > MAX_UDPIN_PEERS:
+            oldest = min(clients, key=lambda a: alive.get(a, 0.0))
+            clients.discard(oldest)
+            alive.pop(oldest, None)
+
+    def _recv(self) -> tuple[bytes, Source | None]:
+        if not self._udp:
+            return self.conn.recv(_READ_CHUNK), None
+        try:
+            data, source = self.conn.port.recvfrom(_UDP_MAX)
+        except (BlockingIOError, InterruptedError, ConnectionRefusedError):
+            return b"", None  # nothing waiting; a refused udpout send reports here
+        if self.conn.broadcast:
+            self.conn.last_address = source
+        return data, source
+
+    def _feed(self, data: bytes) -> list[MAV.MAVLink_message]:
+        out = []
         msg = self._rx.parse_char(data)
         while msg is not None:
             kind = msg.get_type()
             if kind == "BAD_DATA":
-                self.stats.bad_data += 1
+                if "signature" in str(getattr(msg, "reason", "")):
+                    self.stats.bad_signature += 1
+                else:
+                    self.stats.bad_data += 1
             elif kind.startswith("UNKNOWN_"):
                 self.stats.unknown_msgid += 1
             else:
@@ -289,6 +376,7 @@ class Link:
         if self._datagrams and self._rx.buf_len() > 0:
             self.stats.truncated += 1
             self._rx = self._new_parser()
+        return out
 
     def close(self) -> None:
         try:

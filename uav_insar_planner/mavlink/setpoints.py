@@ -9,6 +9,7 @@ from __future__ import annotations
 from pymavlink import mavutil
 
 from uav_insar_planner.mavlink.frames import TrackFrame, Vec3
+from uav_insar_planner.mavlink.guard import fits_float32
 from uav_insar_planner.mavlink.link import MAV
 
 _T = mavutil.mavlink
@@ -28,15 +29,32 @@ MASK_POSITION = MASK_POSITION_VELOCITY | VELOCITY_BITS
 
 def setpoint_message(mav: MAV.MAVLink, frame: TrackFrame, target: tuple[Vec3, Vec3],
                      boot_ms: int, sysid: int, compid: int,
-                     feedforward: bool) -> MAV.MAVLink_message:
-    """The setpoint for a track-frame (position, velocity) target, in MAV_FRAME_LOCAL_NED.
+                     feedforward: bool) -> MAV.MAVLink_message | None:
+    """The setpoint for a track-frame (position, velocity) target, in MAV_FRAME_LOCAL_NED,
+    or None when a value does not fit the float32 fields (guard.fits_float32: NaN, Inf or
+    |v| > 3.4e38, before or after the rotation): nothing is sent then.
 
     With `feedforward` the velocity is sent too (MASK_POSITION_VELOCITY); otherwise the
     velocity fields are zero and ignored (MASK_POSITION).
     """
     n, e, d = frame.to_ned(*target[0])
     vn, ve, vd = frame.vector_to_ned(*target[1]) if feedforward else (0.0, 0.0, 0.0)
+    if not fits_float32((n, e, d, vn, ve, vd)):
+        return None
     mask = MASK_POSITION_VELOCITY if feedforward else MASK_POSITION
     return mav.set_position_target_local_ned_encode(
         boot_ms, sysid, compid, MAV.MAV_FRAME_LOCAL_NED, mask,
         n, e, d, vn, ve, vd, 0.0, 0.0, 0.0, 0.0, 0.0)
+
+
+_FIELD_BITS = ((_T.POSITION_TARGET_TYPEMASK_X_IGNORE, _T.POSITION_TARGET_TYPEMASK_Y_IGNORE,
+                _T.POSITION_TARGET_TYPEMASK_Z_IGNORE),
+               (_T.POSITION_TARGET_TYPEMASK_VX_IGNORE, _T.POSITION_TARGET_TYPEMASK_VY_IGNORE,
+                _T.POSITION_TARGET_TYPEMASK_VZ_IGNORE))
+
+
+def used_values(type_mask: int, position: Vec3, velocity: Vec3) -> tuple[float, ...]:
+    """The position and velocity fields a setpoint with `type_mask` uses (its ignore bit
+    clear). An ignored field may hold anything, NaN included, as PX4 and ArduPilot allow."""
+    return tuple(v for bits, values in zip(_FIELD_BITS, (position, velocity), strict=True)
+                 for bit, v in zip(bits, values, strict=True) if not type_mask & bit)

@@ -4,17 +4,27 @@ A UAV is found on its first vehicle HEARTBEAT (one from a camera, GCS or compani
 sysid does not count), lost after `heartbeat_timeout_s` without one, and found again when one
 returns. LOCAL_POSITION_NED is kept with the time it arrived; HOME_POSITION, the GPS fix
 (GPS_RAW_INT) and the latest arming refusal reason (STATUSTEXT "PreArm: ..." / "Arm: ...") are
-kept for the readiness phase (`position_ready`, `prearm`).
+kept for the readiness phase (`position_ready`, `prearm`). A non-finite position is not
+kept (`on_position` returns False): it counts as no telemetry.
+
+Source checks (`unexpected_source`), without signing the only ones MAVLink allows: on UDP a
+vehicle's messages must come from one address, the one we send to on a `udpout` link, else
+the first one heard (again after each loss) on `udpin`; while linked, its HEARTBEAT,
+LOCAL_POSITION_NED and COMMAND_ACK must come from the component its first heartbeat came from.
+TCP and serial links carry no per-message address, and a router merges every sender into
+one: there only the component can be checked, and anyone who can write to the link can
+claim a sysid; MAVLink 2 signing (`signing`) is the answer there.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from pymavlink import mavutil
 
 from uav_insar_planner.mavlink.frames import Vec3
-from uav_insar_planner.mavlink.link import MAV, Link
+from uav_insar_planner.mavlink.link import MAV, Link, Source
 
 if TYPE_CHECKING:
     from uav_insar_planner.mavlink.sequencer import ArmingSequence
@@ -22,6 +32,7 @@ if TYPE_CHECKING:
 _NOT_VEHICLE_TYPES = frozenset((MAV.MAV_TYPE_GCS, MAV.MAV_TYPE_ONBOARD_CONTROLLER,
                                 MAV.MAV_TYPE_GIMBAL, MAV.MAV_TYPE_ADSB, MAV.MAV_TYPE_CAMERA,
                                 MAV.MAV_TYPE_ANTENNA_TRACKER))
+_AUTOPILOT_ONLY = frozenset(("HEARTBEAT", "LOCAL_POSITION_NED", "COMMAND_ACK"))
 
 
 def is_vehicle_heartbeat(msg: MAV.MAVLink_message) -> bool:
@@ -51,6 +62,18 @@ class WatchedVehicle:
     home_seen: bool = False
     gps_fix: int | None = None  # GPS_RAW_INT.fix_type, None: never reported
     prearm: str = ""  # the latest arming refusal reason, "" once armed
+    expected_source: Source | None = None  # udpout: the address we send to
+    source: Source | None = None  # udpin: the address first heard since the last loss
+
+    def unexpected_source(self, msg: MAV.MAVLink_message, source: Source | None) -> str:
+        """"" when `msg` (attributed to this sysid) may be the vehicle's, else why not."""
+        pinned = self.expected_source or self.source
+        if source is not None and pinned is not None and tuple(source) != tuple(pinned):
+            return f"from {source[0]}:{source[1]}, not {pinned[0]}:{pinned[1]}"
+        if self.linked and msg.get_type() in _AUTOPILOT_ONLY and \
+                msg.get_srcComponent() != self.compid:
+            return f"from component {msg.get_srcComponent()}, not {self.compid}"
+        return ""
 
     def position_ready(self, now: float, max_age_s: float) -> str:
         """"" when the vehicle reports a usable position (LOCAL_POSITION_NED flowing, i.e. an
@@ -90,9 +113,12 @@ class WatchedVehicle:
     def failed(self) -> bool:
         return self.sequence is not None and bool(self.sequence.failed)
 
-    def on_heartbeat(self, msg: MAV.MAVLink_message, now: float) -> str | None:
+    def on_heartbeat(self, msg: MAV.MAVLink_message, now: float,
+                     source: Source | None = None) -> str | None:
         """Take a vehicle heartbeat; return the event text when the link is (re)found."""
         seen_before = self.last_heartbeat is not None
+        if self.source is None:
+            self.source = source
         self.compid = msg.get_srcComponent()
         self.last_heartbeat = now
         self.mode = mavutil.mode_string_v10(msg)
@@ -107,14 +133,19 @@ class WatchedVehicle:
         return (f"sysid {self.sysid} found{again} ({self.mode}, "
                 f"{'armed' if self.armed else 'disarmed'})")
 
-    def on_position(self, msg: MAV.MAVLink_message, now: float) -> None:
-        self.position_ned = (msg.x, msg.y, msg.z)
+    def on_position(self, msg: MAV.MAVLink_message, now: float) -> bool:
+        """Keep a LOCAL_POSITION_NED; False (not kept) when x, y or z is not finite."""
+        position = (msg.x, msg.y, msg.z)
+        if not all(math.isfinite(c) for c in position):
+            return False
+        self.position_ned = position
         self.position_time = now
+        return True
 
     def check_timeout(self, now: float, timeout_s: float) -> str | None:
         """Mark the link lost after `timeout_s` of silence; return the event text if so."""
         if self.linked and now - self.last_heartbeat > timeout_s:
-            self.linked = False
+            self.linked, self.source = False, None
             return f"sysid {self.sysid} lost: no heartbeat for {now - self.last_heartbeat:.1f} s"
         return None
 

@@ -5,7 +5,7 @@ Parameters (mavlink/config.py BRIDGE_SPECS, all read-only: the links are opened 
   connections (string[]), target_sysids (int[]), source_sysid, track_bearing_deg,
   origin_ned_m (double[3], N E D), setpoint_rate_hz, velocity_feedforward, arm_and_takeoff,
   autopilot (ardupilot|px4), speed_mps, track_duration_s, capture_radius_m,
-  heartbeat_timeout_s, readiness_timeout_s, min_separation_m.
+  heartbeat_timeout_s, readiness_timeout_s, min_separation_m, signing_key_file.
 A bad value or unknown name logs one line and exits with code 2 before anything is published
 or opened.
 
@@ -24,7 +24,8 @@ Publishes   uav{K}/mavlink/pose (geometry_msgs/PoseStamped, frame insar_track), 
             armed / airborne / in formation / lost ...), link state, mode, arming sequence,
             PreArm reason, position error, separation warning, link counters. Level ERROR:
             I/O thread dead or sequence failed; WARN: not linked, or planned closer than
-            min_separation_m to another UAV; else OK.
+            min_separation_m to another UAV; else OK. When the I/O thread dies the node
+            publishes that ERROR once, logs why and exits with code 1 (EXIT_WORKER_DIED).
 """
 from __future__ import annotations
 
@@ -37,6 +38,7 @@ from geometry_msgs.msg import PoseStamped
 from rclpy.node import Node
 
 from uav_insar_planner.mavlink.bridge import Bridge, BridgeConfig, VehicleStatus
+from uav_insar_planner.mavlink.guard import EXIT_WORKER_DIED
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.parameters import (
     BRIDGE_SPECS,
@@ -128,6 +130,9 @@ class MavlinkBridgeNode(Node):
         msg.status = [self._vehicle_status(s, stats[s.connection])
                       for s in self.bridge.status()]
         self._diag_pub.publish(msg)
+        if self.bridge.failure is not None:  # said ERROR once: now leave, never a zombie
+            self._publish_poses()  # (drains the event that says why)
+            raise SystemExit(EXIT_WORKER_DIED)
 
     def _vehicle_status(self, s: VehicleStatus, link: Any) -> Any:
         if self.bridge.failure is not None:
@@ -165,7 +170,9 @@ class MavlinkBridgeNode(Node):
                   ("rx_messages", link.rx_messages), ("bad_data", link.bad_data),
                   ("truncated", link.truncated), ("unknown_msgid", link.unknown_msgid),
                   ("foreign", link.foreign), ("io_errors", link.io_errors),
-                  ("bad_plan_messages", self._gate.dropped)]
+                  ("bad_plan_messages", self._gate.dropped),
+                  ("bad_signature", link.bad_signature), ("spoofed", link.spoofed),
+                  ("bad_value", link.bad_value), ("unsendable", link.unsendable)]
         return DiagnosticStatus(level=level, name=f"mavlink_bridge: uav{s.uav}",
                                 message=text, hardware_id=f"mavlink sysid {s.sysid}",
                                 values=[KeyValue(key=k, value=fmt(v)) for k, v in values])

@@ -1,0 +1,40 @@
+"""The command line of `uav-insar-vehicle` (run by vehicle.main)."""
+from __future__ import annotations
+
+import argparse
+
+from uav_insar_planner.mavlink.autopilots import AUTOPILOTS
+from uav_insar_sim.telemetry import SITL_HOME
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="uav-insar-vehicle",
+        description="A SITL-style MAVLink multicopter (ArduPilot-like or PX4-like).")
+    p.add_argument("--sysid", type=int, required=True, help="MAVLink system id, 1..255")
+    p.add_argument("--listen", required=True,
+                   help="pymavlink connection string, e.g. udpin:127.0.0.1:14552 (wait for "
+                        "the bridge) or udpout:127.0.0.1:14550 (talk to it)")
+    p.add_argument("--autopilot", choices=AUTOPILOTS, default="ardupilot",
+                   help="heartbeat, modes and command semantics to imitate")
+    p.add_argument("--start-ned", type=float, nargs=3, metavar=("N", "E", "D"),
+                   default=(0.0, 0.0, 0.0), help="initial position in local NED [m]")
+    p.add_argument("--speed", type=float, default=10.0, help="maximum speed [m/s]")
+    p.add_argument("--accel", type=float, default=5.0, help="maximum acceleration [m/s^2]")
+    p.add_argument("--airborne", action="store_true",
+                   help="start armed and flying in GUIDED (ardupilot) or OFFBOARD (px4), "
+                        "with no boot phase")
+    p.add_argument("--offboard-timeout", type=float, default=0.5,
+                   help="PX4: leave OFFBOARD after this long without setpoints [s]")
+    p.add_argument("--boot-s", type=float, default=3.0,
+                   help="boot phase: no position and arming refused for this long [s]")
+    p.add_argument("--home", default=",".join(str(c) for c in SITL_HOME),
+                   help="LAT,LON,ALT (deg, deg, m AMSL) of the local NED origin "
+                        "(default: ArduPilot SITL's)")
+    p.add_argument("--gcs-sysid", type=int, default=255,
+                   help="the only ground-station sysid obeyed (the bridge's source_sysid); "
+                        "0 obeys anyone")
+    p.add_argument("--signing-key-file", default="",
+                   help="MAVLink 2 signing key (32 raw bytes or 64 hex characters): sign "
+                        "everything, accept only signed frames")
+    return p
