@@ -30,7 +30,7 @@ from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValu
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
-from uav_insar_planner.mavlink.config import BRIDGE_SPECS
+from uav_insar_planner.mavlink.config import BRIDGE_SPECS, ORIGIN_LIMIT_M
 from uav_insar_planner.params import PARAM_SPECS, SPEC_BY_NAME, ParamSpec, check_value, shown
 
 AGENT_SPECS = (
@@ -71,7 +71,8 @@ MAVLINK_SPECS = (
     ParamSpec("track_bearing_deg", float, 0.0, "MAVLink mode: bearing of the along-track "
               "axis from north [deg], as the bridge's", -360.0, 360.0),
     ParamSpec("origin_ned_m", float, [0.0, 0.0, 0.0], "MAVLink mode: track origin in the "
-              "vehicle's local NED [m], as the bridge's", length=3),
+              f"vehicle's local NED, as the bridge's; within +-{ORIGIN_LIMIT_M:g} m [m]",
+              -ORIGIN_LIMIT_M, ORIGIN_LIMIT_M, length=3),
 )
 #: The planner's own parameters beside the scenario's PARAM_SPECS; closed ranges, which rclpy
 #: checks at start and on every set, so nothing else validates them.
