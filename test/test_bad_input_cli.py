@@ -149,3 +149,19 @@ def test_sweep_values_and_count_are_bounded(capsys, start: str, stop: str, count
 def test_unknown_long_option_is_cut(capsys) -> None:
     code, out, err = run(capsys, "solve", "--" + LONG)
     assert_one_line(code, err, "unrecognized arguments: --xxx")
+
+
+def test_a_solver_exception_is_one_line_not_a_traceback(capsys, monkeypatch) -> None:
+    """Fault injected (the one fake here): a back end that raises. The dispatcher names the
+    back end and the exception in one line; the CLI exits 1, not 2 or 3 (neither bad input
+    nor a verdict)."""
+    from uav_insar_planner import solver
+
+    def broken(params, scheme, objective):
+        raise ZeroDivisionError("float division by zero")
+
+    monkeypatch.setattr(solver, "_backend", lambda name: broken)
+    with pytest.raises(solver.SolverFailure, match="solver global failed on scheme proposed"):
+        solver.solve(load_params())
+    code, out, err = run(capsys, "solve")
+    assert_one_line(code, err, "ZeroDivisionError: float division by zero", expected_code=1)
