@@ -75,7 +75,9 @@ def test_dev_zero_is_refused_at_once(capsys) -> None:
     (f"num_slots={HUGE_INT}", "num_slots: value '99999"),
     (f"scheme={LONG}", "scheme: value 'xxxx"),
     (f"{LONG}=1", "xxx...: unknown parameter"),
-    ("1=2", "1: unknown parameter"),
+    ("1=2", "'1': unknown parameter"),
+    ("a\nb=2", "'a\\nb': unknown parameter"),  # a name is shown on one line
+    (LONG, "--set: value 'xxxxx"),
     ("z_max_m={a: 1, a: 2}", "z_max_m: value"),
 ])
 def test_bad_set_is_one_line(capsys, setting: str, says: str) -> None:

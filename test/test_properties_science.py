@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import yaml
-from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import HealthCheck, assume, example, given, settings
 from hypothesis import strategies as st
 
 from uav_insar_planner.evaluate import POSITION_TOL_M, evaluate
@@ -36,6 +36,7 @@ def refused_in_one_line_each(exc: ParamError) -> None:
 
 @FAST
 @given(st.dictionaries(keys, values, max_size=5))
+@example({"\n": None})  # once a two-line "unknown parameter" error
 def test_load_params_returns_params_or_one_line_problems(mapping: dict) -> None:
     try:
         assert isinstance(load_params(None, mapping), Params)

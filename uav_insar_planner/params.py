@@ -297,7 +297,8 @@ def validate(values: Mapping[str, Any]) -> tuple[dict[str, Any], list[str]]:
         elif name not in SPEC_BY_NAME:
             near = difflib.get_close_matches(name[:VALUE_SHOWN_CHARS], SPEC_BY_NAME, n=1)
             hint = f" (did you mean {near[0]}?)" if near else ""
-            problems.append(f"{_cut(name)}: unknown parameter{hint}; allowed: the names in "
+            label = _cut(name) if name.isidentifier() else shown(name)  # one line, always
+            problems.append(f"{label}: unknown parameter{hint}; allowed: the names in "
                             "config/params.yaml")
     bad: set[str] = set()
     for spec in PARAM_SPECS:

@@ -130,7 +130,7 @@ def parse_override(text: str) -> tuple[str, Any]:
     sep = ":=" if ":=" in text else "="
     name, eq, raw = text.partition(sep)
     if not eq or not name.strip():
-        raise ParamError([f"--set: value {text!r} is not allowed; expected NAME=VALUE"])
+        raise ParamError([f"--set: value {shown(text)} is not allowed; expected NAME=VALUE"])
     try:
         value = yaml_load(raw)
     except yaml.YAMLError:
