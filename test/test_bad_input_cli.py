@@ -167,3 +167,10 @@ def test_a_solver_exception_is_one_line_not_a_traceback(capsys, monkeypatch) -> 
         solver.solve(load_params())
     code, out, err = run(capsys, "solve")
     assert_one_line(code, err, "ZeroDivisionError: float division by zero", expected_code=1)
+
+
+def test_every_sweep_value_is_validated_before_the_first_solve(capsys) -> None:
+    t0 = time.monotonic()
+    code, out, err = run(capsys, "sweep", "num_slots", "10", "20", "4", "--no-progress")
+    assert_one_line(code, err, "num_slots: value 13.333333333333334 is not allowed")
+    assert out == "" and time.monotonic() - t0 < 10

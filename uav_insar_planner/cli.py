@@ -122,7 +122,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     if args.plot:
         check_output_path("--plot", args.plot, image=True)
     values = np.linspace(args.start, args.stop, args.count)
-    for value in (values[0], values[-1]):  # every value is checked before the first solve
+    for value in values:  # every value is validated before the first solve
         with_value(params, *parse_sweep_name(args.name), float(value))
     bar = tqdm(total=len(values) * len(args.schemes), unit="solve", file=sys.stderr,
                disable=args.no_progress)
