@@ -161,6 +161,7 @@ def test_publisher_without_message_times_out(spawn: Callable[..., Child]) -> Non
     (["/" + "x" * 100_000], "argument 1 ('/xxxxxxxx"),  # rcl would log all of it
     (["x", "--ros-args", "-r", "__ns:=/" + "x" * 100_000 + "-"], "argument 4 ('__ns:=/xxx"),
     (["x", "--" + "x" * 100_000], "characters long; expected at most 4096"),
+    (["/x\udcff"], "argument 1 ('/x\\udcff') is not UTF-8 text"),  # bytes 0xff from a shell
     (["x", "--once", "--count", "2"], "not allowed with argument --once"),
     (["x", "--bogus"], "unrecognized arguments: --bogus"),
     (["x", "--ros-args", "--bogus"], "bad ROS arguments"),

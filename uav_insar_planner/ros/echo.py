@@ -141,10 +141,15 @@ def _echo(argv: list[str]) -> int:
     from rclpy.validate_full_topic_name import validate_full_topic_name
     from rclpy.validate_topic_name import validate_topic_name
 
-    for i, arg in enumerate(argv, 1):  # before rcl, which would log all of it
+    for i, arg in enumerate(argv, 1):  # before rcl, which would log all of it or raise
         if len(arg) > ARG_MAX_CHARS:
             raise _Fail(f"argument {i} ({_cut(repr(arg), SHOWN_CHARS)}) is {len(arg)} "
                         f"characters long; expected at most {ARG_MAX_CHARS}", 2)
+        try:
+            arg.encode("utf-8")
+        except UnicodeEncodeError:
+            raise _Fail(f"argument {i} ({_cut(repr(arg), SHOWN_CHARS)}) is not UTF-8 text", 2
+                        ) from None
     try:
         plain = remove_ros_args([PROG, *argv])[1:]
     except (_rclpy.RCLError, _rclpy.UnknownROSArgsError) as exc:
