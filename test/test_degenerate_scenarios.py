@@ -108,3 +108,31 @@ def test_extreme_allowed_values_give_a_verdict(solver: str, overrides: dict,
     plan = strict_solve({**overrides, "solver": solver})
     assert not plan.feasible
     assert blocking & set(plan.blocking_constraints), plan.message
+
+
+def _edges():
+    """Each numeric parameter at each end of its allowed range (open ends approached)."""
+    for spec in PARAM_SPECS:
+        if spec.kind is str:
+            continue
+        ends = []
+        for end, is_open, towards in ((spec.lo, spec.lo_open, 1.0), (spec.hi, spec.hi_open, -1.0)):
+            if end is None:
+                end, is_open = (1e308 if towards < 0 else -1e308), False
+            ends.append(end if not is_open else
+                        (end + towards * 1e-300 if end == 0 else end * (1 - towards * 1e-12)))
+        for v in ends:
+            value = [v] * spec.length if spec.length else (int(v) if spec.kind is int else v)
+            try:
+                load_params(None, {spec.name: value})
+            except ParamError:
+                continue  # a cross-field rule (e.g. z_min < z_max) refuses it alone
+            yield pytest.param(spec.name, value, id=f"{spec.name}={v:g}")
+
+
+@pytest.mark.parametrize("name, value", list(_edges()))
+def test_global_solver_is_total_on_every_range_edge(name: str, value) -> None:
+    """No exception and no RuntimeWarning at any edge of the allowed domain, and a verdict:
+    a feasible plan passes the independent check, an infeasible one names its blockers."""
+    plan = strict_solve({name: value})
+    assert plan.feasible or plan.blocking_constraints, plan.message
