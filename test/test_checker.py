@@ -138,3 +138,27 @@ def test_station_disk_is_exact(scheme):
             met = (sched.max() <= p.p_max_w and sched.sum() * p.slot_duration_s
                    <= p.e_max_j * (1 + 1e-12) and rate.min() >= p.rate_min_bps[k] * (1 - 1e-9))
             assert met == ok, (k, scale, scheme)
+
+
+@pytest.mark.parametrize("z_max", [100.0, 1e6])
+@pytest.mark.parametrize("below_m", [5.0, 1e-3, 2e-6])
+def test_c1_tolerance_is_absolute_whatever_z_max(z_max, below_m):
+    """A UAV below z_min fails C1 by any margin above 1e-6 m; with z_max = 1e9 the old relative
+    tolerance (1e-6 z_max) let a UAV at z = -5 m pass."""
+    low = FORMATION.copy()
+    low[1, 1] = 1.0 - below_m  # z_min = 1 m
+    ev = check(formation=low, z_max_m=z_max)
+    assert "C1" in ev.violated
+    low[1, 1] = 1.0 - 5e-7  # within the stated 1e-6 m
+    assert "C1" not in check(formation=low, z_max_m=z_max).violated
+
+
+@pytest.mark.parametrize("d_min", [0.5, 6.0, 1e4])
+def test_c4_tolerance_is_absolute_whatever_d_min(d_min):
+    """Two UAVs 2e-6 m closer than d_min fail C4, whatever d_min is (relative: 1e-2 m at 1e4)."""
+    q = np.array([polar(90, 45), polar(90, 45), [np.nan, np.nan]])  # U0 and U1 only
+    q[1, 0] = q[0, 0] - (d_min - 2e-6)  # the master-slave 1 distance is d_min - 2 um
+    ev = check("single-baseline", formation=q, d_min_m=d_min)
+    assert not ev.constraints["C4"].ok
+    q[1, 0] = q[0, 0] - (d_min - 5e-7)
+    assert check("single-baseline", formation=q, d_min_m=d_min).constraints["C4"].ok

@@ -150,8 +150,18 @@ def test_publisher_without_message_times_out(spawn: Callable[..., Child]) -> Non
     (["bad name!"], "Invalid topic name: topic name must not contain characters"),
     (["1abc"], "Invalid topic name: topic name token must not start with a number"),
     (["/a//b"], "must not contain repeated '/'"),
-    (["x", "--count", "0"], "argument --count: expected a positive number, got '0'"),
-    (["x", "--timeout", "soon"], "argument --timeout: expected a positive number"),
+    (["x", "--count", "0"], "argument --count: expected a positive whole number, got '0'"),
+    (["x", "--count", "-1"], "argument --count: expected a positive whole number, got '-1'"),
+    (["x", "--count=-1"], "argument --count: expected a positive whole number, got '-1'"),
+    (["x", "--count", "9" * 4000], "argument --count: expected a positive whole number, got "
+     "'99999"),
+    (["x", "--timeout", "soon"], "argument --timeout: expected a positive, finite number"),
+    (["x", "--timeout", "inf"], "argument --timeout: expected a positive, finite number"),
+    (["x", "--timeout", "nan"], "argument --timeout: expected a positive, finite number"),
+    (["/" + "x" * 100_000], "argument 1 ('/xxxxxxxx"),  # rcl would log all of it
+    (["x", "--ros-args", "-r", "__ns:=/" + "x" * 100_000 + "-"], "argument 4 ('__ns:=/xxx"),
+    (["x", "--" + "x" * 100_000], "characters long; expected at most 4096"),
+    (["/x\udcff"], "argument 1 ('/x\\udcff') is not UTF-8 text"),  # bytes 0xff from a shell
     (["x", "--once", "--count", "2"], "not allowed with argument --once"),
     (["x", "--bogus"], "unrecognized arguments: --bogus"),
     (["x", "--ros-args", "--bogus"], "bad ROS arguments"),
@@ -160,6 +170,26 @@ def test_bad_usage_exits_two(spawn: Callable[..., Child], args: list[str], says:
     code, out, err = spawn(*ECHO, *args).finish()
     assert (code, out) == (2, "")
     assert err.startswith("uav-insar echo: error: ") and err.count("\n") == 1 and says in err
+    assert len(err) < 400, f"{len(err)} characters: what was given must be cut short"
+
+
+def test_second_signal_during_clean_up_is_ignored(spawn: Callable[..., Child],
+                                                  graph: object) -> None:
+    """SIGTERM, then SIGTERM again while the echo shuts rclpy down: still exit 0, silently
+    (the second once killed it with 143 after the handlers were restored)."""
+    echo = spawn(*ECHO, "/nothing")
+    end = time.monotonic() + 30
+    while f"_uav_insar_echo_{echo.proc.pid}" not in graph.get_node_names():
+        assert time.monotonic() < end and echo.proc.poll() is None, "echo node never seen"
+        time.sleep(0.05)
+    echo.proc.send_signal(signal.SIGTERM)
+    for _ in range(10):
+        time.sleep(0.01)
+        if echo.proc.poll() is not None:
+            break
+        echo.proc.send_signal(signal.SIGTERM)
+    code, out, err = echo.finish(timeout=15)
+    assert (code, out, err) == (0, "", "")
 
 
 def test_type_that_cannot_be_imported(spawn: Callable[..., Child], tmp_path: Path) -> None:

@@ -59,7 +59,7 @@ BAD_FILES = {
     "unknown": ('"/**":\n  ros__parameters:\n    looks_n: 4\n', "looks_n: unknown parameter"),
     "type": ('"/**":\n  ros__parameters:\n    z_max_m: high\n', "z_max_m: value 'high'"),
     "range": ('"/**":\n  ros__parameters:\n    coherence_rg_min: 1.5\n',
-              "coherence_rg_min: value 1.5 is not allowed; expected a finite number in (0, 1]"),
+              "coherence_rg_min: value 1.5 is not allowed; expected a finite number in [0.01, 1)"),
     "not finite": ('"/**":\n  ros__parameters:\n    d_min_m: .nan\n', "d_min_m: value nan"),
     "length": ('"/**":\n  ros__parameters:\n    ground_station_m: [1, 2]\n',
                "ground_station_m: value [1, 2] is not allowed; expected a list of 3"),

@@ -1,6 +1,7 @@
 """`uav-insar`: solve, sweep and plot the planning problem; echo topics.
 
-Exit codes: 0 solved, 3 infeasible (solve), 2 bad input (one line per problem, no traceback).
+Exit codes: 0 solved, 3 infeasible (solve), 2 bad input (one line per problem, no traceback),
+1 a solver failed on an allowed scenario (a bug: one line naming it, no traceback).
 """
 from __future__ import annotations
 
@@ -11,15 +12,23 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from uav_insar_planner.cli_checks import check_output_path, finite_float, sweep_count
 from uav_insar_planner.params import OBJECTIVES, SCHEMES, SOLVERS, ParamError, Params
 from uav_insar_planner.params_file import load_params, parse_override
+from uav_insar_planner.solver import SolverFailure
 
-EXIT_OK, EXIT_BAD_INPUT, EXIT_INFEASIBLE = 0, 2, 3
+EXIT_OK, EXIT_BAD_INPUT, EXIT_INFEASIBLE, EXIT_SOLVER_FAILED = 0, 2, 3, 1
+ERROR_LINE_MAX_CHARS = 300  # argparse quotes what it was given; a 100 kB argument is cut
+
+
+def _one_line(text: str) -> str:
+    text = " ".join(text.split())
+    return text if len(text) <= ERROR_LINE_MAX_CHARS else text[:ERROR_LINE_MAX_CHARS - 3] + "..."
 
 
 class _Parser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # one line, exit 2, as for bad parameters
-        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")
+        self.exit(EXIT_BAD_INPUT, _one_line(f"{self.prog}: error: {message}") + "\n")
 
 
 def _add_scenario_args(command: argparse.ArgumentParser) -> None:
@@ -47,9 +56,9 @@ def _build_parser() -> argparse.ArgumentParser:
 
     w = sub.add_parser("sweep", help="solve along one parameter for several schemes")
     w.add_argument("name", help="parameter, e.g. h_amb_min_m or rate_min_mbps[1]")
-    w.add_argument("start", type=float, help="first value (the parameter's file unit)")
-    w.add_argument("stop", type=float, help="last value")
-    w.add_argument("count", type=int, help="number of evenly spaced values")
+    w.add_argument("start", type=finite_float, help="first value (the parameter's file unit)")
+    w.add_argument("stop", type=finite_float, help="last value")
+    w.add_argument("count", type=sweep_count, help="number of evenly spaced values (1..10000)")
     _add_scenario_args(w)
     w.add_argument("--schemes", nargs="+", choices=SCHEMES, default=list(SCHEMES),
                    help="schemes to solve at each value (default: all four)")
@@ -119,18 +128,22 @@ def _cmd_solve(args: argparse.Namespace) -> int:
 def _cmd_sweep(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from uav_insar_planner.sweep import gains, parse_sweep_name, run_sweep, write_csv
+    from uav_insar_planner.sweep import gains, parse_sweep_name, run_sweep, with_value, write_csv
 
     params = _scenario(args)
     parse_sweep_name(args.name)
-    if args.count < 1:
-        raise ParamError([f"sweep COUNT: value {args.count} is not allowed; expected >= 1"])
+    if args.csv:
+        check_output_path("--csv", args.csv)
+    if args.plot:
+        check_output_path("--plot", args.plot, image=True)
     mc = 0
     if args.montecarlo:
         from uav_insar_planner.montecarlo_cli import MAX_SAMPLES, parse_int
 
         mc = parse_int("--mc-samples", args.mc_samples, 2, MAX_SAMPLES)
     values = np.linspace(args.start, args.stop, args.count)
+    for value in values:  # every value is validated before the first solve
+        with_value(params, *parse_sweep_name(args.name), float(value))
     bar = tqdm(total=len(values) * len(args.schemes), unit="solve", file=sys.stderr,
                disable=args.no_progress)
     rows = run_sweep(params, args.name, values, args.schemes, band=args.band,
@@ -169,6 +182,7 @@ def _cmd_plot_formation(args: argparse.Namespace) -> int:
     from uav_insar_planner.solver import solve
 
     params = _scenario(args)
+    check_output_path("--out", args.out, image=True)
     plan = solve(params)
     if not plan.feasible:
         print("infeasible, blocked by: " + ", ".join(plan.blocking_constraints),
@@ -209,8 +223,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         return commands[args.command](args)
     except ParamError as exc:
         for line in exc.problems:
-            print(f"uav-insar: error: {line}", file=sys.stderr)
+            print(_one_line(f"uav-insar: error: {line}"), file=sys.stderr)
         return EXIT_BAD_INPUT
+    except SolverFailure as exc:
+        print(_one_line(f"uav-insar: error: {exc}"), file=sys.stderr)
+        return EXIT_SOLVER_FAILED
 
 
 if __name__ == "__main__":

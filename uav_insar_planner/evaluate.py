@@ -21,6 +21,9 @@ CONSTRAINT_NAMES = tuple(f"C{i}" for i in range(1, 12))
 # Relative feasibility tolerance: a constraint counts as met when its slack is at least
 # -FEAS_TOL times the constraint's own scale (numerical solvers stop at ~1e-8 accuracy).
 FEAS_TOL = 1e-6
+# Positions (C1 altitudes, C4 distances) are judged absolutely: a micrometre, far below any
+# positioning error, whatever z_max or d_min is (1e-6 z_max let z = -5 m pass at z_max = 1e9).
+POSITION_TOL_M = 1e-6
 
 
 @dataclass
@@ -95,18 +98,21 @@ def evaluate(p: Params, formation: np.ndarray, p_com: np.ndarray, scheme: str) -
                                                                     p.ground_station),
                                 p.comm_bandwidth_hz, p.beta_c) for k in uavs}
 
-    def status(slacks: dict[str, float], scale: float) -> ConstraintStatus:
+    def status(slacks: dict[str, float], scale: float, absolute: float | None = None
+               ) -> ConstraintStatus:
         name, worst = min(slacks.items(), key=lambda kv: kv[1])
-        return ConstraintStatus(bool(worst >= -FEAS_TOL * scale), float(worst), name)
+        tol = FEAS_TOL * scale if absolute is None else absolute
+        return ConstraintStatus(bool(worst >= -tol), float(worst), name)
 
     c: dict[str, ConstraintStatus] = {}
-    c["C1"] = status({f"z{k}": min(q[k, 1] - p.z_min, p.z_max - q[k, 1]) for k in uavs}, p.z_max)
+    c["C1"] = status({f"z{k}": min(q[k, 1] - p.z_min, p.z_max - q[k, 1]) for k in uavs}, 1.0,
+                     POSITION_TOL_M)
     c["C2"] = status({"x0": -abs(q[0, 0] - float(model.master_x(q[0, 1], p.x_t, p.theta0)))},
                      1.0)
     c["C3"] = status({f"theta{k}": min(looks[k] - p.theta_min, p.theta_max - looks[k])
                       for k in slaves}, 1.0)
     c["C4"] = status({f"d{i}{j}": float(np.hypot(*(q[i] - q[j]))) - p.d_min
-                      for i in uavs for j in uavs if i < j}, max(p.d_min, 1.0))
+                      for i in uavs for j in uavs if i < j}, 1.0, POSITION_TOL_M)
     c["C5"] = status({f"S{k}": swaths[k] - p.swath_min for k in uavs}, max(p.swath_min, 1.0))
     c["C6"] = status({f"gamma_snr{k}": pairs[k]["coherence_snr"] - p.coherence_snr_min
                       for k in slaves}, 1.0)

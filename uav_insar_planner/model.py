@@ -91,7 +91,8 @@ def slave_range_max(p: Params, r0: ArrayLike) -> ArrayLike:
     """
     gm = gamma_m(p)
     r0 = np.asarray(r0, dtype=float)
-    return gm / r0**2 * (1.0 / (p.coherence_snr_min**2 * (1.0 + r0**3 / gm)) - 1.0)
+    with np.errstate(divide="ignore"):  # +inf at r0 = 0: no limit from a master on the target
+        return gm / r0**2 * (1.0 / (p.coherence_snr_min**2 * (1.0 + r0**3 / gm)) - 1.0)
 
 
 def coherence_snr(snr0: ArrayLike, snrk: ArrayLike) -> ArrayLike:
@@ -194,11 +195,16 @@ def distance_to_station(x: ArrayLike, y: ArrayLike, z: ArrayLike,
 
 
 def fdma_rate(p_w: ArrayLike, d_m: ArrayLike, bandwidth_hz: float, beta_c: float) -> ArrayLike:
-    """R_k,n = B_c log2(1 + P_com,k[n] beta_c / d_k,n^2)  (eq. 17, free-space FDMA)."""
-    return bandwidth_hz * np.log2(1.0 + np.asarray(p_w) * beta_c / np.asarray(d_m) ** 2)
+    """R_k,n = B_c log2(1 + P_com,k[n] beta_c / d_k,n^2)  (eq. 17, free-space FDMA).
+
+    Written with log1p: for a wide band the SNR needed is tiny and 1 + SNR would round to 1."""
+    snr = np.asarray(p_w) * beta_c / np.asarray(d_m) ** 2
+    return bandwidth_hz * np.log1p(snr) / np.log(2.0)
 
 
 def power_for_rate(rate_bps: float, d_m: ArrayLike, bandwidth_hz: float,
                    beta_c: float) -> ArrayLike:
-    """The least P_com meeting R_k,n >= rate: (2^(rate/B_c) - 1) d^2 / beta_c (C10 tight)."""
-    return np.expm1(rate_bps / bandwidth_hz * np.log(2.0)) * np.asarray(d_m) ** 2 / beta_c
+    """The least P_com meeting R_k,n >= rate: (2^(rate/B_c) - 1) d^2 / beta_c (C10 tight);
+    +inf when 2^(rate/B_c) is beyond double precision (no power reaches that rate)."""
+    with np.errstate(over="ignore"):
+        return np.expm1(rate_bps / bandwidth_hz * np.log(2.0)) * np.asarray(d_m) ** 2 / beta_c

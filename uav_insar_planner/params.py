@@ -1,7 +1,7 @@
 """Scenario parameters: the one place where dB, dBm, degrees and Mbit/s become SI.
 
-`PARAM_SPECS` is the single table of every parameter: name, type, default (Table I), allowed
-range, unit and description. The planner node declares its ROS parameters from it; the CLI
+`PARAM_SPECS` (param_specs.py) is the single table of every parameter: name, type, default,
+allowed range, unit and description. The planner node declares its ROS parameters from it; the CLI
 and `params_file.load_params` validate against it. `Params` holds the values converted to SI.
 Reading params files and `NAME=VALUE` overrides is `params_file`'s job.
 """
@@ -13,11 +13,20 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-SCHEMES = ("proposed", "single-baseline", "fixed-master", "static-power")
-OBJECTIVES = ("exact", "bound", "multilook")
-# The multilook objective tabulates the exact phase std per n_L (multilook.py): O(n_L) work.
-MULTILOOK_MAX_LOOKS = 1000
-SOLVERS = ("global", "paper-ao")
+from uav_insar_planner.param_specs import (
+    LENGTH_MAX_M,
+    MULTILOOK_MAX_LOOKS,
+    OBJECTIVES,
+    PARAM_SPECS,
+    SCHEMES,
+    SOLVERS,
+    SPEC_BY_NAME,
+    ParamSpec,
+)
+
+# Re-exported: callers import the table and its choices from here, with the values.
+__all__ = ["LENGTH_MAX_M", "MULTILOOK_MAX_LOOKS", "OBJECTIVES", "PARAM_SPECS", "SCHEMES",
+           "SOLVERS", "SPEC_BY_NAME", "ParamSpec"]
 
 SPEED_OF_LIGHT = 299_792_458.0
 BOLTZMANN = 1.380649e-23
@@ -35,90 +44,6 @@ def linear_to_db(value: float) -> float:
     return 10.0 * math.log10(value)
 
 
-@dataclass(frozen=True)
-class ParamSpec:
-    """One user-facing parameter. `length` > 0 means a list of that many numbers."""
-
-    name: str
-    kind: type  # int, float or str
-    default: Any
-    description: str
-    lo: float | None = None
-    hi: float | None = None
-    lo_open: bool = False
-    length: int = 0
-    choices: tuple[str, ...] = ()
-
-    def allowed(self) -> str:
-        if self.choices:
-            return "one of " + ", ".join(self.choices)
-        what = {int: "an integer", float: "a finite number", str: "a string"}[self.kind]
-        if self.length:
-            what = f"a list of {self.length} finite numbers"
-        if self.lo is not None and self.hi is not None:
-            rng = f"{'(' if self.lo_open else '['}{self.lo:g}, {self.hi:g}]"
-            return f"{what} in {rng}"
-        if self.lo is not None:
-            return f"{what} {'>' if self.lo_open else '>='} {self.lo:g}"
-        return what
-
-
-def _f(name, default, desc, lo=None, hi=None, lo_open=False, length=0):
-    return ParamSpec(name, float, default, desc, lo, hi, lo_open, length)
-
-
-PARAM_SPECS: tuple[ParamSpec, ...] = (
-    ParamSpec("num_slots", int, 80, "N, number of time slots", 1, 100000),
-    _f("slot_duration_s", 1.0, "delta_t, slot duration [s]", 0.0, None, True),
-    _f("z_min_m", 1.0, "z_min, lowest flying altitude [m] (C1)", 0.0, None),
-    _f("z_max_m", 100.0, "z_max, highest flying altitude [m] (C1)", 0.0, None, True),
-    _f("h_amb_min_m", 1.2, "h_amb^min, minimum height of ambiguity [m] (C8)", 0.0, None, True),
-    _f("target_x_m", 20.0, "x_t, across-track position of the target line [m]"),
-    _f("ground_station_m", [70.0, 149.37, 25.0], "g = (g_x, g_y, g_z), ground station [m]",
-       length=3),
-    _f("d_min_m", 1.5, "d_min, minimum distance between UAVs [m] (C4)", 0.0, None),
-    _f("swath_min_m", 55.0, "S_min, minimum swath width [m] (C5)", 0.0, None),
-    _f("speed_mps", 4.3, "v_y, along-track speed [m/s]", 0.0, None, True),
-    _f("p_com_max_db", 10.1, "P_com^max, peak communication power [dBW] (C9)", -100.0, 60.0),
-    _f("e_com_max_j", 594.0, "E_com^max, communication energy budget per UAV [J] (C11)",
-       0.0, None, True),
-    _f("rate_min_mbps", [10.0, 16.95, 1.0], "R_min,k, minimum data rate of U0, U1, U2 "
-       "[Mbit/s] (C10)", 0.0, None, length=3),
-    _f("comm_bandwidth_hz", 1.0e9, "B_c, FDMA bandwidth per UAV [Hz]", 0.0, None, True),
-    _f("ref_snr_db", 18.69, "beta_c, channel gain at 1 m over noise power [dB]", -200.0, 200.0),
-    _f("coherence_rg_min", 0.8, "gamma_Rg^min, minimum baseline coherence (C7)", 0.0, 1.0, True),
-    _f("coherence_snr_min", 0.8, "gamma_SNR^min, minimum SNR coherence (C6)", 0.0, 1.0, True),
-    _f("coherence_other", 0.6, "gamma_other, other decorrelation sources", 0.0, 1.0, True),
-    _f("sigma0_db", -10.0, "sigma_0, normalised backscatter [dB]", -100.0, 50.0),
-    _f("radar_power_dbm", 26.02, "P_t, radar transmit power [dBm]", -100.0, 100.0),
-    _f("gain_tx_dbi", 5.0, "G_t, radar transmit antenna gain [dBi]", -50.0, 80.0),
-    _f("gain_rx_dbi", 5.0, "G_r, radar receive antenna gain [dBi]", -50.0, 80.0),
-    _f("wavelength_m", 0.12, "lambda, radar wavelength [m]", 0.0, None, True),
-    _f("duty_cycle", 1.0e-4, "tau_p x PRF, radar duty cycle", 0.0, 1.0, True),
-    _f("look_angle_deg", 45.0, "theta_0, master look angle from vertical [deg] (C2)",
-       0.0, 90.0, True),
-    _f("system_temperature_k", 400.0, "T_sys, receiver temperature [K]", 0.0, None, True),
-    _f("radar_bandwidth_hz", 3.0e9, "B_Rg, radar pulse bandwidth [Hz]", 0.0, None, True),
-    _f("noise_figure_db", 5.0, "F, receiver noise figure [dB]", 0.0, 100.0),
-    _f("losses_db", 6.0, "L, total radar losses [dB]", 0.0, 100.0),
-    _f("center_frequency_hz", 2.5e9, "f_0, radar centre frequency [Hz]", 0.0, None, True),
-    _f("beamwidth_deg", 33.44, "Theta_3dB, elevation beamwidth [deg] (C5)", 0.0, 180.0, True),
-    _f("slave_look_angle_min_deg", 37.24, "theta_min, slave look angle lower limit [deg] (C3)",
-       0.0, 90.0),
-    _f("slave_look_angle_max_deg", 48.7, "theta_max, slave look angle upper limit [deg] (C3)",
-       0.0, 90.0),
-    ParamSpec("looks", int, 4, "n_L, number of independent looks", 1, 1_000_000),
-    _f("tolerance", 1.0e-2, "eps_0 = eps_1 = eps_2, AO/SCA relative stopping tolerance",
-       0.0, 1.0, True),
-    _f("master_fixed_xz_m", [-54.0, 74.0], "q0_fixed = (x_0, z_0) for the fixed-master scheme "
-       "[m]", length=2),
-    ParamSpec("scheme", str, "proposed", "which scheme to solve", choices=SCHEMES),
-    ParamSpec("objective", str, "exact", "exact: minimise sigma_h; bound: Proposition 1; "
-              "multilook: sigma_h with the exact multilook phase std", choices=OBJECTIVES),
-    ParamSpec("solver", str, "global", "global (certified) or paper-ao (Algorithm 2)",
-              choices=SOLVERS),
-)
-SPEC_BY_NAME: dict[str, ParamSpec] = {s.name: s for s in PARAM_SPECS}
 
 
 class ParamError(ValueError):
@@ -196,19 +121,35 @@ class Params:
 
 
 VALUE_SHOWN_CHARS = 60
+# C1 and C5 must keep the master this far from the target: with neither, sigma_h keeps
+# falling as the whole formation shrinks onto the target (the SNR grows as 1/r^3).
+MASTER_RANGE_MIN_M = 0.1
+# B_Rg / f_0 below this: gamma_Rg (eq. 10) falls below any allowed gamma_Rg^min within
+# microradians of theta_0, so C7 leaves no baseline worth flying.
+FRACTIONAL_BANDWIDTH_MIN = 1e-4
+
+
+def _cut(text: str) -> str:
+    return text if len(text) <= VALUE_SHOWN_CHARS else text[:VALUE_SHOWN_CHARS - 3] + "..."
 
 
 def shown(value: Any) -> str:
-    """repr(value) for an error line, cut to VALUE_SHOWN_CHARS."""
-    text = repr(list(value) if isinstance(value, tuple) else value)
-    return text if len(text) <= VALUE_SHOWN_CHARS else text[:VALUE_SHOWN_CHARS - 3] + "..."
+    """repr(value) for an error line, cut to VALUE_SHOWN_CHARS. Never renders more than that
+    of a long str or bytes value, and an int beyond Python's str limit is described."""
+    if isinstance(value, (str, bytes)) and len(value) > VALUE_SHOWN_CHARS:
+        value = value[:VALUE_SHOWN_CHARS]
+    try:
+        return _cut(repr(list(value) if isinstance(value, tuple) else value))
+    except ValueError:  # int with more digits than sys.get_int_max_str_digits()
+        return f"<integer of about {int(value.bit_length() * 0.30103)} digits>"
 
 
 def check_value(spec: ParamSpec, value: Any) -> tuple[Any, str | None]:
     """Coerce one value to the spec's type (int, float, str, or a list of `length` floats);
     return (value, problem or None), the problem one line naming the value and what is
     allowed. The one value check of every node and the CLI."""
-    bad = f"{spec.name}: value {shown(value)} is not allowed; expected {spec.allowed()}"
+    bad = (f"{spec.name}: value {shown(value)} is not allowed; expected {spec.allowed()}"
+           + (f" ({spec.why})" if spec.why else ""))
     if spec.kind is str:
         if not isinstance(value, str) or (spec.choices and value not in spec.choices):
             return value, bad
@@ -218,11 +159,10 @@ def check_value(spec: ParamSpec, value: Any) -> tuple[Any, str | None]:
             return value, bad
         items = []
         for item in value:
-            if isinstance(item, bool) or not isinstance(item, (int, float)):
+            item = _as_float(item)
+            if item is None or not math.isfinite(item) or not _in_range(spec, item):
                 return value, bad
-            if not math.isfinite(float(item)) or not _in_range(spec, float(item)):
-                return value, bad
-            items.append(float(item))
+            items.append(item)
         return tuple(items), None
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         return value, bad
@@ -230,17 +170,27 @@ def check_value(spec: ParamSpec, value: Any) -> tuple[Any, str | None]:
         if isinstance(value, float) and not value.is_integer():
             return value, bad
         value = int(value)
-    else:
-        value = float(value)
-    if not math.isfinite(value) or not _in_range(spec, value):
+        return value, (None if _in_range(spec, value) else bad)
+    number = _as_float(value)
+    if number is None or not math.isfinite(number) or not _in_range(spec, number):
         return value, bad
-    return value, None
+    return number, None
+
+
+def _as_float(value: Any) -> float | None:
+    """`value` as a float, None when it is no number (bool included) or an int beyond it."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return None
+    try:
+        return float(value)
+    except OverflowError:  # an integer above 1.8e308
+        return None
 
 
 def _in_range(spec: ParamSpec, v: float) -> bool:
     if spec.lo is not None and (v <= spec.lo if spec.lo_open else v < spec.lo):
         return False
-    return not (spec.hi is not None and v > spec.hi)
+    return not (spec.hi is not None and (v >= spec.hi if spec.hi_open else v > spec.hi))
 
 
 def validate(values: Mapping[str, Any]) -> tuple[dict[str, Any], list[str]]:
@@ -248,10 +198,14 @@ def validate(values: Mapping[str, Any]) -> tuple[dict[str, Any], list[str]]:
     problems: list[str] = []
     clean: dict[str, Any] = {}
     for name in values:
-        if name not in SPEC_BY_NAME:
-            near = difflib.get_close_matches(name, SPEC_BY_NAME, n=1)
+        if not isinstance(name, str):
+            problems.append(f"parameter name {shown(name)} is not allowed; expected a name "
+                            "from config/params.yaml")
+        elif name not in SPEC_BY_NAME:
+            near = difflib.get_close_matches(name[:VALUE_SHOWN_CHARS], SPEC_BY_NAME, n=1)
             hint = f" (did you mean {near[0]}?)" if near else ""
-            problems.append(f"{name}: unknown parameter{hint}; allowed: the names in "
+            label = _cut(name) if name.isidentifier() else shown(name)  # one line, always
+            problems.append(f"{label}: unknown parameter{hint}; allowed: the names in "
                             "config/params.yaml")
     bad: set[str] = set()
     for spec in PARAM_SPECS:
@@ -272,10 +226,23 @@ def validate(values: Mapping[str, Any]) -> tuple[dict[str, Any], list[str]]:
             f"allowed; expected less than slave_look_angle_max_deg "
             f"({clean['slave_look_angle_max_deg']!r})")
     problems += objective_problems(clean["objective"], clean["solver"], clean["looks"])
-    if clean["radar_bandwidth_hz"] >= 2.0 * clean["center_frequency_hz"]:
+    if not bad & {"swath_min_m", "look_angle_deg", "beamwidth_deg"}:
+        c0 = math.cos(math.radians(clean["look_angle_deg"]))
+        least = max(clean["z_min_m"] / c0 if c0 > 0 else math.inf,
+                    clean["swath_min_m"] * c0 / math.radians(clean["beamwidth_deg"]))
+        if least < MASTER_RANGE_MIN_M:
+            problems.append(
+                f"z_min_m: value {clean['z_min_m']!r} is not allowed with swath_min_m "
+                f"{clean['swath_min_m']!r}; expected the master's least slant range "
+                f"max(z_min/cos theta_0, S_min cos theta_0/Theta_3dB) >= {MASTER_RANGE_MIN_M:g}"
+                f" m, not {least:.3g} m (nearer, the optimum moves onto the target, r_0 -> 0,"
+                " where eqs. 8-9's SNR diverges and no formation attains it)")
+    fractional = clean["radar_bandwidth_hz"] / clean["center_frequency_hz"]
+    if not FRACTIONAL_BANDWIDTH_MIN <= fractional < 2.0:
         problems.append(
             f"radar_bandwidth_hz: value {clean['radar_bandwidth_hz']!r} is not allowed; "
-            "expected a fractional bandwidth B_Rg/f_0 below 2")
+            f"expected a fractional bandwidth B_Rg/f_0 in [{FRACTIONAL_BANDWIDTH_MIN:g}, 2) "
+            "(narrower, C7's gamma_Rg >= gamma_Rg^min leaves no baseline)")
     return clean, problems
 
 

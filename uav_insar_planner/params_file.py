@@ -12,21 +12,53 @@ from typing import Any
 
 import yaml
 
-from uav_insar_planner.params import ParamError, Params, params_from_mapping
+from uav_insar_planner.params import ParamError, Params, params_from_mapping, shown
 
 PARAMS_FILE_MAX_BYTES = 1 << 20
 
 
+# ROS 2 integer parameters are 64-bit; a longer literal is refused before Python converts it
+# (a 5000-digit one would pass its int-str limit).
+INT_LITERAL_MAX_DIGITS = 19
+
+
 class _RosYamlLoader(yaml.SafeLoader):
     """YAML 1.1 safe loader that also reads `1e9` and `1.0e9` as floats, as ROS 2's params
-    parser does (PyYAML's 1.1 resolver wants a signed exponent), and refuses aliases: a params
-    file needs none, and nested aliases make a few hundred bytes expand to gigabytes."""
+    parser does (PyYAML's 1.1 resolver wants a signed exponent), and refuses what a params file
+    never needs: aliases (nested ones make a few hundred bytes expand to gigabytes), mapping
+    keys that are not strings (`1:`, `null:`, `yes:`), duplicate keys (YAML would silently keep
+    the last) and integers of more than INT_LITERAL_MAX_DIGITS digits."""
 
     def compose_node(self, parent: Any, index: Any) -> Any:
         if self.check_event(yaml.events.AliasEvent):
             raise yaml.composer.ComposerError(None, None, "aliases are not allowed",
                                               self.peek_event().start_mark)
         return super().compose_node(parent, index)
+
+    def construct_mapping(self, node: Any, deep: bool = False) -> Any:
+        seen: set[str] = set()
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=deep)
+            if not isinstance(key, str):
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"key {shown(key)} is not a name (quote it if it is one)",
+                    key_node.start_mark)
+            if key in seen:
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"duplicate key {shown(key)}", key_node.start_mark)
+            seen.add(key)
+        return super().construct_mapping(node, deep=deep)
+
+    def construct_yaml_int(self, node: Any) -> int:
+        digits = sum(c.isdigit() for c in str(node.value))
+        if digits > INT_LITERAL_MAX_DIGITS:
+            raise yaml.constructor.ConstructorError(
+                None, None, f"integer of {digits} digits (at most {INT_LITERAL_MAX_DIGITS}: "
+                "ROS 2 integers are 64-bit; write a float as 1.0e30)", node.start_mark)
+        return super().construct_yaml_int(node)
+
+
+_RosYamlLoader.add_constructor("tag:yaml.org,2002:int", _RosYamlLoader.construct_yaml_int)
 
 
 _RosYamlLoader.add_implicit_resolver(
@@ -62,6 +94,9 @@ def read_yaml_file(path: str | Path) -> Any:
         mark = getattr(exc, "problem_mark", None)
         at = f" at line {mark.line + 1}" if mark else ""
         why = f" ({exc.problem})" if getattr(exc, "problem", None) else ""
+        if isinstance(exc, yaml.constructor.ConstructorError):
+            raise ParamError([f"{where}: is not a params file{at}{why}; expected '/**:' or "
+                              "'NODE:' sections of unique names with ros__parameters"]) from None
         raise ParamError([f"{where}: is not valid YAML{at}{why}; expected '/**:' or 'NODE:' "
                           "sections with ros__parameters"]) from None
 
@@ -75,12 +110,12 @@ def read_params_file(path: str | Path, node_name: str = "planner") -> dict[str, 
     """
     doc = read_yaml_file(path)
     if not isinstance(doc, dict):
-        raise ParamError([f"params file: {str(path)!r} must map node names to "
+        raise ParamError([f"params file {str(path)[:200]!r}: must map node names to "
                           "{ros__parameters: {...}}"])
     for key, body in doc.items():
         if not isinstance(body, dict) or not isinstance(body.get("ros__parameters"), dict):
-            raise ParamError([f"params file: section {key!r} in {str(path)!r} must hold a "
-                              "'ros__parameters' mapping"])
+            raise ParamError([f"params file {str(path)[:200]!r}: section {shown(key)} must hold "
+                              "a 'ros__parameters' mapping"])
     values: dict[str, Any] = {}
     sections = [k for k in doc if k == "/**"] + [
         k for k in doc if isinstance(k, str) and k != "/**"
@@ -95,7 +130,7 @@ def parse_override(text: str) -> tuple[str, Any]:
     sep = ":=" if ":=" in text else "="
     name, eq, raw = text.partition(sep)
     if not eq or not name.strip():
-        raise ParamError([f"--set: value {text!r} is not allowed; expected NAME=VALUE"])
+        raise ParamError([f"--set: value {shown(text)} is not allowed; expected NAME=VALUE"])
     try:
         value = yaml_load(raw)
     except yaml.YAMLError:

@@ -21,13 +21,16 @@ Exit codes:
   0  --once/--count messages arrived; SIGINT or SIGTERM; --timeout after at least one message
   1  no publisher on TOPIC within --timeout; its type is ambiguous or cannot be imported;
      --timeout ran out with no message
-  2  bad options or ROS arguments; invalid topic name
-Errors are one line on stderr.
+  2  bad options or ROS arguments (--count a whole number >= 1, --timeout finite > 0, no
+     argument over 4096 characters); invalid topic name
+Errors are one line on stderr, what was given cut to a few dozen characters. After SIGINT or
+SIGTERM further signals are ignored while the echo cleans up and exits.
 """
 from __future__ import annotations
 
 import argparse
 import importlib
+import math
 import os
 import signal
 import sys
@@ -48,19 +51,32 @@ class _Fail(Exception):
         self.code = code
 
 
+ERROR_LINE_MAX_CHARS = 300  # what the user typed is quoted in errors: a 100 kB name is cut
+SHOWN_CHARS = 40
+ARG_MAX_CHARS = 4096  # topic names and ROS arguments are far shorter
+
+
+def _cut(text: str, limit: int = ERROR_LINE_MAX_CHARS) -> str:
+    text = " ".join(text.split())
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
 class _Parser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # one line, exit 2
-        self.exit(2, f"{self.prog}: error: {message}\n")
+        self.exit(2, _cut(f"{self.prog}: error: {message}") + "\n")
 
 
 def _positive(kind: type) -> Any:
+    """argparse type: a positive, finite int or float (`--count -1`, `--timeout inf` refused)."""
     def parse(text: str) -> Any:
         try:
-            value = kind(text)
+            value = kind(text) if len(text) <= 30 else 0
         except ValueError:
             value = 0
-        if not value > 0:
-            raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+        if not (value > 0 and math.isfinite(value)):
+            raise argparse.ArgumentTypeError(
+                f"expected a positive{' whole' if kind is int else ', finite'} number, got "
+                f"{_cut(repr(text), SHOWN_CHARS)}")
         return value
     parse.__name__ = kind.__name__
     return parse
@@ -86,6 +102,10 @@ def _first_line(exc: BaseException) -> str:
 
 
 def _interrupt(signum: int, frame: Any) -> None:
+    # One signal ends the echo; more during the clean-up (or Python's exit) must not cut it
+    # short, so from now on they are ignored.
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, signal.SIG_IGN)
     raise KeyboardInterrupt
 
 
@@ -98,9 +118,10 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return _echo(argv)
     except _Fail as exc:
-        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        print(_cut(f"{PROG}: error: {exc}"), file=sys.stderr)
         return exc.code
     except KeyboardInterrupt:
+        previous = {}  # stay deaf to signals while Python exits (see _interrupt)
         return 0
     except BrokenPipeError:  # e.g. `| head`: stop quietly, and keep Python's exit flush quiet
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
@@ -120,6 +141,15 @@ def _echo(argv: list[str]) -> int:
     from rclpy.validate_full_topic_name import validate_full_topic_name
     from rclpy.validate_topic_name import validate_topic_name
 
+    for i, arg in enumerate(argv, 1):  # before rcl, which would log all of it or raise
+        if len(arg) > ARG_MAX_CHARS:
+            raise _Fail(f"argument {i} ({_cut(repr(arg), SHOWN_CHARS)}) is {len(arg)} "
+                        f"characters long; expected at most {ARG_MAX_CHARS}", 2)
+        try:
+            arg.encode("utf-8")
+        except UnicodeEncodeError:
+            raise _Fail(f"argument {i} ({_cut(repr(arg), SHOWN_CHARS)}) is not UTF-8 text", 2
+                        ) from None
     try:
         plain = remove_ros_args([PROG, *argv])[1:]
     except (_rclpy.RCLError, _rclpy.UnknownROSArgsError) as exc:

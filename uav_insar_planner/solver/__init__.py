@@ -24,6 +24,11 @@ from uav_insar_planner.params import (
 from uav_insar_planner.plan import Plan
 
 
+class SolverFailure(RuntimeError):
+    """A back end raised on an allowed scenario: a bug, reported as one line naming the back
+    end, the scheme and the exception instead of a traceback (the cause is to be fixed)."""
+
+
 def _backend(name: str):
     if name == "global":
         from uav_insar_planner.solver.global_opt.optimum import solve_global
@@ -53,11 +58,16 @@ def solve(params: Params, scheme: str | None = None, objective: str | None = Non
     if problems := objective_problems(objective, solver, params.looks):
         raise ParamError(problems)
     start = time.perf_counter()
-    result = _backend(solver)(params, scheme, objective)
-    elapsed = time.perf_counter() - start
-
-    ev = evaluate(params, result.formation, result.p_com, scheme) if np.isfinite(
-        result.formation[0, 0]) else None
+    try:
+        result = _backend(solver)(params, scheme, objective)
+        elapsed = time.perf_counter() - start
+        ev = evaluate(params, result.formation, result.p_com, scheme) if np.isfinite(
+            result.formation[0, 0]) else None
+    except Exception as exc:  # any bug becomes one clear line, not a traceback
+        text = " ".join(str(exc).split())[:120]
+        raise SolverFailure(f"solver {solver} failed on scheme {scheme}, objective "
+                            f"{objective}: {type(exc).__name__}: {text} (a bug: please "
+                            "report it with the parameters)") from exc
     feasible = result.feasible and ev is not None and ev.feasible
     blocking = list(result.blocking)
     message = result.message

@@ -5,7 +5,8 @@ end's infeasibility report falls back to the same grid when its search cannot de
 set. We build the start from the constraints of (P) themselves (exact model, no surrogate):
 
 - the master lies on its C2 line, x_0 = x_t - z_0 tan(theta_0), z_0 on a uniform grid of
-  `Z_GRID` altitudes over [z_min, z_max] (benchmark 2: the single point q0_fixed);
+  `Z_GRID` altitudes over the part of [z_min, z_max] that C5, C6 and the station disk leave to
+  the master alone (rays.master_interval; benchmark 2: the single point q0_fixed);
 - each slave lies on a look-angle ray from the target, q_k = (x_t - r sin(theta), r cos(theta)),
   theta on a uniform grid of `THETA_GRID` angles over [theta_min, theta_max] (C3). On a ray every
   other constraint is an interval of r in closed form: C1, C5 (r >= S_min cos(theta)/Theta_3dB),
@@ -33,6 +34,7 @@ import numpy as np
 from uav_insar_planner import model
 from uav_insar_planner.params import Params
 from uav_insar_planner.schemes import slave_uavs
+from uav_insar_planner.solver import rays
 from uav_insar_planner.solver.blocking import ALL_FAMILIES
 from uav_insar_planner.solver.power import station_radius_sq
 
@@ -65,8 +67,17 @@ def _master_grid(p: Params, scheme: str, fam: frozenset[str]) -> tuple[np.ndarra
     if scheme == "fixed-master":
         x0, z0 = (np.array([v]) for v in p.master_fixed)
     else:
-        z0 = np.linspace(p.z_min, p.z_max, Z_GRID) if "C1" in fam else np.linspace(
-            max(p.z_max * 1e-3, 1e-3), 10.0 * p.z_max, Z_GRID)
+        z_lo, z_hi = ((p.z_min, p.z_max) if "C1" in fam
+                      else (max(p.z_max * 1e-3, 1e-3), 10.0 * p.z_max))
+        # Only the altitudes C1, C5, C6 and the station disk leave to the master alone (in
+        # closed form, rays.master_interval): a grid over all of [z_min, z_max] = [1, 1e6]
+        # would step 1250 m and miss Table I's feasible 47-93 m.
+        sc = rays.make_scenario(p, scheme, "bound", ALL_FAMILIES - fam)
+        r_lo, r_hi = rays.master_interval(sc)
+        c0 = math.cos(p.theta0)
+        if r_lo <= r_hi and max(z_lo, r_lo * c0) < min(z_hi, r_hi * c0):
+            z_lo, z_hi = max(z_lo, r_lo * c0), min(z_hi, r_hi * c0)
+        z0 = np.linspace(z_lo, z_hi, Z_GRID)
         x0 = model.master_x(z0, p.x_t, p.theta0)
     ok = np.ones(z0.shape, dtype=bool)
     if "C1" in fam:
@@ -86,6 +97,12 @@ def _slave_pieces(p: Params, k: int, scheme: str, fam: frozenset[str], q0: np.nd
     """For master q0 and slave k: thetas (T,), and per theta up to two feasible r-intervals
     (lo, hi arrays of shape (2, T)); an empty piece has lo > hi."""
     span = (p.theta_min, p.theta_max) if "C3" in fam else (math.radians(0.5), math.radians(89.5))
+    if "C7" in fam:
+        # C7 is an interval of look angles in closed form (Proposition 2): a narrow band
+        # (B_Rg/f_0 = 3e-3) can fall between two points of a grid over all of C3
+        c7_lo, c7_hi = rays.c7_interval(rays.make_scenario(p, scheme, "bound"))
+        if max(span[0], c7_lo) < min(span[1], c7_hi):
+            span = (max(span[0], c7_lo), min(span[1], c7_hi))
     thetas = np.linspace(*span, THETA_GRID)
     if span[0] < p.theta0 < span[1]:
         # the master's own line of sight (b_perp = 0) is the last resort for a strict C8

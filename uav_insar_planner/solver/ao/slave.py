@@ -55,8 +55,10 @@ class SlaveProblem:
         alpha_a, alpha_b = c7_slopes(p)
         cons = [sign * (t0 * z - across) >= 0,                                       # I_a / I_b
                 z >= p.z_min, z <= p.z_max,                                          # C1
-                across >= math.tan(p.theta_min) * z,                                 # C3
-                across <= math.tan(p.theta_max) * z,
+                # C3 as cos(theta) (x_t - x) vs sin(theta) z: tan(90 deg) = 1.6e16 would
+                # wreck the conditioning (Clarabel then missed C8 by 7e-5 m)
+                math.cos(p.theta_min) * across >= math.sin(p.theta_min) * z,         # C3
+                math.cos(p.theta_max) * across <= math.sin(p.theta_max) * z,
                 self.c5_grad @ q + self.c5_const >= p.swath_min / p.beamwidth * z,   # C5~
                 cp.norm(q - np.array([p.x_t, 0.0])) <= self.r_max,                   # C6
                 b_perp <= self.b_max]                                                # C8

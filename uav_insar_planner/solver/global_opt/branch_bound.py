@@ -51,7 +51,8 @@ def _split_dim(sc: Scenario, b: np.ndarray) -> np.ndarray:
     """Which coordinate to halve: the one whose width most loosens the bound. The objective's
     relative sensitivity is about 2 per relative change of r0 and about
     1/|tan(theta - theta_0)| per radian of a slave angle (b_perp), plus the coherence terms."""
-    r0w = 2.0 * (b[:, R0B] - b[:, R0A]) / b[:, R0A]
+    with np.errstate(divide="ignore"):  # a box from r0 = 0 is infinitely wide: split r0
+        r0w = 2.0 * (b[:, R0B] - b[:, R0A]) / b[:, R0A]
     scores = [r0w]
     for a, z in ((T1A, T1B), (T2A, T2B))[:len(sc.slaves)]:
         mid = 0.5 * (b[:, a] + b[:, z]) - sc.th0

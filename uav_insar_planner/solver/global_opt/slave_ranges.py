@@ -32,7 +32,11 @@ from uav_insar_planner.solver.rays import Scenario
 
 
 def _slave_weight(sc: Scenario, r0, theta, r):
-    b = r * np.abs(np.sin(theta - sc.th0))
+    """w / r0^2, the weight normalised by the master range (see _from_normalised): formed from
+    b_perp / r0 so that centimetre ranges do not underflow b_perp^2 into denormals (which
+    once made a formation at r0 = 1e-161 look optimal). nan at r0 = 0."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        b = r / r0 * np.abs(np.sin(theta - sc.th0))
     return rays.weight(sc, b, rays.coherence_rg(sc, theta), rays.snr_factor(sc, r0, r))
 
 
@@ -55,7 +59,8 @@ def best_ranges(sc: Scenario, r0, th1, th2=None):
     """Exact optimum of the slave ranges for fixed (r0, theta_1[, theta_2]). With one slave
     (sc.slaves == (k,)) theta_1 is that slave's angle.
 
-    Returns (objective, r1, r2): objective +inf and ranges nan where no ranges are feasible.
+    Returns (objective, r1, r2): objective +inf and ranges nan where no ranges are feasible,
+    and at r0 = 0 (the master on the target: no look angle, no baseline).
     """
     r0 = np.asarray(r0, dtype=float)
     th1 = np.asarray(th1, dtype=float)
@@ -65,7 +70,7 @@ def best_ranges(sc: Scenario, r0, th1, th2=None):
         lo_a, top_a = comps1[0]
         r1 = np.where(lo_b <= top_b, top_b, np.where(lo_a <= top_a, top_a, np.nan))
         w = _slave_weight(sc, r0, th1, r1)
-        f = np.where(np.isfinite(r1) & (w > 0), rays.objective_from_weights(sc, r0, w), np.inf)
+        f = np.where(np.isfinite(r1) & (w > 0) & (r0 > 0), _from_normalised(sc, w), np.inf)
         return f, r1, np.full_like(r1, np.nan)
     th2 = np.asarray(th2, dtype=float)
     comps2 = _components(sc, 2, r0, th2)
@@ -99,8 +104,7 @@ def best_ranges(sc: Scenario, r0, th1, th2=None):
                 x = _lower_crossing(t2, c, d2)
                 ok = crowded & (x >= lo1)
                 consider(ok, _slave_weight(sc, r0, th1, np.where(ok, x, t1)) + w2, x, t2)
-    f = np.where(best_w > 0, rays.objective_from_weights(sc, r0, np.maximum(best_w, 1e-300)),
-                 np.inf)
+    f = np.where((best_w > 0) & (r0 > 0), _from_normalised(sc, best_w), np.inf)
     return f, best_r1, best_r2
 
 
@@ -158,6 +162,9 @@ def weight_bound(sc: Scenario, r0a, rho, smax, g_rg):
         r = np.minimum(rho, np.where(smax > 0, cap * r0a / smax, math.inf))
         bn = np.where(smax > 0, np.minimum(r * smax / r0a, cap), 0.0)
         w = rays.weight(sc, bn, g_rg, rays.snr_factor(sc, r0a, r))
+        # A box reaching r0 = 0: b_perp / r0 <= cap (C8) and gamma_SNR <= 1 still bound it.
+        w = np.where(np.asarray(r0a) > 0, w,
+                     rays.weight(sc, np.where(smax > 0, cap, 0.0), g_rg, 1.0))
     # An unbounded range (only with constraint families switched off) has unbounded weight.
     return np.where(np.isnan(w), np.inf, w)
 

@@ -1,0 +1,73 @@
+"""Checks of `uav-insar` arguments made before any work starts, each failing with one line.
+
+Output paths are tried for writing up front (a sweep's results must not be lost to a typo in
+`--csv` after an hour of solving); sweep values must be finite and their count bounded.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import shutil
+from pathlib import Path
+
+from uav_insar_planner.params import ParamError, shown
+
+SWEEP_COUNT_MAX = 10_000  # evenly spaced values per sweep; each costs a solve per scheme
+
+
+def sweep_count(text: str) -> int:
+    """argparse type of the sweep COUNT: an integer in 1..SWEEP_COUNT_MAX."""
+    stripped = text.strip()
+    if not (stripped.lstrip("+-").isdigit() and len(stripped) <= 12
+            and 1 <= int(stripped) <= SWEEP_COUNT_MAX):
+        raise argparse.ArgumentTypeError(f"value {shown(text)} is not allowed; expected an "
+                                         f"integer in 1..{SWEEP_COUNT_MAX}")
+    return int(stripped)
+
+
+def finite_float(text: str) -> float:
+    """argparse type of a sweep START / STOP: a finite number."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"value {shown(text)} is not allowed; expected a "
+                                         "finite number")
+    return value
+
+
+def image_formats() -> list[str]:
+    """File extensions matplotlib can save to here (pgf only with a LaTeX to measure text)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+
+    formats = set(Figure().canvas.get_supported_filetypes())
+    if shutil.which(matplotlib.rcParams["pgf.texsystem"]) is None:
+        formats.discard("pgf")
+    return sorted(formats)
+
+
+def check_output_path(option: str, path: str, image: bool = False) -> None:
+    """Raise ParamError (one line) unless `path` can be written: its directory exists, it is
+    not a directory, opening it for writing works (a new file is removed again), and for an
+    image its extension is one matplotlib saves to. Nothing existing is changed."""
+    where = f"{option}: value {shown(path)} is not allowed"
+    if image:
+        ext = Path(path).suffix.lower().lstrip(".")
+        formats = image_formats()
+        if ext not in formats:
+            raise ParamError([f"{where}; expected a file name ending in one of "
+                              + ", ".join("." + f for f in formats)])
+    existed = os.path.lexists(path)
+    try:
+        with open(path, "a"):
+            pass
+    except OSError as exc:
+        raise ParamError([f"{where}; cannot be written ({exc.strerror or exc}); expected a "
+                          "writable file in an existing directory"]) from None
+    if not existed:
+        os.unlink(path)
