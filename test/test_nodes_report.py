@@ -113,7 +113,7 @@ def test_descriptor_ranges_and_scalar_checks():
     rng = descriptor_for(SPEC_BY_NAME["num_slots"], False).integer_range[0]
     assert (rng.from_value, rng.to_value) == (1, 100000)
     rng = descriptor_for(SPEC_BY_NAME["speed_mps"], True).floating_point_range[0]
-    assert (rng.from_value, rng.to_value) == (0.0, math.inf)
+    assert (rng.from_value, rng.to_value) == (0.01, 1000.0)
     assert descriptor_for(SPEC_BY_NAME["speed_mps"], True).read_only
     for name in ("ground_station_m", "scheme"):
         d = descriptor_for(SPEC_BY_NAME[name], False)

@@ -93,7 +93,8 @@ def test_two_planners_are_reported_and_never_mixed(watcher, procs):
     w.spin_until(lambda: False, 2.0)  # the agents had time to take planner2's plan: they hold
     assert all(f == [first_id] for f in w.flown_plans.values()), w.flown_plans
 
-    assert stop_node(second) == 0  # a clean stop: SIGKILL waits out the DDS lease (~20 s)
+    code = stop_node(second)  # a clean stop: SIGKILL waits out the DDS lease (~20 s)
+    assert code == 0, second.stdout.read()[-4000:]
     since = len(w.diagnostics)
     assert w.spin_until(lambda: any(s.level == DiagnosticStatus.OK for s in diag(
         w, "planner: formation publishers", since)), 15.0), "planner still sees planner2"

@@ -43,8 +43,8 @@ from uav_insar_planner.ros.msg_yaml import TRUNCATE_LENGTH, message_to_yaml
 PROG = "uav-insar echo"
 
 
-class _Fail(Exception):
-    """A one-line error `str(self)` ending the echo with exit code `code`."""
+class CommandFailed(Exception):
+    """A one-line error `str(self)` ending a command (echo, record) with exit code `code`."""
 
     def __init__(self, message: str, code: int) -> None:
         super().__init__(message)
@@ -117,7 +117,7 @@ def main(argv: list[str] | None = None) -> int:
         previous = {s: signal.signal(s, _interrupt) for s in (signal.SIGINT, signal.SIGTERM)}
     try:
         return _echo(argv)
-    except _Fail as exc:
+    except CommandFailed as exc:
         print(_cut(f"{PROG}: error: {exc}"), file=sys.stderr)
         return exc.code
     except KeyboardInterrupt:
@@ -143,22 +143,22 @@ def _echo(argv: list[str]) -> int:
 
     for i, arg in enumerate(argv, 1):  # before rcl, which would log all of it or raise
         if len(arg) > ARG_MAX_CHARS:
-            raise _Fail(f"argument {i} ({_cut(repr(arg), SHOWN_CHARS)}) is {len(arg)} "
-                        f"characters long; expected at most {ARG_MAX_CHARS}", 2)
+            raise CommandFailed(f"argument {i} ({_cut(repr(arg), SHOWN_CHARS)}) is {len(arg)} "
+                                f"characters long; expected at most {ARG_MAX_CHARS}", 2)
         try:
             arg.encode("utf-8")
         except UnicodeEncodeError:
-            raise _Fail(f"argument {i} ({_cut(repr(arg), SHOWN_CHARS)}) is not UTF-8 text", 2
-                        ) from None
+            raise CommandFailed(f"argument {i} ({_cut(repr(arg), SHOWN_CHARS)}) is not UTF-8 "
+                                "text", 2) from None
     try:
         plain = remove_ros_args([PROG, *argv])[1:]
     except (_rclpy.RCLError, _rclpy.UnknownROSArgsError) as exc:
-        raise _Fail(f"bad ROS arguments: {_first_line(exc)}", 2) from None
+        raise CommandFailed(f"bad ROS arguments: {_first_line(exc)}", 2) from None
     args = _parser().parse_args(plain)
     try:
         validate_topic_name(args.topic)
     except InvalidTopicNameException as exc:
-        raise _Fail(_first_line(exc), 2) from None
+        raise CommandFailed(_first_line(exc), 2) from None
     end = None if args.timeout is None else time.monotonic() + args.timeout
     want = 1 if args.once else args.count
     context = rclpy.Context()
@@ -166,19 +166,19 @@ def _echo(argv: list[str]) -> int:
         rclpy.init(args=[PROG, *argv], context=context,
                    signal_handler_options=SignalHandlerOptions.NO)
     except _rclpy.RCLError as exc:
-        raise _Fail(f"bad ROS arguments: {_first_line(exc)}", 2) from None
+        raise CommandFailed(f"bad ROS arguments: {_first_line(exc)}", 2) from None
     node = executor = None
     try:
         try:
             node = rclpy.create_node(f"_uav_insar_echo_{os.getpid()}", context=context,
                                      start_parameter_services=False, enable_rosout=False)
         except (_rclpy.RCLError, NameValidationException) as exc:
-            raise _Fail(f"bad ROS arguments: {_first_line(exc)}", 2) from None
+            raise CommandFailed(f"bad ROS arguments: {_first_line(exc)}", 2) from None
         try:
             topic = node.resolve_topic_name(args.topic)
             validate_full_topic_name(topic)
         except (_rclpy.RCLError, InvalidTopicNameException) as exc:
-            raise _Fail(_first_line(exc), 2) from None
+            raise CommandFailed(_first_line(exc), 2) from None
         msg_type, qos = _wait_for_publishers(node, topic, end, args.timeout)
         received = 0
 
@@ -198,7 +198,7 @@ def _echo(argv: list[str]) -> int:
                 break
             executor.spin_once(timeout_sec=step)
         if not received:
-            raise _Fail(f"no message on {topic} within {args.timeout:g} s", 1)
+            raise CommandFailed(f"no message on {topic} within {args.timeout:g} s", 1)
         return 0
     except ExternalShutdownException:
         return 0
@@ -222,20 +222,20 @@ def _wait_for_publishers(node: Any, topic: str, end: float | None,
         if infos and types:
             break
         if end is not None and time.monotonic() >= end:
-            raise _Fail(f"no publisher on {topic} within {timeout:g} s", 1)
+            raise CommandFailed(f"no publisher on {topic} within {timeout:g} s", 1)
         time.sleep(0.05)
     if len(types) > 1:
-        raise _Fail(f"{topic} has more than one type: {', '.join(types)}", 1)
+        raise CommandFailed(f"{topic} has more than one type: {', '.join(types)}", 1)
     reliable = all(i.qos_profile.reliability == ReliabilityPolicy.RELIABLE for i in infos)
     latched = all(i.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL for i in infos)
     qos = QoSProfile(
         depth=10,
         reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
         durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)
-    return _message_class(types[0], topic), qos
+    return message_class(types[0], topic), qos
 
 
-def _message_class(type_name: str, topic: str) -> type:
+def message_class(type_name: str, topic: str) -> type:
     """The Python class of ROS type `pkg/msg/Name`."""
     try:
         package, kind, name = type_name.split("/")
@@ -243,7 +243,7 @@ def _message_class(type_name: str, topic: str) -> type:
         if not hasattr(cls, "get_fields_and_field_types"):
             raise TypeError("not a message class")
     except (ValueError, ImportError, AttributeError, TypeError) as exc:
-        raise _Fail(f"cannot import message type {type_name} of {topic}: "
+        raise CommandFailed(f"cannot import message type {type_name} of {topic}: "
                     f"{_first_line(exc)}", 1) from None
     return cls
 

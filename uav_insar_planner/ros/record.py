@@ -42,7 +42,7 @@ from rclpy.validate_full_topic_name import validate_full_topic_name
 
 from uav_insar_planner.bag_writer import McapBagWriter
 from uav_insar_planner.msg_definitions import DefinitionError
-from uav_insar_planner.ros.echo import _Fail, _message_class
+from uav_insar_planner.ros.echo import CommandFailed, message_class
 from uav_insar_planner.ros.run import startup_problems
 
 PROG = "uav-insar record"
@@ -112,9 +112,9 @@ class BagRecorder(Node):
                 continue
             offered = [i.qos_profile for i in infos]
             try:
-                cls = _message_class(types[0], topic)
+                cls = message_class(types[0], topic)
                 self.bag.add_topic(topic, types[0], [qos_dict(q) for q in offered])
-            except (_Fail, DefinitionError) as exc:
+            except (CommandFailed, DefinitionError) as exc:
                 self._skip(topic, str(exc))
                 continue
             self.create_subscription(cls, topic, self._writer(topic), subscription_qos(offered),
