@@ -21,7 +21,9 @@ swarm watch (swarm_watch.py: lost UAVs, saturated closed loops, the re-plans the
 also uav{K}/offload and /diagnostics. Planner-only parameter: uav_timeout_s
 (parameters.PLANNER_SPECS).
 Service ~/replan (std_srvs/Trigger): solve again with the current parameters.
-Solves run on a worker thread (solve_worker), so the node keeps serving while one runs.
+Solves run on a worker thread (solve_worker), so the node keeps serving while one runs; a
+worker that dies turns the plan status ERROR ("solve worker died: ...") and the node exits
+with code 1 after publishing it (guard.EXIT_WORKER_DIED).
 """
 from __future__ import annotations
 
@@ -37,6 +39,7 @@ from rclpy.parameter import Parameter
 from std_msgs.msg import Float64, Float64MultiArray
 from std_srvs.srv import Trigger
 
+from uav_insar_planner.mavlink.guard import EXIT_WORKER_DIED
 from uav_insar_planner.params import (
     PARAM_SPECS,
     SPEC_BY_NAME,
@@ -105,7 +108,7 @@ class PlannerNode(Node):
         guard_sets(self)
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.add_post_set_parameters_callback(self._after_set_parameters)
-        self.create_timer(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)
+        self.create_timer(DIAGNOSTICS_PERIOD_S, self._on_diagnostics_timer)
         self._worker = SolveWorker(solve, self._on_solved)
         self._swarm = SwarmWatch(self, params)
         self._worker.request(params, "start")
@@ -211,11 +214,19 @@ class PlannerNode(Node):
         self._power_pub.publish(power)
         self._markers.publish_plan(scenario, plan)
 
+    def _on_diagnostics_timer(self) -> None:
+        self._publish_diagnostics()
+        failure = self._worker.failure or self._swarm.failure
+        if failure is not None:  # said ERROR: now leave, never a zombie
+            self.get_logger().error("solve worker died: " + failure)
+            raise SystemExit(EXIT_WORKER_DIED)
+
     def _publish_diagnostics(self) -> None:
         with self._state_lock:
-            if self._worker.failure is not None:  # no more plans will come: say so
+            failure = self._worker.failure or self._swarm.failure
+            if failure is not None:  # no more plans will come: say so
                 self._plan_status = report.failure_status(
-                    self._scenario.scheme, "solve worker died: " + self._worker.failure)
+                    self._scenario.scheme, "solve worker died: " + failure)
             statuses = [self._plan_status] if self._plan_status else []
             statuses.append(self._swarm.status())
             # Per-UAV status even without a plan of this planner's (restarted infeasible).

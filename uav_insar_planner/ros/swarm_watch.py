@@ -81,6 +81,11 @@ class SwarmWatch:
     def stop(self) -> None:
         self._worker.stop()
 
+    @property
+    def failure(self) -> str | None:
+        """Why the re-plan worker died, or None."""
+        return self._worker.failure
+
     # --- inputs ----------------------------------------------------------------------------
     def on_pose(self, k: int, msg: Any) -> None:
         p = msg.pose.position
