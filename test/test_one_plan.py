@@ -113,7 +113,8 @@ def test_two_planners_are_reported_and_never_mixed(watcher, procs):
     assert second_id.planner == "/planner2"
     w.spin_until(lambda: False, 1.0)
     assert all(f == [first_id] for f in w.flown_plans.values()), w.flown_plans
-    assert stop_node(first) == 0
+    code = stop_node(first)
+    assert code == 0, first.stdout.read()[-4000:]
     assert w.spin_until(lambda: all(len(f) == 2 for f in w.flown_plans.values()), 15.0), \
         w.flown_plans
     assert all(f == [first_id, second_id.label] for f in w.flown_plans.values())

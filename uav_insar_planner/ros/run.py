@@ -12,6 +12,7 @@ import os
 import re
 import signal
 import sys
+import time
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
@@ -112,6 +113,9 @@ def _terminate(signum: int, frame: Any) -> None:
     raise KeyboardInterrupt  # SIGTERM stops a node the way Ctrl-C does
 
 
+SHUTDOWN_GRACE_S = 0.5
+
+
 def _spin(node: Node) -> None:
     """rclpy.spin, where a failure after the context was shut down counts as the shutdown.
 
@@ -122,6 +126,10 @@ def _spin(node: Node) -> None:
     try:
         rclpy.spin(node)
     except Exception:
+        # The handler may still be shutting the context down: give it a moment to show.
+        end = time.monotonic() + SHUTDOWN_GRACE_S
+        while rclpy.ok(context=node.context) and time.monotonic() < end:
+            time.sleep(0.02)
         if rclpy.ok(context=node.context):
             raise
 
