@@ -3,7 +3,7 @@
 On a private ROS_DOMAIN_ID (random, discovery on this host), for each target rate this process
 publishes geometry_msgs/PoseStamped (the suite's most frequent type) on /bench/pose, reliable,
 keep-last 1000, paced to the rate for --seconds; two processes subscribe: the recorder
-(`python -m uav_insar_planner.ros.record OUT --topics /bench/pose`, raw bytes into an MCAP
+(`python -m uav_insar_planner.ros.tools.record OUT --topics /bench/pose`, raw bytes into an MCAP
 bag) and, side by side, a bare rclpy node that only counts raw messages (the floor of what a
 Python subscriber costs). Both are stopped with SIGINT 2 s after the last message; the
 recorded count comes from the bag's metadata.yaml, the recorder's CPU seconds from /proc
@@ -61,7 +61,7 @@ def run_rate(rate: float, seconds: float, env: dict[str, str], folder: Path) -> 
     from rclpy.qos import QoSProfile
 
     bag = folder / f"bench_{int(rate)}"
-    recorder = subprocess.Popen([sys.executable, "-m", "uav_insar_planner.ros.record",
+    recorder = subprocess.Popen([sys.executable, "-m", "uav_insar_planner.ros.tools.record",
                                  str(bag), "--topics", TOPIC], env=env, text=True,
                                 stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
     counter = subprocess.Popen([sys.executable, "-c", COUNTER], env=env, text=True,
@@ -104,7 +104,7 @@ def main() -> None:
     parser.add_argument("--rates", type=float, nargs="+", default=[500, 2000, 5000, 20000])
     parser.add_argument("--seconds", type=float, default=3.0)
     args = parser.parse_args()
-    from uav_insar_planner.processes import ros_env
+    from uav_insar_planner.demo.processes import ros_env
 
     env = dict(ros_env(random.randint(110, 230)), PYTHONPATH=str(REPO))
     print(f"ROS_DOMAIN_ID={env['ROS_DOMAIN_ID']}, {args.seconds:g} s per rate, PoseStamped "

@@ -95,7 +95,7 @@ def ros_context(ros_domain: int):
 def procs(ros_domain: int):
     """`procs(name, *ros_args)` starts executable `name` (planner, agent, mavlink_bridge) with
     `--ros-args ros_args` on the test's domain, as `ros2 run` would; leftovers are killed."""
-    from uav_insar_planner.processes import start_node
+    from uav_insar_planner.demo.processes import start_node
 
     started: list[subprocess.Popen] = []
 
@@ -112,8 +112,8 @@ def procs(ros_domain: int):
 
 @pytest.fixture
 def watcher(ros_context):
-    """The suite's TopicWatcher (uav_insar_planner/ros/watcher.py) in the test's context."""
-    from uav_insar_planner.ros.watcher import TopicWatcher
+    """The suite's TopicWatcher (ros/tools/topic_watcher.py) in the test's context."""
+    from uav_insar_planner.ros.tools.topic_watcher import TopicWatcher
 
     w = TopicWatcher(ros_context)
     yield w

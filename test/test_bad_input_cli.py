@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from uav_insar_planner import cli
-from uav_insar_planner.cli_checks import SWEEP_COUNT_MAX
+from uav_insar_planner.cli.checks import SWEEP_COUNT_MAX
 from uav_insar_planner.params import ParamError
 from uav_insar_planner.params_file import load_params, parse_override
 

@@ -28,9 +28,9 @@ def mission(tmp_path_factory):
     import rclpy
     from visualization_msgs.msg import MarkerArray
 
-    from uav_insar_planner.demo_bag import recorder_ready, stop_recorder
-    from uav_insar_planner.processes import ros_env, start_node, start_process, stop_nodes
-    from uav_insar_planner.ros.watcher import TopicWatcher
+    from uav_insar_planner.demo.processes import ros_env, start_node, start_process, stop_nodes
+    from uav_insar_planner.demo.recorder import recorder_ready, stop_recorder
+    from uav_insar_planner.ros.tools.topic_watcher import TopicWatcher
 
     domain = _next_domain()
     env = dict(ros_env(domain), PYTHONPATH=str(REPO))
@@ -39,7 +39,7 @@ def mission(tmp_path_factory):
     rclpy.init(args=["test"], context=ctx, domain_id=domain)
     w = TopicWatcher(ctx)
     bag = tmp_path_factory.mktemp("bags") / "mission"
-    recorder = start_process([sys.executable, "-m", "uav_insar_planner.ros.record", str(bag)],
+    recorder = start_process([sys.executable, "-m", "uav_insar_planner.ros.tools.record", str(bag)],
                              env)
     nodes = [start_node("agent", ["-p", f"uav_id:={k}", "-p", "time_scale:=40.0", "-p",
                                   f"num_slots:={SLOTS}", "-r", f"__node:=agent{k}"], env)

@@ -99,8 +99,8 @@ def known_bag(tmp_path_factory) -> Path:
 
 
 def test_figures_of_a_known_bag(known_bag):
-    from uav_insar_planner.bag_read import read_mission
-    from uav_insar_planner.bag_report import mission_figures
+    from uav_insar_planner.bag.reader import read_mission
+    from uav_insar_planner.report.recorded import mission_figures
 
     f = mission_figures(read_mission(known_bag), P)
     assert f.uavs == [0, 1, 2] and f.num_slots == N and f.scheme == "proposed"

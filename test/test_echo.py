@@ -16,11 +16,11 @@ import numpy as np
 import pytest
 import yaml
 
-from uav_insar_planner.ros.msg_yaml import message_to_yaml
+from uav_insar_planner.ros.tools.msg_yaml import message_to_yaml
 
 REPO = Path(__file__).resolve().parent.parent
 TALKER = str(Path(__file__).resolve().parent / "echo_talker.py")
-ECHO = ("-m", "uav_insar_planner.ros.echo")
+ECHO = ("-m", "uav_insar_planner.ros.tools.echo")
 
 
 class Child:

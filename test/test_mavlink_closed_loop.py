@@ -6,7 +6,7 @@ import pytest
 from mavlink_fakes import MAV, wait_until
 
 from uav_insar_planner.mavlink.bridge import Bridge, BridgeConfig
-from uav_insar_sim.vehicle import SimVehicle
+from uav_insar_sim.vehicle.simulator import SimVehicle
 
 pytestmark = pytest.mark.timeout(60)
 SYSIDS = (2, 3, 4)

@@ -11,7 +11,7 @@ import sys
 import pytest
 from diagnostic_msgs.msg import DiagnosticStatus
 
-from uav_insar_sim.vehicle import SimVehicle
+from uav_insar_sim.vehicle.simulator import SimVehicle
 
 pytestmark = pytest.mark.timeout(90)
 SYSIDS = (2, 3, 4)

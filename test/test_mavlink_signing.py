@@ -13,7 +13,7 @@ from uav_insar_planner.mavlink.signing import (
     signing_state,
     signing_timestamp,
 )
-from uav_insar_sim.vehicle import SimVehicle
+from uav_insar_sim.vehicle.simulator import SimVehicle
 
 pytestmark = pytest.mark.timeout(60)
 KEY = bytes(range(1, 33))

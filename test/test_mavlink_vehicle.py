@@ -5,7 +5,7 @@ import pytest
 from mavlink_fakes import MAV, FakePeer, wait_until
 
 from uav_insar_planner.mavlink.autopilots import px4_custom_mode
-from uav_insar_sim.vehicle import SimVehicle, main
+from uav_insar_sim.vehicle.simulator import SimVehicle, main
 
 pytestmark = pytest.mark.timeout(60)
 ACCEPTED = MAV.MAV_RESULT_ACCEPTED

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from uav_insar_planner.msg_definitions import (
+from uav_insar_planner.bag.definitions import (
     DefinitionError,
     dependencies,
     full_definition,

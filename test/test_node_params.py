@@ -16,7 +16,7 @@ from rcl_interfaces.srv import GetParameters, SetParameters
 from std_srvs.srv import Trigger
 
 from uav_insar_planner import load_params, solve
-from uav_insar_planner.processes import start_node, stop_node
+from uav_insar_planner.demo.processes import start_node, stop_node
 
 CONFIG = str(Path(__file__).resolve().parents[1] / "config" / "params.yaml")
 N = 8
@@ -173,7 +173,7 @@ def test_domain_id_out_of_range_exits_2(ros_domain, monkeypatch):
 def test_domains_are_isolated(watcher, procs, another_domain):
     import rclpy
 
-    from uav_insar_planner.ros.watcher import TopicWatcher
+    from uav_insar_planner.ros.tools.topic_watcher import TopicWatcher
 
     planner = procs("planner", "-p", f"num_slots:={N}")
     other = rclpy.Context()

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from uav_insar_planner import load_params, model, solve
+from uav_insar_planner.demo.processes import stop_node
 from uav_insar_planner.evaluate import rate_tolerance_bps
-from uav_insar_planner.processes import stop_node
 
 CONFIG = str(Path(__file__).resolve().parents[1] / "config" / "params.yaml")
 N = 30

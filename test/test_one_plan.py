@@ -14,10 +14,10 @@ from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
 
 from uav_insar_planner import load_params, model, solve
-from uav_insar_planner.processes import start_node, stop_node
+from uav_insar_planner.demo.processes import start_node, stop_node
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.plan_msgs import PlanId, encode
-from uav_insar_sim.vehicle import SimVehicle
+from uav_insar_sim.vehicle.simulator import SimVehicle
 
 pytestmark = pytest.mark.timeout(120)
 N = 40

@@ -10,7 +10,7 @@ from pathlib import Path
 from diagnostic_msgs.msg import DiagnosticStatus
 from std_srvs.srv import Trigger
 
-from uav_insar_planner.processes import start_process, stop_node
+from uav_insar_planner.demo.processes import start_process, stop_node
 
 FAULT = Path(__file__).with_name("fault_solve_callback.py")
 

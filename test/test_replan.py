@@ -1,5 +1,5 @@
 """Re-planning without ROS: the reduced problem (replan.py) against the independent checker,
-and the swarm monitor's state machine (ros/swarm_monitor.py) on a clock of the test's own."""
+and the swarm monitor's state machine (swarm_health.py) on a clock of the test's own."""
 from __future__ import annotations
 
 import dataclasses
@@ -9,7 +9,7 @@ import pytest
 
 from uav_insar_planner import load_params, model, replan, solve
 from uav_insar_planner.evaluate import evaluate
-from uav_insar_planner.ros.swarm_monitor import SATURATED_MISSES, SwarmMonitor
+from uav_insar_planner.swarm_health import SATURATED_MISSES, SwarmMonitor
 
 
 @pytest.fixture(scope="module")

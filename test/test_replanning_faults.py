@@ -10,12 +10,12 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from rclpy.parameter import Parameter
 
 from uav_insar_planner import load_params, solve
-from uav_insar_planner.processes import stop_nodes
+from uav_insar_planner.demo.processes import stop_nodes
 from uav_insar_planner.ros.planner import PlannerNode
-from uav_insar_planner.ros.swarm_monitor import SATURATED_MISSES
 from uav_insar_planner.ros.swarm_watch import SWARM_STATUS_NAME
+from uav_insar_planner.swarm_health import SATURATED_MISSES
 from uav_insar_sim.agent_node import AgentNode
-from uav_insar_sim.vehicle import SimVehicle
+from uav_insar_sim.vehicle.simulator import SimVehicle
 
 pytestmark = pytest.mark.timeout(90)
 SYSIDS = (2, 3, 4)

@@ -15,8 +15,8 @@ import pytest
 from diagnostic_msgs.msg import DiagnosticStatus
 
 from uav_insar_planner import load_params, replan, solve
+from uav_insar_planner.demo.processes import stop_nodes
 from uav_insar_planner.evaluate import evaluate, rate_tolerance_bps
-from uav_insar_planner.processes import stop_nodes
 from uav_insar_planner.ros.swarm_watch import SWARM_STATUS_NAME
 
 pytestmark = pytest.mark.timeout(120)

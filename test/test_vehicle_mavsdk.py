@@ -9,7 +9,7 @@ import warnings
 
 import pytest
 
-from uav_insar_sim.vehicle import SimVehicle
+from uav_insar_sim.vehicle.simulator import SimVehicle
 
 with warnings.catch_warnings():
     warnings.simplefilter("ignore")  # 3.17.4 warns that the name moves to mavsdk-grpc

@@ -10,7 +10,8 @@ from typing import Any
 
 import numpy as np
 
-UAV_NAMES = ("uav0", "uav1", "uav2")
+from uav_insar_planner.swarm import UAV_NAMES
+
 # Two UAVs planned closer than this may touch once each flies with its own position error:
 # standard GNSS (single frequency, SBAS) is good to about 1.5-3 m horizontally (95 %), RTK to
 # 0.02-0.05 m. Table I's d_min = 1.5 m therefore needs RTK; 2 m is the warning threshold.

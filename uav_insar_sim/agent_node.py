@@ -57,7 +57,7 @@ from uav_insar_planner.ros.plan_gate import PlanGate
 from uav_insar_planner.ros.plan_msgs import Formation, PowerSchedule
 from uav_insar_planner.ros.run import run_node
 from uav_insar_sim.flight import choose_flight
-from uav_insar_sim.vehicle import SimVehicle
+from uav_insar_sim.vehicle.simulator import SimVehicle
 
 SCENARIO_SPECS = agent_scenario_specs()
 TICK_PERIOD_S = 0.05  # wall clock; the mission clock advances time_scale times faster

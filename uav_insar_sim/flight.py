@@ -25,7 +25,7 @@ from uav_insar_sim.mission import Mission, home_position
 from uav_insar_sim.observed_mission import ObservedMission
 from uav_insar_sim.offload import ClosedLoopOffload
 from uav_insar_sim.slots import SlotSample
-from uav_insar_sim.vehicle import SimVehicle
+from uav_insar_sim.vehicle.simulator import SimVehicle
 from uav_insar_sim.wind import Wind
 
 # MAVLink mode: the embedded vehicle starts airborne (no arming needed) above the agent's home.

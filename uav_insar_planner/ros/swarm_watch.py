@@ -1,5 +1,5 @@
 """The planner's watch over the swarm in flight: lost UAVs and saturated closed loops, and the
-re-plans they call for (the ROS side of `swarm_monitor`; the mathematics is `replan`'s).
+re-plans they call for (the ROS side of `swarm_health`; the mathematics is `replan`'s).
 
 Created by the planner node, which feeds it uavK/pose and uavK/achieved_rate (`on_pose`,
 `on_rate`) and every plan it publishes (`on_plan`); it subscribes uavK/offload and
@@ -19,7 +19,7 @@ and checks the swarm every CHECK_PERIOD_S against the planner parameter `uav_tim
   `mission cannot continue: master uav0 lost at slot n (why)` and the hold plan
   (`replan.hold_plan`: every pose NaN, every power zero) is published: agents hold where
   they are, the bridge commands LOITER.
-- Saturated closed loop (`swarm_monitor.Saturated`): WARN on the `planner: swarm` status,
+- Saturated closed loop (`swarm_health.Saturated`): WARN on the `planner: swarm` status,
   then the power re-plan of `replan.power_replan` for that UAV, formation unchanged.
 - `status()`: the `planner: swarm` status, one value per UAV (heard / not heard / lost).
 """
@@ -40,7 +40,7 @@ from uav_insar_planner.plan import SAFE_SEPARATION_M, UAV_NAMES, Plan
 from uav_insar_planner.ros import diagnostics as report
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.solve_worker import SolveWorker
-from uav_insar_planner.ros.swarm_monitor import Lost, Saturated, SwarmMonitor
+from uav_insar_planner.swarm_health import Lost, Saturated, SwarmMonitor
 
 CHECK_PERIOD_S = 0.1
 SWARM_STATUS_NAME = "planner: swarm"

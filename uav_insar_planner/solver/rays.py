@@ -18,7 +18,8 @@ constraint family allows an interval of ranges:
 
 Every function broadcasts over numpy arrays. `Scenario.off` disables constraint families,
 which is how the blocking set of an infeasible scenario is found. The global back end
-(solver/global_opt/) searches this model; plotting draws the slaves' feasible regions from it.
+(solver/global_opt/) searches this model; report/figures.py draws the slaves' feasible
+regions from it.
 """
 from __future__ import annotations
 

@@ -1,7 +1,7 @@
 """`uav-insar echo TOPIC`: print a topic's messages as `ros2 topic echo` does, on rclpy.
 
     uav-insar echo TOPIC [--once | --count N] [--timeout S] [--full-length] [--ros-args ...]
-    python -m uav_insar_planner.ros.echo TOPIC ...
+    python -m uav_insar_planner.ros.tools.echo TOPIC ...
 
 TOPIC is resolved as ros2 resolves it (`formation` -> `/formation`, or under the namespace
 given by `--ros-args -r __ns:=/uav1`). The echo waits for a publisher on it, takes the message
@@ -38,7 +38,7 @@ import threading
 import time
 from typing import Any
 
-from uav_insar_planner.ros.msg_yaml import TRUNCATE_LENGTH, message_to_yaml
+from uav_insar_planner.ros.tools.msg_yaml import TRUNCATE_LENGTH, message_to_yaml
 
 PROG = "uav-insar echo"
 

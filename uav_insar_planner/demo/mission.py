@@ -38,14 +38,7 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
-from uav_insar_planner.demo_bag import (
-    default_bag_path,
-    recorder_ready,
-    start_recorder,
-    stop_recorder,
-)
-from uav_insar_planner.mission_report import MavlinkPass, mavlink_table, rate_table, summary
-from uav_insar_planner.processes import (
+from uav_insar_planner.demo.processes import (
     PRINT_LOCK,
     executable,
     free_udp_ports,
@@ -55,6 +48,13 @@ from uav_insar_planner.processes import (
     start_process,
     stop_nodes,
 )
+from uav_insar_planner.demo.recorder import (
+    default_bag_path,
+    recorder_ready,
+    start_recorder,
+    stop_recorder,
+)
+from uav_insar_planner.report.flown import MavlinkPass, mavlink_table, rate_table, summary
 
 REPO_CONFIG = Path(__file__).resolve().parents[1] / "config" / "params.yaml"
 # MAVLink part: the bridge starts the pass once every vehicle is this close to its start point
@@ -154,8 +154,8 @@ def run(args: argparse.Namespace) -> int:
         return 2
     domain = args.domain_id if args.domain_id is not None else random_domain_id()
     os.environ.update(ros_env(domain))
-    from uav_insar_planner.ros.msg_yaml import message_to_yaml
-    from uav_insar_planner.ros.watcher import TopicWatcher
+    from uav_insar_planner.ros.tools.msg_yaml import message_to_yaml
+    from uav_insar_planner.ros.tools.topic_watcher import TopicWatcher
 
     common = ["--params-file", str(args.params_file)] if args.params_file else []
     common += ["-p", f"num_slots:={params.num_slots}", *(a for text in args.param
@@ -330,7 +330,3 @@ def main(argv: list[str] | None = None) -> int:
     if not args.mavlink_pass_s > 0 or not 0 <= args.mavlink_base_port <= 65515:
         parser.error("--mavlink-pass-s must be > 0 and --mavlink-base-port in 0..65515")
     return run(args)
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,6 +1,6 @@
 """The flight logic of the simulated multicopter: boot, modes, arming, takeoff, setpoints.
 
-No I/O: `SimVehicle` (vehicle.py) decodes MAVLink into these calls and reports the state.
+No I/O: `SimVehicle` (simulator.py) decodes MAVLink into these calls and reports the state.
 Results are MAV_RESULT numbers, as the real autopilots answer; STATUSTEXTs to send are queued
 in `statustexts` as (severity, text) for the vehicle to drain.
 

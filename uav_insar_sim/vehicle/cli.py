@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 
 from uav_insar_planner.mavlink.autopilots import AUTOPILOTS
-from uav_insar_sim.telemetry import SITL_HOME
+from uav_insar_sim.vehicle.telemetry import SITL_HOME
 
 
 def build_parser() -> argparse.ArgumentParser:

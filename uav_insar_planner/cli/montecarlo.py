@@ -1,6 +1,6 @@
 """`uav-insar montecarlo`: the Monte-Carlo check (montecarlo.py) of a planned or given formation.
 
-Registered by cli.py (`add_parser`); bad input raises ParamError (one line, exit 2).
+Registered by cli/__init__.py (`add_parser`); bad input raises ParamError (one line, exit 2).
 """
 from __future__ import annotations
 
@@ -107,7 +107,7 @@ def run(args: argparse.Namespace, scenario: Callable[[argparse.Namespace], Param
                          if np.isfinite(x))
         print(f"{where}: {rows}\n" + format_table(result))
     if args.plot:
-        from uav_insar_planner.plotting import plot_montecarlo
+        from uav_insar_planner.report.figures import plot_montecarlo
 
         plot_montecarlo(result | {"height_errors_m": errors}, args.plot)
         if not args.json:

@@ -1,4 +1,4 @@
-"""The mission report's PNGs (matplotlib, Agg back end, as plotting.py): one figure per quantity,
+"""The mission report's PNGs (matplotlib, Agg back end, as figures.py): one figure per quantity,
 one panel per flown UAV, planned or required dashed, achieved solid.
 
   report_rate.png       achieved rate per slot against R_min,k [Mbit/s]
@@ -18,8 +18,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from uav_insar_planner.bag_report import MissionFigures  # noqa: E402
 from uav_insar_planner.params import Params  # noqa: E402
+from uav_insar_planner.report.recorded import MissionFigures  # noqa: E402
 
 COLORS = ("tab:red", "tab:blue", "tab:green")  # U0, U1, U2 as in plot-formation
 FILES = ("report_rate.png", "report_power.png", "report_energy.png", "report_error.png",

@@ -1,7 +1,7 @@
 """`uav-insar record OUT`: record the suite's topics into a rosbag2 MCAP bag, on rclpy.
 
     uav-insar record OUT [--topics T [T ...]] [--duration S] [--ros-args ...]
-    python -m uav_insar_planner.ros.record OUT ...
+    python -m uav_insar_planner.ros.tools.record OUT ...
 
 A node (`uav_insar_recorder`) looks at the ROS graph every DISCOVERY_PERIOD_S and subscribes to
 each new topic that has a publisher: every topic except /rosout, /parameter_events and hidden
@@ -10,7 +10,7 @@ with raw=True, so it gets the serialized CDR bytes rclpy received, and matches t
 QoS as `ros2 bag record` does: reliable only if every publisher is, transient_local only if
 every publisher is (a latched topic such as /formation is recorded even when the recorder
 starts after its publisher), depth RECORD_DEPTH. Each message is written with its receive time
-(bag_writer.McapBagWriter: OUT/metadata.yaml + OUT/OUT_0.mcap, the publishers' QoS as the
+(bag.writer.McapBagWriter: OUT/metadata.yaml + OUT/OUT_0.mcap, the publishers' QoS as the
 topic's offered_qos_profiles, so `ros2 bag play` latches /formation and /formation/power again).
 
 It runs until SIGINT / SIGTERM or --duration seconds, then closes the bag and prints one line:
@@ -40,10 +40,10 @@ from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 from rclpy.validate_full_topic_name import validate_full_topic_name
 
-from uav_insar_planner.bag_writer import McapBagWriter
-from uav_insar_planner.msg_definitions import DefinitionError
-from uav_insar_planner.ros.echo import CommandFailed, message_class
+from uav_insar_planner.bag.definitions import DefinitionError
+from uav_insar_planner.bag.writer import McapBagWriter
 from uav_insar_planner.ros.run import startup_problems
+from uav_insar_planner.ros.tools.echo import CommandFailed, message_class
 
 PROG = "uav-insar record"
 NODE_NAME = "uav_insar_recorder"
@@ -53,7 +53,7 @@ NOT_RECORDED = ("/rosout", "/parameter_events")
 
 
 def qos_dict(qos: QoSProfile) -> dict[str, Any]:
-    """An rclpy QoSProfile as the plain dictionary rosbag2's metadata holds (bag_writer)."""
+    """An rclpy QoSProfile as the plain dictionary rosbag2's metadata holds (bag.writer)."""
     def duration(d: Any) -> dict[str, int]:
         sec, nsec = divmod(int(d.nanoseconds), 10**9)
         return {"sec": sec, "nsec": nsec}

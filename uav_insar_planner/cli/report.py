@@ -5,9 +5,10 @@
 BAG is a rosbag2 folder (`uav-insar record`, `make demo`, `ros2 bag record`). The scenario
 (R_min, E_max, the radar, for sigma_h) is the one the mission flew with: Table I, or --params
 and --set as for `uav-insar solve`; num_slots is taken from the recorded plan. Prints
-bag_report.report_table, writes report_plots.FILES into DIR (default BAG_report beside the
-bag) and names them. A progress bar on stderr follows the read. Exit codes: 0 written; 2 bad
-input (no such bag, not a bag, no plan in it, bad parameters), one line on stderr.
+report.recorded.report_table, writes report.recorded_plots.FILES into DIR (default BAG_report
+beside the bag) and names them. A progress bar on stderr follows the read. Exit codes: 0
+written; 2 bad input (no such bag, not a bag, no plan in it, bad parameters), one line on
+stderr.
 """
 from __future__ import annotations
 
@@ -40,15 +41,15 @@ def main(argv: list[str] | None = None) -> int:
     """Run `uav-insar report` with `argv`; returns the exit code."""
     from tqdm import tqdm
 
-    from uav_insar_planner.bag_read import BagError, read_mission
-    from uav_insar_planner.bag_report import (
+    from uav_insar_planner.bag.reader import BagError, read_mission
+    from uav_insar_planner.params import ParamError
+    from uav_insar_planner.params_file import load_params, parse_override
+    from uav_insar_planner.report.recorded import (
         ReportError,
         flown_scenario,
         mission_figures,
         report_table,
     )
-    from uav_insar_planner.params import ParamError
-    from uav_insar_planner.params_file import load_params, parse_override
 
     args = _parser().parse_args(sys.argv[1:] if argv is None else argv)
     out = args.out or args.bag.resolve().parent / f"{args.bag.resolve().name}_report"
@@ -71,7 +72,7 @@ def main(argv: list[str] | None = None) -> int:
     except (BagError, ReportError) as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return 2
-    from uav_insar_planner.report_plots import plot_report
+    from uav_insar_planner.report.recorded_plots import plot_report
 
     print(report_table(figures, params))
     for path in plot_report(figures, params, out):

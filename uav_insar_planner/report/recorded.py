@@ -1,7 +1,7 @@
 """Planned versus achieved figures of a recorded mission (no ROS import): what `uav-insar
 report` prints and plots.
 
-From a MissionRecord (bag_read.py) and the scenario the mission was flown with (Params):
+From a MissionRecord (bag/reader.py) and the scenario the mission was flown with (Params):
 
   per UAV k: the slots reported of N, those below R_min,k - tol (evaluate.rate_tolerance_bps),
     the worst margin min_n (R_k,n - R_min,k), the energy used (the last uav{k}/offload's
@@ -13,7 +13,7 @@ From a MissionRecord (bag_read.py) and the scenario the mission was flown with (
     figure from /diagnostics beside it) and the sigma_h of the flown geometry: the same
     evaluation with each UAV at its mean (x, z) on the track.
 
-The per-UAV lines are mission_report.summary's, the demo's summary, so both read alike.
+The per-UAV lines are report.flown.summary's, the demo's summary, so both read alike.
 """
 from __future__ import annotations
 
@@ -22,10 +22,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from uav_insar_planner.bag_read import MissionRecord
+from uav_insar_planner.bag.reader import MissionRecord
 from uav_insar_planner.evaluate import evaluate, rate_tolerance_bps
-from uav_insar_planner.mission_report import summary
 from uav_insar_planner.params import Params
+from uav_insar_planner.report.flown import summary
 
 
 class ReportError(ValueError):

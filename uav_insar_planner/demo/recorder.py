@@ -10,9 +10,9 @@ import time
 from pathlib import Path
 from typing import Any
 
-from uav_insar_planner.processes import start_process, stop_node
+from uav_insar_planner.demo.processes import start_process, stop_node
 
-RECORDER_NODE = "uav_insar_recorder"  # ros/record.NODE_NAME
+RECORDER_NODE = "uav_insar_recorder"  # ros/tools/record.NODE_NAME
 # The topics the recorder must have subscribed to before the plan starts the slots: the
 # agents' volatile ones (a latched plan would be delivered late anyway).
 AGENT_TOPICS = ("uav{k}/achieved_rate", "uav{k}/offload", "uav{k}/pose")
@@ -26,7 +26,8 @@ def default_bag_path(now: float | None = None) -> Path:
 
 def start_recorder(path: Path, env: dict[str, str]) -> subprocess.Popen:
     """`uav-insar record path` in `env`; its output stays in its pipe (see stop_recorder)."""
-    return start_process([sys.executable, "-m", "uav_insar_planner.ros.record", str(path)], env)
+    return start_process([sys.executable, "-m", "uav_insar_planner.ros.tools.record", str(path)],
+                         env)
 
 
 def recorder_ready(node: Any, uavs: range = range(3)) -> bool:

@@ -12,23 +12,15 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from uav_insar_planner.cli_checks import check_output_path, finite_float, sweep_count
+from uav_insar_planner.cli.checks import check_output_path, finite_float, sweep_count
+from uav_insar_planner.cli.parser import OneLineParser as _Parser
+from uav_insar_planner.cli.parser import one_line as _one_line
+from uav_insar_planner.exit_codes import EXIT_BAD_INPUT, EXIT_CRASH, EXIT_INFEASIBLE, EXIT_OK
 from uav_insar_planner.params import OBJECTIVES, SCHEMES, SOLVERS, ParamError, Params
 from uav_insar_planner.params_file import load_params, parse_override
 from uav_insar_planner.solver import SolverFailure
 
-EXIT_OK, EXIT_BAD_INPUT, EXIT_INFEASIBLE, EXIT_SOLVER_FAILED = 0, 2, 3, 1
-ERROR_LINE_MAX_CHARS = 300  # argparse quotes what it was given; a 100 kB argument is cut
-
-
-def _one_line(text: str) -> str:
-    text = " ".join(text.split())
-    return text if len(text) <= ERROR_LINE_MAX_CHARS else text[:ERROR_LINE_MAX_CHARS - 3] + "..."
-
-
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # one line, exit 2, as for bad parameters
-        self.exit(EXIT_BAD_INPUT, _one_line(f"{self.prog}: error: {message}") + "\n")
+EXIT_SOLVER_FAILED = EXIT_CRASH
 
 
 def _add_scenario_args(command: argparse.ArgumentParser) -> None:
@@ -79,14 +71,14 @@ def _build_parser() -> argparse.ArgumentParser:
     f.add_argument("--scheme", choices=SCHEMES)
     f.add_argument("--out", default="formation.png", metavar="FILE.png")
 
-    from uav_insar_planner.montecarlo_cli import add_parser as add_montecarlo_parser
+    from uav_insar_planner.cli.montecarlo import add_parser as add_montecarlo_parser
 
     add_montecarlo_parser(sub, _add_scenario_args)
 
-    # echo parses its own options (uav_insar_planner/ros/echo.py): they pass through.
+    # echo parses its own options (uav_insar_planner/ros/tools/echo.py): they pass through.
     sub.add_parser("echo", help="print a topic like `ros2 topic echo` (see echo --help)",
                    add_help=False)
-    # record and report parse their own options too (ros/record.py, bag_report_cli.py).
+    # record and report parse their own options too (ros/tools/record.py, cli/report.py).
     sub.add_parser("record", help="record the topics into a rosbag2 MCAP bag (see record "
                    "--help)", add_help=False)
     sub.add_parser("report", help="plots and a table of a recorded mission (see report "
@@ -107,7 +99,7 @@ def _scenario(args: argparse.Namespace) -> Params:
 
 def _cmd_solve(args: argparse.Namespace) -> int:
     from uav_insar_planner.plan import SAFE_SEPARATION_M, closest_pair
-    from uav_insar_planner.plan_text import format_plan
+    from uav_insar_planner.report.plan_text import format_plan
     from uav_insar_planner.solver import solve
 
     limit = SAFE_SEPARATION_M if args.min_separation_m is None else args.min_separation_m
@@ -138,7 +130,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         check_output_path("--plot", args.plot, image=True)
     mc = 0
     if args.montecarlo:
-        from uav_insar_planner.montecarlo_cli import MAX_SAMPLES, parse_int
+        from uav_insar_planner.cli.montecarlo import MAX_SAMPLES, parse_int
 
         mc = parse_int("--mc-samples", args.mc_samples, 2, MAX_SAMPLES)
     values = np.linspace(args.start, args.stop, args.count)
@@ -170,7 +162,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         write_csv(rows, args.csv, args.name)
         print(f"wrote {args.csv}")
     if args.plot:
-        from uav_insar_planner.plotting import plot_sweep
+        from uav_insar_planner.report.figures import plot_sweep
 
         plot_sweep(rows, args.name, args.plot)
         print(f"wrote {args.plot}")
@@ -178,7 +170,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
 
 
 def _cmd_plot_formation(args: argparse.Namespace) -> int:
-    from uav_insar_planner.plotting import plot_formation
+    from uav_insar_planner.report.figures import plot_formation
     from uav_insar_planner.solver import solve
 
     params = _scenario(args)
@@ -194,7 +186,7 @@ def _cmd_plot_formation(args: argparse.Namespace) -> int:
 
 
 def _cmd_montecarlo(args: argparse.Namespace) -> int:
-    from uav_insar_planner.montecarlo_cli import run
+    from uav_insar_planner.cli.montecarlo import run
 
     return run(args, _scenario)
 
@@ -204,15 +196,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = _build_parser()
     args, rest = parser.parse_known_args(argv)
     if args.command == "echo":
-        from uav_insar_planner.ros.echo import main as echo_main
+        from uav_insar_planner.ros.tools.echo import main as echo_main
 
         return echo_main(rest)
     if args.command == "record":
-        from uav_insar_planner.ros.record import main as record_main
+        from uav_insar_planner.ros.tools.record import main as record_main
 
         return record_main(rest)
     if args.command == "report":
-        from uav_insar_planner.bag_report_cli import main as report_main
+        from uav_insar_planner.cli.report import main as report_main
 
         return report_main(rest)
     if rest:
@@ -228,7 +220,3 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SolverFailure as exc:
         print(_one_line(f"uav-insar: error: {exc}"), file=sys.stderr)
         return EXIT_SOLVER_FAILED
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

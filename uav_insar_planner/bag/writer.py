@@ -6,7 +6,7 @@
     bag.close()                                     # writes the MCAP index and metadata.yaml
 
 The folder holds `<name>.mcap` and `metadata.yaml` (rosbag2 format version 9, Jazzy). Each
-topic's MCAP schema is the full `ros2msg` definition (msg_definitions.full_definition), its
+topic's MCAP schema is the full `ros2msg` definition (bag.definitions.full_definition), its
 channel carries `offered_qos_profiles` (the publishers' QoS, so `ros2 bag play` offers them
 again: a transient-local topic is latched on playback) and the RIHS01 `topic_type_hash`.
 The writer is rosbags' (rosbags.rosbag2.Writer); this module only supplies the definitions and
@@ -30,7 +30,7 @@ from rosbags.interfaces import (
 )
 from rosbags.rosbag2 import StoragePlugin, Writer
 
-from uav_insar_planner.msg_definitions import canonical_type, full_definition, type_hash
+from uav_insar_planner.bag.definitions import canonical_type, full_definition, type_hash
 
 METADATA_VERSION = 9  # rosbag2 in Jazzy
 # rmw's "infinite" duration as rosbag2 (Jazzy) dumps it

@@ -17,7 +17,7 @@ In-process (a background thread; what tests and an agent node use):
 
 In-process the boot phase defaults to 0 s (`boot_s`), on the command line to 3 s; a vehicle
 started `airborne` never boots. The MAVLink side, like the real autopilots (flight logic:
-`autopilot.Autopilot`, telemetry: `telemetry`, parameters: `sim_params`, commands:
+`autopilot.Autopilot`, telemetry: `telemetry`, parameters: `parameters`, commands:
 `commands`):
 - Sent as (sysid, compid 1): HEARTBEAT (MAV_TYPE_QUADROTOR; ArduCopter mode numbers or PX4
   main << 16 | sub << 24), SYS_STATUS, GPS_RAW_INT, ATTITUDE, LOCAL_POSITION_NED,
@@ -55,11 +55,11 @@ from uav_insar_planner.mavlink.link import MAV, Link, LinkStats
 from uav_insar_planner.mavlink.sequencer import command_name
 from uav_insar_planner.mavlink.setpoints import used_values
 from uav_insar_planner.mavlink.signing import read_key_file, signing_state
-from uav_insar_sim.autopilot import Autopilot
-from uav_insar_sim.commands import run_command
-from uav_insar_sim.sim_params import ParamTable, vehicle_params
-from uav_insar_sim.telemetry import SITL_HOME, Streams, Telemetry, parse_home
-from uav_insar_sim.vehicle_args import build_parser
+from uav_insar_sim.vehicle.autopilot import Autopilot
+from uav_insar_sim.vehicle.cli import build_parser
+from uav_insar_sim.vehicle.commands import run_command
+from uav_insar_sim.vehicle.parameters import ParamTable, vehicle_params
+from uav_insar_sim.vehicle.telemetry import SITL_HOME, Streams, Telemetry, parse_home
 
 __all__ = ["SimVehicle", "build_parser", "main"]
 
@@ -382,7 +382,3 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         vehicle.stop()
     return 0 if vehicle.failure is None else EXIT_WORKER_DIED
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,0 +1,17 @@
+"""The exit codes every command and node of the suite returns, in one table.
+
+    0  done (solved, recorded, stopped by SIGINT / SIGTERM)
+    1  a crash or a dead worker thread: a bug, one line naming it (never a zombie that looks
+       alive)
+    2  bad input: one line per problem, on stderr, before any work and with nothing written
+    3  infeasible: the scenario has no plan (the blocking constraints are named)
+"""
+from __future__ import annotations
+
+EXIT_OK = 0
+EXIT_CRASH = 1
+EXIT_BAD_INPUT = 2
+EXIT_INFEASIBLE = 3
+
+EXIT_CODES = {EXIT_OK: "done", EXIT_CRASH: "crash or dead worker",
+              EXIT_BAD_INPUT: "bad input", EXIT_INFEASIBLE: "infeasible"}
