@@ -35,8 +35,8 @@ def assert_one_line(code: int, err: str, says: str, expected_code: int = 2) -> N
 
 PARAMS_FILES = {
     "int key": ("planner:\n  ros__parameters:\n    1: 2\n", "line 3 (key 1 is not a name"),
-    "null key": ("planner:\n  ros__parameters:\n    null: 2\n", "key None is not a name"),
-    "bool key": ('"/**":\n  ros__parameters:\n    yes: 2\n', "key True is not a name"),
+    "null key": ("planner:\n  ros__parameters:\n    null: 2\n", "key null is not a name"),
+    "bool key": ('"/**":\n  ros__parameters:\n    yes: 2\n', "key yes is not a name"),
     "int section": ("1:\n  ros__parameters:\n    z_max_m: 2.0\n", "line 1 (key 1 is not"),
     "5000 digits": (f'"/**":\n  ros__parameters:\n    num_slots: {HUGE_INT}\n',
                     "integer of 5000 digits"),

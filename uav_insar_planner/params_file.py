@@ -1,20 +1,36 @@
 """Params files and overrides: ROS 2 params YAML and `NAME=VALUE` text to a validated Params.
 
-`load_params` is the entry point: the file's "/**" section, then the node's own section, then
-the overrides, all validated at once by `params.params_from_mapping`.
+The one params-file reader of the suite: `uav-insar solve/sweep/report --params`, the demo's
+`--params-file` and every node's start-up check (ros/run.py) read a file with
+`parse_params_file`, so a file gets one verdict and the same lines everywhere. It walks the
+sections as rcl's parser does (nested namespace keys joined with '/'), refuses what rcl would
+refuse and any section that addresses no node of the suite, and `ParamsFile.values_for` merges
+the sections that match a node as rclpy does. `load_params` is the entry point of the science:
+the planner's values from the file, then the overrides, all validated at once by
+`params.params_from_mapping`.
 """
 from __future__ import annotations
 
+import difflib
 import re
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import yaml
 
 from uav_insar_planner.params import ParamError, Params, params_from_mapping, shown
+from uav_insar_planner.swarm import UAVS
 
 PARAMS_FILE_MAX_BYTES = 1 << 20
+#: The nodes a section may address: the executables' own names, and the agents as the demo
+#: starts them (`-r __node:=agentK`, one per UAV).
+SUITE_NODE_NAMES = ("planner", "agent", "mavlink_bridge", *(f"agent{k}" for k in UAVS))
+SUITE_NODE_KINDS = ("planner", "agent", f"agent{UAVS[0]}..agent{UAVS[-1]}", "mavlink_bridge")
+SECTIONS_EXPECTED = "expected '/**:' or 'NODE:' sections with ros__parameters"
+# One part of a section's node name as rcl's parser allows it: a ROS name token, * or **.
+_NAME_PART = re.compile(r"\*\*?|[A-Za-z_][A-Za-z0-9_]*")
 
 
 # ROS 2 integer parameters are 64-bit; a longer literal is refused before Python converts it
@@ -24,10 +40,12 @@ INT_LITERAL_MAX_DIGITS = 19
 
 class _RosYamlLoader(yaml.SafeLoader):
     """YAML 1.1 safe loader that also reads `1e9` and `1.0e9` as floats, as ROS 2's params
-    parser does (PyYAML's 1.1 resolver wants a signed exponent), and refuses what a params file
-    never needs: aliases (nested ones make a few hundred bytes expand to gigabytes), mapping
-    keys that are not strings (`1:`, `null:`, `yes:`), duplicate keys (YAML would silently keep
-    the last) and integers of more than INT_LITERAL_MAX_DIGITS digits."""
+    parser does (PyYAML's 1.1 resolver wants a signed exponent), `null`, `~` and dates as the
+    text they are (rcl has no null or date type: `a: null` is the string 'null' to a node), and
+    refuses what a params file never needs: aliases (nested ones make a few hundred bytes
+    expand to gigabytes), mapping keys that are not strings (`1:`, `null:`, `yes:`), duplicate
+    keys (YAML would silently keep the last) and integers of more than INT_LITERAL_MAX_DIGITS
+    digits."""
 
     def compose_node(self, parent: Any, index: Any) -> Any:
         if self.check_event(yaml.events.AliasEvent):
@@ -39,9 +57,11 @@ class _RosYamlLoader(yaml.SafeLoader):
         seen: set[str] = set()
         for key_node, _ in node.value:
             key = self.construct_object(key_node, deep=deep)
-            if not isinstance(key, str):
+            if key_node.tag != "tag:yaml.org,2002:str":
+                text = (shown(key_node.value)[1:-1] if isinstance(key_node, yaml.ScalarNode)
+                        else shown(key))  # as written: `yes`, `null`, `1`
                 raise yaml.constructor.ConstructorError(
-                    None, None, f"key {shown(key)} is not a name (quote it if it is one)",
+                    None, None, f"key {text} is not a name (quote it if it is one)",
                     key_node.start_mark)
             if key in seen:
                 raise yaml.constructor.ConstructorError(
@@ -59,6 +79,9 @@ class _RosYamlLoader(yaml.SafeLoader):
 
 
 _RosYamlLoader.add_constructor("tag:yaml.org,2002:int", _RosYamlLoader.construct_yaml_int)
+for _tag in ("null", "timestamp"):
+    _RosYamlLoader.add_constructor(f"tag:yaml.org,2002:{_tag}",
+                                   yaml.SafeLoader.construct_scalar)
 
 
 _RosYamlLoader.add_implicit_resolver(
@@ -73,10 +96,14 @@ def yaml_load(text: str) -> Any:
     return yaml.load(text, Loader=_RosYamlLoader)  # noqa: S506 - a SafeLoader subclass
 
 
+def _where(path: str | Path) -> str:
+    return f"params file {str(path)[:200]!r}"
+
+
 def read_yaml_file(path: str | Path) -> Any:
     """The YAML document in file `path`; ParamError with one line when it is not a readable,
     UTF-8, alias-free YAML file of at most PARAMS_FILE_MAX_BYTES (read no further)."""
-    where = f"params file {str(path)[:200]!r}"
+    where = _where(path)
     try:
         with open(path, "rb") as f:
             raw = f.read(PARAMS_FILE_MAX_BYTES + 1)
@@ -97,32 +124,131 @@ def read_yaml_file(path: str | Path) -> Any:
         if isinstance(exc, yaml.constructor.ConstructorError):
             raise ParamError([f"{where}: is not a params file{at}{why}; expected '/**:' or "
                               "'NODE:' sections of unique names with ros__parameters"]) from None
-        raise ParamError([f"{where}: is not valid YAML{at}{why}; expected '/**:' or 'NODE:' "
-                          "sections with ros__parameters"]) from None
+        raise ParamError([f"{where}: is not valid YAML{at}{why}; {SECTIONS_EXPECTED}"]) from None
+
+
+# --- sections: which node each addresses, and what it holds ---------------------------------
+
+def _walk(doc: dict, prefix: str = "") -> Iterator[tuple[str, Any]]:
+    """(node name, body) of each section, as rcl's parser finds them: a mapping without
+    ros__parameters whose values are all mappings is a namespace, its key joined with '/'."""
+    for key, body in doc.items():
+        name = f"{prefix}/{key}" if prefix else key
+        if (isinstance(body, dict) and body and "ros__parameters" not in body
+                and all(isinstance(v, dict) for v in body.values())):
+            yield from _walk(body, name)
+        else:
+            yield name, body
+
+
+def _flat(values: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+    """Parameter values with nested mappings as dotted names (`a: {b: 1}` is `a.b`), as rcl."""
+    out: dict[str, Any] = {}
+    for key, value in values.items():
+        name = f"{prefix}.{key}" if prefix else key
+        if isinstance(value, dict) and value:
+            out.update(_flat(value, name))
+        else:
+            out[name] = value
+    return out
+
+
+def _kind(value: Any) -> str:
+    return {bool: "true/false", int: "integers", float: "floats", str: "strings"}.get(
+        type(value), type(value).__name__)
+
+
+def _section_problems(name: str, body: Any, own_name: str) -> list[str]:
+    """What rcl (or the suite) refuses in one section, one line each."""
+    parts = name[1:].split("/") if name.startswith("/") else name.split("/")
+    if not all(_NAME_PART.fullmatch(p) for p in parts):
+        return [f"section {shown(name)} is not a node name; expected '/'-separated parts of "
+                "letters, digits and '_' (not starting with a digit), or * or **"]
+    if not isinstance(body, dict) or not isinstance(body.get("ros__parameters"), dict):
+        return [f"section {shown(name)} must hold a 'ros__parameters' mapping"]
+    if len(body) > 1:
+        other = next(k for k in body if k != "ros__parameters")
+        return [f"section {shown(name)} must hold only a 'ros__parameters' mapping (not "
+                f"{shown(other)})"]
+    node = parts[-1]
+    if node not in ("*", "**", own_name, *SUITE_NODE_NAMES):
+        near = difflib.get_close_matches(node, [*SUITE_NODE_NAMES, own_name], n=1)
+        hint = f" (did you mean {near[0]}?)" if near else ""
+        return [f"section {shown(name)} names no node of uav_insar_planner{hint}; expected "
+                f"/**, {', '.join(SUITE_NODE_KINDS)} or this node's name"]
+    problems = []
+    for param, value in _flat(body["ros__parameters"]).items():
+        kinds = {_kind(v) for v in value} if isinstance(value, list) else set()
+        if len(kinds) > 1:
+            problems.append(f"section {shown(name)}: {param}: value {shown(value)} mixes "
+                            f"{' and '.join(sorted(kinds))}; expected a list of one type, as "
+                            "ROS 2 parameters are (write 70.0, not 70, among floats)")
+    return problems
+
+
+@dataclass(frozen=True)
+class ParamsFile:
+    """A params file that rcl would accept and whose sections all address nodes of the suite:
+    each section's node name (nested namespaces joined with '/') and its values (nested
+    names dotted), in rcl's order: the order in which each name first appears."""
+
+    path: str
+    sections: Mapping[str, Mapping[str, Any]]
+
+    def values_for(self, node: str = "planner") -> dict[str, Any]:
+        """The values node `node` (a name, or a fully qualified /NS/NAME) gets, as rclpy
+        merges them: every section whose name matches, in file order, a later one winning."""
+        fqn = node if node.startswith("/") else f"/{node}"
+        values: dict[str, Any] = {}
+        for name, section in self.sections.items():
+            if section_matches(name, fqn):
+                values.update(section)
+        return values
+
+
+def section_matches(name: str, fqn: str) -> bool:
+    """Whether section `name` addresses the node of fully qualified name `fqn`, by rclpy's
+    rule: a leading '/' is implied, `/*` is one namespace part or name, `/**` any number."""
+    name = name if name.startswith("/") else f"/{name}"
+    pattern = name.replace("/*", r"(/\w+)")  # "/**" becomes (/\w+)*, as in rclpy
+    return re.fullmatch(pattern, fqn, re.ASCII) is not None
+
+
+def parse_params_file(path: str | Path, own_name: str = "planner") -> ParamsFile:
+    """Read and check a ROS 2 params file. ParamError lists every problem, one line each,
+    when rcl would refuse it or a section addresses no node of the suite (nor `own_name`)."""
+    where = _where(path)
+    doc = read_yaml_file(path)
+    if doc is None or doc == {}:
+        raise ParamError([f"{where}: is empty; {SECTIONS_EXPECTED}"])
+    if not isinstance(doc, dict):
+        raise ParamError([f"{where}: must map node names to {{ros__parameters: {{...}}}}; "
+                          f"{SECTIONS_EXPECTED}"])
+    sections: dict[str, dict[str, Any]] = {}
+    problems = []
+    for name, body in _walk(doc):
+        found = _section_problems(name, body, own_name)
+        problems += [f"{where}: {line}" for line in found]
+        if not found:
+            sections.setdefault(name, {}).update(_flat(body["ros__parameters"]))
+    if problems:
+        raise ParamError(problems)
+    return ParamsFile(str(path), sections)
+
+
+def params_file_problems(path: str | Path, own_name: str = "planner") -> list[str]:
+    """One line per problem of params file `path` (none: it is fine)."""
+    try:
+        parse_params_file(path, own_name)
+    except ParamError as exc:
+        return exc.problems
+    return []
 
 
 def read_params_file(path: str | Path, node_name: str = "planner") -> dict[str, Any]:
-    """Read a ROS 2 params file: the "/**" section, then the node's own section on top.
-
-    Node sections may be keyed by the node name with or without a leading slash or namespace
-    (rclpy matches the fully qualified name; we accept `planner`, `/planner`, `/ns/planner`).
-    Raises ParamError with one line when the file is unreadable or not in that format.
-    """
-    doc = read_yaml_file(path)
-    if not isinstance(doc, dict):
-        raise ParamError([f"params file {str(path)[:200]!r}: must map node names to "
-                          "{ros__parameters: {...}}"])
-    for key, body in doc.items():
-        if not isinstance(body, dict) or not isinstance(body.get("ros__parameters"), dict):
-            raise ParamError([f"params file {str(path)[:200]!r}: section {shown(key)} must hold "
-                              "a 'ros__parameters' mapping"])
-    values: dict[str, Any] = {}
-    sections = [k for k in doc if k == "/**"] + [
-        k for k in doc if isinstance(k, str) and k != "/**"
-        and k.lstrip("/").split("/")[-1] == node_name]
-    for key in sections:
-        values.update(doc[key]["ros__parameters"])
-    return values
+    """The values node `node_name` gets from params file `path` (ParamsFile.values_for);
+    ParamError, one line per problem, as parse_params_file."""
+    return parse_params_file(path, node_name.rsplit("/", 1)[-1]).values_for(node_name)
 
 
 def parse_override(text: str) -> tuple[str, Any]:

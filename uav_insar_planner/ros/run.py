@@ -1,15 +1,13 @@
 """The run-until-stopped loop every node of the suite shares, with its start-up checks.
 
 `run_node` checks what rcl would otherwise turn into a traceback before it initialises
-rclpy: ROS_DOMAIN_ID, and each `--params-file` (readable, YAML, sections that name a node
-of the suite, each with a `ros__parameters` mapping). Every problem is one line on stderr,
-exit code 2, nothing published.
+rclpy: ROS_DOMAIN_ID, and each `--params-file`, read by the suite's one params-file reader
+(`params_file.parse_params_file`, as `uav-insar solve --params` reads it). Every problem is one
+line on stderr, exit code 2 (EXIT_BAD_INPUT), nothing published.
 """
 from __future__ import annotations
 
-import difflib
 import os
-import re
 import signal
 import sys
 import time
@@ -22,14 +20,12 @@ from rclpy.executors import ExternalShutdownException
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 
-from uav_insar_planner.params import ParamError
-from uav_insar_planner.params_file import read_yaml_file
+from uav_insar_planner.exit_codes import EXIT_BAD_INPUT
+from uav_insar_planner.params_file import params_file_problems
 
-EXIT_BAD_PARAMS = 2
 # Fast DDS derives its ports from the domain id; above 232 they pass 65535 and the process
 # aborts inside the middleware.
 DOMAIN_ID_MAX = 232
-SUITE_NODE_NAMES = ("planner", "agent", "mavlink_bridge")
 
 
 def params_files(args: Sequence[str]) -> Iterator[str]:
@@ -45,51 +41,6 @@ def params_files(args: Sequence[str]) -> Iterator[str]:
             in_ros = False
         elif in_ros and arg == "--params-file":
             expect_file = True
-
-
-def _suite_node(section: str, own_name: str) -> bool:
-    """Whether a params-file section key can address a node of the suite (or this node)."""
-    name = str(section).rstrip("/").split("/")[-1]
-    return ("*" in name or name == own_name or name in SUITE_NODE_NAMES
-            or re.fullmatch(r"agent\d+", name) is not None)
-
-
-def _sections(doc: dict, prefix: str = "") -> Iterator[tuple[str, Any]]:
-    """(node key, body) of each section; nested namespace keys are joined with '/'."""
-    for key, body in doc.items():
-        path = f"{prefix}/{key}".replace("//", "/") if prefix else str(key)
-        if isinstance(body, dict) and "ros__parameters" not in body and body and all(
-                isinstance(v, dict) for v in body.values()):
-            yield from _sections(body, path)
-        else:
-            yield path, body
-
-
-def params_file_problems(path: str, own_name: str) -> list[str]:
-    """One line per problem of params file `path` for a node named `own_name`."""
-    where = f"params file {path!r}"
-    try:
-        doc = read_yaml_file(path)
-    except ParamError as exc:
-        return exc.problems
-    if doc is None or doc == {}:
-        return [f"{where}: is empty; expected '/**:' or 'NODE:' sections with "
-                "ros__parameters"]
-    if not isinstance(doc, dict):
-        return [f"{where}: must map node names to {{ros__parameters: {{...}}}}"]
-    problems = []
-    for key, body in _sections(doc):
-        if not isinstance(body, dict) or not isinstance(body.get("ros__parameters"), dict):
-            problems.append(f"{where}: section {str(key)!r} must hold a 'ros__parameters' "
-                            "mapping")
-        elif not _suite_node(key, own_name):
-            near = difflib.get_close_matches(str(key).split("/")[-1],
-                                             [*SUITE_NODE_NAMES, own_name], n=1)
-            hint = f" (did you mean {near[0]}?)" if near else ""
-            problems.append(f"{where}: section {str(key)!r} names no node of "
-                            f"uav_insar_planner{hint}; expected /**, {', '.join(SUITE_NODE_NAMES)}"
-                            " or this node's name")
-    return problems
 
 
 def startup_problems(args: Sequence[str], own_name: str) -> list[str]:
@@ -137,14 +88,14 @@ def _spin(node: Node) -> None:
 def run_node(make_node: Callable[[], Node], default_name: str,
              args: list[str] | None = None) -> int:
     """Check the start-up arguments, init, build the node, spin until Ctrl-C / SIGTERM, shut
-    down; 0, or EXIT_BAD_PARAMS when the arguments or the node's parameters were invalid
+    down; 0, or EXIT_BAD_INPUT when the arguments or the node's parameters were invalid
     (the node's `problems`, one line each), in which case nothing was published. A node's
     optional `stop()` runs before it is destroyed."""
     argv = list(sys.argv if args is None else args)
     problems = startup_problems(argv, default_name)
     if problems:
         _report(default_name, problems)
-        return EXIT_BAD_PARAMS
+        return EXIT_BAD_INPUT
     signal.signal(signal.SIGTERM, _terminate)
     # rcl logs its own "Failed to parse global arguments" before raising; ours says which.
     rclpy.logging.set_logger_level("rcl", rclpy.logging.LoggingSeverity.FATAL)
@@ -153,10 +104,10 @@ def run_node(make_node: Callable[[], Node], default_name: str,
     except _rclpy.UnknownROSArgsError as exc:
         _report(default_name, [f"unknown ROS arguments {str(exc)[:200]}; expected -p NAME:=VALUE, "
                                "-r FROM:=TO, --params-file FILE, --log-level LEVEL, ..."])
-        return EXIT_BAD_PARAMS
+        return EXIT_BAD_INPUT
     except _rclpy.RCLError as exc:
         _report(default_name, [" ".join(str(exc).split(", at ")[0].split())])
-        return EXIT_BAD_PARAMS
+        return EXIT_BAD_INPUT
     rclpy.logging.set_logger_level("rcl", rclpy.logging.LoggingSeverity.UNSET)
     node = None
     code = 0
@@ -165,7 +116,7 @@ def run_node(make_node: Callable[[], Node], default_name: str,
         if node.problems:
             for line in node.problems:
                 node.get_logger().error(line)
-            code = EXIT_BAD_PARAMS
+            code = EXIT_BAD_INPUT
         else:
             _spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
