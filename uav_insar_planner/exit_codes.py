@@ -15,3 +15,12 @@ EXIT_INFEASIBLE = 3
 
 EXIT_CODES = {EXIT_OK: "done", EXIT_CRASH: "crash or dead worker",
               EXIT_BAD_INPUT: "bad input", EXIT_INFEASIBLE: "infeasible"}
+
+
+class CommandFailed(Exception):
+    """A one-line error `str(self)` that ends a command with exit code `code` (the dispatcher
+    `uav-insar` prints it after the verb's name)."""
+
+    def __init__(self, message: str, code: int) -> None:
+        super().__init__(message)
+        self.code = code
