@@ -2,7 +2,8 @@
 
     0  done (solved, recorded, stopped by SIGINT / SIGTERM)
     1  a crash or a dead worker thread: a bug, one line naming it (never a zombie that looks
-       alive)
+       alive); for `uav-insar echo`, as for `ros2 topic echo`, also nothing to echo (no
+       publisher or message within --timeout, a type it cannot import)
     2  bad input: one line per problem, on stderr, before any work and with nothing written
     3  infeasible: the scenario has no plan (the blocking constraints are named)
 """
