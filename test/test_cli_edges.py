@@ -166,3 +166,14 @@ def test_the_vehicle_usage_error_is_one_line() -> None:
     assert proc.returncode == 2 and proc.stdout == ""
     assert proc.stderr == ("uav-insar-vehicle: error: argument --sysid: invalid int value: "
                            "'two'\n")
+
+
+@pytest.mark.parametrize("verb", [("echo", "/chatter", "--timeout", "5"),
+                                  ("record", "{tmp}/bag", "--duration", "5")])
+def test_bad_ros_arguments_are_one_line_before_rcl_starts(tmp_path: Path, verb: tuple) -> None:
+    """rclpy.init would log an `[ERROR] [rcl]` line of its own first."""
+    args = [a.format(tmp=tmp_path) for a in verb]
+    proc = run(*args, "--ros-args", "--log-level", "nonsense")
+    assert_refused(proc, f"uav-insar {verb[0]}: error: bad ROS arguments: Failed to parse ROS "
+                   "arguments: Couldn't parse log level")
+    assert list(tmp_path.iterdir()) == []

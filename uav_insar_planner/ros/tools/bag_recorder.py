@@ -35,7 +35,7 @@ from uav_insar_planner.bag.definitions import DefinitionError
 from uav_insar_planner.bag.writer import McapBagWriter
 from uav_insar_planner.exit_codes import EXIT_BAD_INPUT, EXIT_OK, CommandFailed
 from uav_insar_planner.ros.run import startup_problems
-from uav_insar_planner.ros.tools.echo import message_class
+from uav_insar_planner.ros.tools.echo import check_ros_args, message_class
 
 PROG = "uav-insar record"
 NODE_NAME = "uav_insar_recorder"
@@ -131,6 +131,7 @@ def _stop(signum: int, frame: Any) -> None:
 def record(args: argparse.Namespace) -> int:
     """Record (args of cli/record.py, `args.ros_args` for rcl) until SIGINT / SIGTERM or
     --duration; the exit code, or CommandFailed (EXIT_BAD_INPUT) before anything is written."""
+    check_ros_args(args.ros_args)
     topics = None
     if args.topics:
         topics = ["/" + t.lstrip("/") for t in args.topics]

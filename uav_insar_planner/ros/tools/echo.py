@@ -61,6 +61,18 @@ def _bad(text: str) -> CommandFailed:
     return CommandFailed(text, EXIT_BAD_INPUT)
 
 
+def check_ros_args(ros_args: list[str]) -> None:
+    """CommandFailed (EXIT_BAD_INPUT) unless rcl parses `ros_args`; asked before rclpy.init,
+    which would log its own `[ERROR]` line about them first."""
+    from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+    from rclpy.utilities import remove_ros_args
+
+    try:
+        remove_ros_args([PROG, *ros_args])
+    except (_rclpy.RCLError, _rclpy.UnknownROSArgsError) as exc:
+        raise _bad(f"bad ROS arguments: {_first_line(exc)}") from None
+
+
 def _echo(args: argparse.Namespace) -> int:
     import rclpy
     from rclpy.exceptions import InvalidTopicNameException, NameValidationException
@@ -70,6 +82,7 @@ def _echo(args: argparse.Namespace) -> int:
     from rclpy.validate_full_topic_name import validate_full_topic_name
     from rclpy.validate_topic_name import validate_topic_name
 
+    check_ros_args(args.ros_args)
     try:
         validate_topic_name(args.topic)
     except InvalidTopicNameException as exc:
