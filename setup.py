@@ -52,7 +52,7 @@ setup(
             "agent = uav_insar_sim.agent_node:main",
             "mavlink_bridge = uav_insar_planner.ros.mavlink_bridge:main",
             "uav-insar = uav_insar_planner.cli:main",
-            "uav-insar-vehicle = uav_insar_sim.vehicle.simulator:main",
+            "uav-insar-vehicle = uav_insar_sim.vehicle.cli:main",
         ],
     },
 )

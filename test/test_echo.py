@@ -20,7 +20,7 @@ from uav_insar_planner.ros.tools.msg_yaml import message_to_yaml
 
 REPO = Path(__file__).resolve().parent.parent
 TALKER = str(Path(__file__).resolve().parent / "echo_talker.py")
-ECHO = ("-m", "uav_insar_planner.ros.tools.echo")
+ECHO = ("-m", "uav_insar_planner.cli", "echo")
 
 
 class Child:

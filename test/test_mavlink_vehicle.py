@@ -5,7 +5,8 @@ import pytest
 from mavlink_fakes import MAV, FakePeer, wait_until
 
 from uav_insar_planner.mavlink.autopilots import px4_custom_mode
-from uav_insar_sim.vehicle.simulator import SimVehicle, main
+from uav_insar_sim.vehicle.cli import main
+from uav_insar_sim.vehicle.simulator import SimVehicle
 
 pytestmark = pytest.mark.timeout(60)
 ACCEPTED = MAV.MAV_RESULT_ACCEPTED

@@ -76,11 +76,12 @@ def test_paper_ao_and_too_many_looks_refuse_multilook_in_one_line():
     with pytest.raises(ParamError) as err:
         solve(p, objective="multilook", solver="paper-ao")
     assert len(err.value.problems) == 1 and "paper-ao" in str(err.value)
-    with pytest.raises(ParamError) as err:
+    with pytest.raises(ParamError) as err:  # for every objective: looks stops there
         p.replace(objective="multilook", looks=MULTILOOK_MAX_LOOKS + 1)
-    assert err.value.problems == [f"looks: value {MULTILOOK_MAX_LOOKS + 1} is not allowed with "
-                                  "objective 'multilook'; expected an integer in "
-                                  f"[1, {MULTILOOK_MAX_LOOKS}]"]
+    assert len(err.value.problems) == 1
+    assert err.value.problems[0].startswith(f"looks: value {MULTILOOK_MAX_LOOKS + 1} is not "
+                                            "allowed; expected an integer in "
+                                            f"[1, {MULTILOOK_MAX_LOOKS}]")
 
 
 def test_no_feasible_formation_near_the_optimum_beats_the_certified_lower_bound():

@@ -11,7 +11,8 @@ from pathlib import Path
 import pytest
 from mavlink_fakes import MAV, FakePeer, wait_until
 
-from uav_insar_sim.vehicle.simulator import SimVehicle, main
+from uav_insar_sim.vehicle.cli import main
+from uav_insar_sim.vehicle.simulator import SimVehicle
 
 pytestmark = pytest.mark.timeout(60)
 NAN, INF = float("nan"), float("inf")
@@ -171,7 +172,7 @@ def test_a_dead_vehicle_loop_is_recorded_not_silent(rig):
 
 def test_the_vehicle_program_exits_1_when_its_loop_dies():
     """FAULT INJECTION (test/fault_injection.py): its link starts raising after 1 s."""
-    out = subprocess.run([sys.executable, str(FAULT), "1.0", "uav_insar_sim.vehicle.simulator",
+    out = subprocess.run([sys.executable, str(FAULT), "1.0", "uav_insar_sim.vehicle.cli",
                           "--sysid", "2", "--listen", "udpin:127.0.0.1:0"],
                          capture_output=True, text=True, timeout=30)
     assert out.returncode == 1, out

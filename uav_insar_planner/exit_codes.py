@@ -3,7 +3,8 @@
     0  done (solved, recorded, stopped by SIGINT / SIGTERM)
     1  failed: a crash or a dead worker thread (a bug, one line naming it, never a zombie
        that looks alive), or a run that did not finish what it set out to do (the demo's
-       mission, an echo that heard nothing)
+       mission; for `uav-insar echo`, as for `ros2 topic echo`, nothing to echo: no publisher
+       or message within --timeout, a type it cannot import)
     2  bad input: one line per problem, on stderr, before any work and with nothing written
     3  infeasible: the scenario has no plan (the blocking constraints are named)
 """
@@ -16,3 +17,12 @@ EXIT_INFEASIBLE = 3
 
 EXIT_CODES = {EXIT_OK: "done", EXIT_CRASH: "failed (crash, dead worker, not finished)",
               EXIT_BAD_INPUT: "bad input", EXIT_INFEASIBLE: "infeasible"}
+
+
+class CommandFailed(Exception):
+    """A one-line error `str(self)` that ends a command with exit code `code` (the dispatcher
+    `uav-insar` prints it after the verb's name)."""
+
+    def __init__(self, message: str, code: int) -> None:
+        super().__init__(message)
+        self.code = code

@@ -225,7 +225,7 @@ def validate(values: Mapping[str, Any]) -> tuple[dict[str, Any], list[str]]:
             f"slave_look_angle_min_deg: value {clean['slave_look_angle_min_deg']!r} is not "
             f"allowed; expected less than slave_look_angle_max_deg "
             f"({clean['slave_look_angle_max_deg']!r})")
-    problems += objective_problems(clean["objective"], clean["solver"], clean["looks"])
+    problems += objective_problems(clean["objective"], clean["solver"])
     if not bad & {"swath_min_m", "look_angle_deg", "beamwidth_deg"}:
         c0 = math.cos(math.radians(clean["look_angle_deg"]))
         least = max(clean["z_min_m"] / c0 if c0 > 0 else math.inf,
@@ -246,17 +246,12 @@ def validate(values: Mapping[str, Any]) -> tuple[dict[str, Any], list[str]]:
     return clean, problems
 
 
-def objective_problems(objective: Any, solver: Any, looks: Any) -> list[str]:
-    """The objective's cross-field rules: `multilook` runs on the global solver only, with
-    looks <= MULTILOOK_MAX_LOOKS."""
-    if objective != "multilook":
-        return []
-    if solver == "paper-ao":
+def objective_problems(objective: Any, solver: Any) -> list[str]:
+    """The objective's cross-field rule: `multilook` runs on the global solver only (its looks
+    bound is the one of `looks`)."""
+    if objective == "multilook" and solver == "paper-ao":
         return ["objective: value 'multilook' is not allowed with solver 'paper-ao'; expected "
                 "exact or bound (paper-ao minimises Proposition 1's bound), or solver global"]
-    if isinstance(looks, int) and looks > MULTILOOK_MAX_LOOKS:
-        return [f"looks: value {looks!r} is not allowed with objective 'multilook'; expected "
-                f"an integer in [1, {MULTILOOK_MAX_LOOKS}]"]
     return []
 
 

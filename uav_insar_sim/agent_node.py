@@ -40,7 +40,7 @@ from rclpy.node import Node
 from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension
 
 from uav_insar_planner.evaluate import rate_tolerance_bps
-from uav_insar_planner.mavlink.guard import EXIT_WORKER_DIED
+from uav_insar_planner.exit_codes import EXIT_CRASH
 from uav_insar_planner.params import ParamError, params_from_mapping
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.parameters import (
@@ -137,7 +137,7 @@ class AgentNode(Node):
         if self.vehicle is not None and self.vehicle.failure is not None:
             self.get_logger().error(f"uav{self.k}: embedded MAVLink vehicle died: "
                                     f"{self.vehicle.failure}; exiting")
-            raise SystemExit(EXIT_WORKER_DIED)  # never a zombie agent that flies nothing
+            raise SystemExit(EXIT_CRASH)  # never a zombie agent that flies nothing
         for sample in self.flight.tick():
             self._publish_pose(sample.position)
             self._rate_pub.publish(Float64(data=sample.rate_bps))

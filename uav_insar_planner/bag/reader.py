@@ -54,6 +54,30 @@ def _kind(topic: str) -> tuple[str, int]:
     return "", -1
 
 
+_UNREADABLE = (OSError, KeyError, ValueError)  # and rosbags' AnyReaderError
+
+
+def check_bag(path: str | Path) -> None:
+    """BagError (one line) unless `path` is a bag folder whose metadata and storage files open:
+    what can be known of a bag before its messages are read."""
+    from rosbags.highlevel import AnyReader, AnyReaderError
+
+    path = Path(path)
+    shown = repr(str(path)[:200])
+    expected = "expected a rosbag2 bag folder (as ros2 bag record / uav-insar record make)"
+    if not path.exists():
+        raise BagError(f"BAG: {shown} does not exist; {expected}")
+    if not path.is_dir():
+        raise BagError(f"BAG: {shown} is not a folder; {expected}")
+    if not (path / "metadata.yaml").is_file():
+        raise BagError(f"BAG: {shown} has no metadata.yaml; {expected}")
+    try:
+        with AnyReader([path]):
+            pass
+    except (AnyReaderError, *_UNREADABLE) as exc:
+        raise BagError(f"BAG: {shown} cannot be read: {str(exc)[:200]}") from None
+
+
 def read_mission(path: str | Path, progress: Callable[[int], None] | None = None,
                  total: Callable[[int], None] | None = None) -> MissionRecord:
     """The mission in bag `path` (a bag folder, as `ros2 bag record` makes). `total(n)` hears
@@ -61,11 +85,7 @@ def read_mission(path: str | Path, progress: Callable[[int], None] | None = None
     from rosbags.highlevel import AnyReader, AnyReaderError
 
     path = Path(path)
-    if not path.exists():
-        raise BagError(f"BAG: {str(path)[:200]!r} does not exist; expected a rosbag2 bag folder")
-    if not (path / "metadata.yaml").is_file():
-        raise BagError(f"BAG: {str(path)[:200]!r} has no metadata.yaml; expected a rosbag2 bag "
-                       "folder (as ros2 bag record / uav-insar record make)")
+    check_bag(path)
     record = MissionRecord()
     rows: dict[tuple[str, int], list] = {}
     try:
@@ -80,7 +100,7 @@ def read_mission(path: str | Path, progress: Callable[[int], None] | None = None
                 _take(record, rows, name, k, stamp_ns * 1e-9, msg)
                 if progress is not None:
                     progress(1)
-    except (AnyReaderError, OSError, KeyError, ValueError) as exc:
+    except (AnyReaderError, *_UNREADABLE) as exc:
         raise BagError(f"BAG: {str(path)[:200]!r} cannot be read: {str(exc)[:200]}") from None
     widths = {"achieved_rate": 2, "offload": 5, "pose": 4}
     for (name, k), found in rows.items():

@@ -9,6 +9,7 @@ import argparse
 import math
 import os
 import shutil
+import tempfile
 from pathlib import Path
 
 from uav_insar_planner.params import ParamError, shown
@@ -71,3 +72,24 @@ def check_output_path(option: str, path: str, image: bool = False) -> None:
                           "writable file in an existing directory"]) from None
     if not existed:
         os.unlink(path)
+
+
+def check_output_folder(option: str, path: Path) -> None:
+    """Raise ParamError (one line) unless files can be written into folder `path`: it is a
+    folder, or it does not exist and its nearest existing parent is one, and a file can be
+    made there (tried: a probe file, removed at once; the folders are made only when the files
+    are written)."""
+    where = f"{option}: value {shown(str(path))} is not allowed"
+    if path.exists() and not path.is_dir():
+        raise ParamError([f"{where}; it exists and is not a folder"])
+    parent = path
+    while not parent.exists():
+        parent = parent.parent
+    if not parent.is_dir():
+        raise ParamError([f"{where}; {shown(str(parent))} is not a folder"])
+    try:
+        with tempfile.NamedTemporaryFile(dir=parent):
+            pass
+    except OSError as exc:
+        raise ParamError([f"{where}; {shown(str(parent))} cannot be written "
+                          f"({exc.strerror or exc}); expected a writable folder"]) from None

@@ -6,9 +6,10 @@ BAG is a rosbag2 folder (`uav-insar record`, `make demo`, `ros2 bag record`). Th
 (R_min, E_max, the radar, for sigma_h) is the one the mission flew with: Table I, or --params
 and --set as for `uav-insar solve`; num_slots is taken from the recorded plan. Prints
 report.recorded.report_table, writes report.recorded_plots.FILES into DIR (default BAG_report
-beside the bag) and names them. A progress bar on stderr follows the read. Exit codes: 0
-written; 2 bad input (no such bag, not a bag, no plan in it, bad parameters), one line on
-stderr.
+beside the bag) and names them. The parameters, DIR and the bag folder are checked first; then
+a progress bar on stderr follows the read. Exit codes (exit_codes.py): EXIT_OK written;
+EXIT_BAD_INPUT, one line on stderr and nothing written, for bad parameters, a DIR that cannot
+be written, no such bag, not a bag, a bag that cannot be read or holds no plan.
 """
 from __future__ import annotations
 
@@ -16,34 +17,28 @@ import argparse
 import sys
 from pathlib import Path
 
-PROG = "uav-insar report"
+from uav_insar_planner.cli.checks import check_output_folder
+from uav_insar_planner.cli.scenario import scenario_params
+from uav_insar_planner.exit_codes import EXIT_BAD_INPUT, EXIT_OK, CommandFailed
+
+HELP = "plots and a table of a recorded mission"
 
 
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # one line, exit 2
-        self.exit(2, f"{self.prog}: error: {message}\n")
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("bag", type=Path, help="rosbag2 bag folder")
+    parser.add_argument("--out", type=Path, metavar="DIR",
+                        help="folder for the PNGs (default: BAG_report beside the bag)")
+    parser.add_argument("--params", metavar="FILE",
+                        help="ROS 2 params file the mission flew with (default: Table I)")
+    parser.add_argument("--set", metavar="NAME=VALUE", action="append", default=[],
+                        help="override a parameter (repeatable), e.g. --set num_slots=10")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
 
 
-def _parser() -> argparse.ArgumentParser:
-    p = _Parser(prog=PROG, description="Plots and a table of a recorded mission.")
-    p.add_argument("bag", type=Path, help="rosbag2 bag folder")
-    p.add_argument("--out", type=Path, metavar="DIR",
-                   help="folder for the PNGs (default: BAG_report beside the bag)")
-    p.add_argument("--params", metavar="FILE",
-                   help="ROS 2 params file the mission flew with (default: Table I)")
-    p.add_argument("--set", metavar="NAME=VALUE", action="append", default=[],
-                   help="override a parameter (repeatable), e.g. --set num_slots=10")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
-    return p
-
-
-def main(argv: list[str] | None = None) -> int:
-    """Run `uav-insar report` with `argv`; returns the exit code."""
+def main(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from uav_insar_planner.bag.reader import BagError, read_mission
-    from uav_insar_planner.params import ParamError
-    from uav_insar_planner.params_file import load_params, parse_override
+    from uav_insar_planner.bag.reader import BagError, check_bag, read_mission
     from uav_insar_planner.report.recorded import (
         ReportError,
         flown_scenario,
@@ -51,12 +46,11 @@ def main(argv: list[str] | None = None) -> int:
         report_table,
     )
 
-    args = _parser().parse_args(sys.argv[1:] if argv is None else argv)
+    params = scenario_params(args)
     out = args.out or args.bag.resolve().parent / f"{args.bag.resolve().name}_report"
+    check_output_folder("--out", out)
     try:
-        params = load_params(args.params, dict(parse_override(s) for s in args.set))
-        if out.exists() and not out.is_dir():
-            raise ParamError([f"--out: {str(out)[:200]!r} exists and is not a folder"])
+        check_bag(args.bag)
         bar = tqdm(unit="msg", file=sys.stderr, disable=args.no_progress, desc="reading")
         try:
             record = read_mission(args.bag, progress=bar.update,
@@ -65,20 +59,11 @@ def main(argv: list[str] | None = None) -> int:
             bar.close()
         params = flown_scenario(record, params)
         figures = mission_figures(record, params)
-    except ParamError as exc:
-        for line in exc.problems:
-            print(f"{PROG}: error: {line}", file=sys.stderr)
-        return 2
     except (BagError, ReportError) as exc:
-        print(f"{PROG}: error: {exc}", file=sys.stderr)
-        return 2
+        raise CommandFailed(str(exc), EXIT_BAD_INPUT) from None
     from uav_insar_planner.report.recorded_plots import plot_report
 
     print(report_table(figures, params))
     for path in plot_report(figures, params, out):
         print(f"wrote {path}")
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())
+    return EXIT_OK

@@ -13,7 +13,7 @@ from typing import Any
 from uav_insar_planner.demo.processes import start_process, stop_node
 from uav_insar_planner.swarm import UAVS
 
-RECORDER_NODE = "uav_insar_recorder"  # ros/tools/record.NODE_NAME
+RECORDER_NODE = "uav_insar_recorder"  # ros/tools/bag_recorder.NODE_NAME
 # The topics the recorder must have subscribed to before the plan starts the slots: the
 # agents' volatile ones (a latched plan would be delivered late anyway).
 AGENT_TOPICS = ("uav{k}/achieved_rate", "uav{k}/offload", "uav{k}/pose")

@@ -18,9 +18,6 @@ from collections.abc import Callable, Iterable
 #: The largest finite IEEE-754 single-precision value.
 FLOAT32_MAX = 3.4028234663852886e38
 DROP_LOG_PERIOD_S = 10.0
-#: Exit code of a program whose MAVLink worker thread died (the bridge node, the vehicle
-#: simulator, an agent with an embedded vehicle): never a zombie that looks alive.
-EXIT_WORKER_DIED = 1
 
 
 def fits_float32(values: Iterable[float]) -> bool:

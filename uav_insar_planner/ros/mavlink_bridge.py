@@ -25,7 +25,7 @@ Publishes   uav{K}/mavlink/pose (geometry_msgs/PoseStamped, frame insar_track), 
             PreArm reason, position error, separation warning, link counters. Level ERROR:
             I/O thread dead or sequence failed; WARN: not linked, or planned closer than
             min_separation_m to another UAV; else OK. When the I/O thread dies the node
-            publishes that ERROR once, logs why and exits with code 1 (EXIT_WORKER_DIED).
+            publishes that ERROR once, logs why and exits with code 1 (exit_codes.EXIT_CRASH).
 """
 from __future__ import annotations
 
@@ -37,8 +37,8 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PoseStamped
 from rclpy.node import Node
 
+from uav_insar_planner.exit_codes import EXIT_CRASH
 from uav_insar_planner.mavlink.bridge import Bridge, BridgeConfig, VehicleStatus
-from uav_insar_planner.mavlink.guard import EXIT_WORKER_DIED
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.parameters import (
     BRIDGE_SPECS,
@@ -132,7 +132,7 @@ class MavlinkBridgeNode(Node):
         self._diag_pub.publish(msg)
         if self.bridge.failure is not None:  # said ERROR once: now leave, never a zombie
             self._publish_poses()  # (drains the event that says why)
-            raise SystemExit(EXIT_WORKER_DIED)
+            raise SystemExit(EXIT_CRASH)
 
     def _vehicle_status(self, s: VehicleStatus, link: Any) -> Any:
         if self.bridge.failure is not None:

@@ -23,7 +23,7 @@ also uav{K}/offload and /diagnostics. Planner-only parameter: uav_timeout_s
 Service ~/replan (std_srvs/Trigger): solve again with the current parameters.
 Solves run on a worker thread (solve_worker), so the node keeps serving while one runs; a
 worker that dies turns the plan status ERROR ("solve worker died: ...") and the node exits
-with code 1 after publishing it (guard.EXIT_WORKER_DIED).
+with code 1 after publishing it (exit_codes.EXIT_CRASH).
 """
 from __future__ import annotations
 
@@ -39,7 +39,7 @@ from rclpy.parameter import Parameter
 from std_msgs.msg import Float64, Float64MultiArray
 from std_srvs.srv import Trigger
 
-from uav_insar_planner.mavlink.guard import EXIT_WORKER_DIED
+from uav_insar_planner.exit_codes import EXIT_CRASH
 from uav_insar_planner.params import (
     PARAM_SPECS,
     SPEC_BY_NAME,
@@ -219,7 +219,7 @@ class PlannerNode(Node):
         failure = self._worker.failure or self._swarm.failure
         if failure is not None:  # said ERROR: now leave, never a zombie
             self.get_logger().error("solve worker died: " + failure)
-            raise SystemExit(EXIT_WORKER_DIED)
+            raise SystemExit(EXIT_CRASH)
 
     def _publish_diagnostics(self) -> None:
         with self._state_lock:

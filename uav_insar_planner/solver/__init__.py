@@ -55,7 +55,7 @@ def solve(params: Params, scheme: str | None = None, objective: str | None = Non
         if value not in allowed:
             raise ParamError([f"{field}: value {value!r} is not allowed; expected one of "
                               + ", ".join(allowed)])
-    if problems := objective_problems(objective, solver, params.looks):
+    if problems := objective_problems(objective, solver):
         raise ParamError(problems)
     start = time.perf_counter()
     try:

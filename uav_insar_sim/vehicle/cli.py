@@ -1,15 +1,30 @@
-"""The command line of `uav-insar-vehicle` (run by vehicle.main)."""
+"""`uav-insar-vehicle` (and `python -m uav_insar_sim.vehicle`): run one simulated vehicle
+(vehicle/simulator.py) until SIGINT / SIGTERM.
+
+Exit codes (uav_insar_planner/exit_codes.py): EXIT_OK at a clean stop, EXIT_BAD_INPUT for bad
+arguments (one line on stderr, before the vehicle starts), EXIT_CRASH when the vehicle loop
+died (one line naming why).
+"""
 from __future__ import annotations
 
 import argparse
+import signal
+import sys
+import threading
 
+from uav_insar_planner.cli.parser import OneLineParser
+from uav_insar_planner.exit_codes import EXIT_BAD_INPUT, EXIT_CRASH, EXIT_OK
 from uav_insar_planner.mavlink.autopilots import AUTOPILOTS
-from uav_insar_sim.vehicle.telemetry import SITL_HOME
+from uav_insar_planner.mavlink.signing import read_key_file
+from uav_insar_sim.vehicle.simulator import SimVehicle
+from uav_insar_sim.vehicle.telemetry import SITL_HOME, parse_home
+
+PROG = "uav-insar-vehicle"
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
-        prog="uav-insar-vehicle",
+    p = OneLineParser(
+        prog=PROG,
         description="A SITL-style MAVLink multicopter (ArduPilot-like or PX4-like).")
     p.add_argument("--sysid", type=int, required=True, help="MAVLink system id, 1..255")
     p.add_argument("--listen", required=True,
@@ -38,3 +53,34 @@ def build_parser() -> argparse.ArgumentParser:
                    help="MAVLink 2 signing key (32 raw bytes or 64 hex characters): sign "
                         "everything, accept only signed frames")
     return p
+
+
+def _stderr(line: str) -> None:
+    print(f"{PROG}: {line}", file=sys.stderr, flush=True)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run one vehicle until SIGINT / SIGTERM; the exit code (module docstring)."""
+    args = build_parser().parse_args(argv)
+    try:
+        key = None
+        if args.signing_key_file:
+            key, warning = read_key_file(args.signing_key_file)
+            if warning:
+                _stderr("warning: " + warning)
+        vehicle = SimVehicle(args.sysid, args.listen, args.autopilot, tuple(args.start_ned),
+                             args.speed, args.accel, args.airborne, args.offboard_timeout,
+                             boot_s=args.boot_s, home=parse_home(args.home),
+                             gcs_sysid=args.gcs_sysid, signing_key=key, log=_stderr)
+    except ValueError as exc:
+        _stderr(f"error: {exc}")
+        return EXIT_BAD_INPUT
+    stop = threading.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
+    print(f"vehicle sysid {args.sysid} ({args.autopilot}) on {args.listen}", flush=True)
+    try:
+        vehicle.run(stop)
+    finally:
+        vehicle.stop()
+    return EXIT_OK if vehicle.failure is None else EXIT_CRASH

@@ -1,6 +1,7 @@
 """A SITL-style MAVLink multicopter: enough of ArduCopter or PX4 for the bridge and a GCS.
 
-Command line (the `uav-insar-vehicle` console script, or `python -m uav_insar_sim.vehicle`):
+Command line (vehicle/cli.py: the `uav-insar-vehicle` console script, or
+`python -m uav_insar_sim.vehicle`):
 
     uav-insar-vehicle --sysid 2 --listen udpin:127.0.0.1:14552 [--autopilot ardupilot|px4]
                       [--start-ned N E D] [--speed 10] [--accel 5] [--airborne]
@@ -38,30 +39,28 @@ started `airborne` never boots. The MAVLink side, like the real autopilots (flig
 - With `signing_key` (CLI `--signing-key-file`) everything sent is signed and only correctly
   signed frames are read (`signing`), from anyone: the GCS sysid rule still applies.
 - If the vehicle loop dies, `failure` says why and the loop ends; the command line then
-  prints one line and exits with code 1 (guard.EXIT_WORKER_DIED).
+  prints one line and exits with exit_codes.EXIT_CRASH.
 """
 from __future__ import annotations
 
 import select
-import sys
 import threading
 import time
 from collections import deque
 from collections.abc import Callable
 from dataclasses import replace
 
-from uav_insar_planner.mavlink.guard import EXIT_WORKER_DIED, DropLog, finite
+from uav_insar_planner.mavlink.guard import DropLog, finite
 from uav_insar_planner.mavlink.link import MAV, Link, LinkStats
 from uav_insar_planner.mavlink.sequencer import command_name
 from uav_insar_planner.mavlink.setpoints import used_values
-from uav_insar_planner.mavlink.signing import read_key_file, signing_state
+from uav_insar_planner.mavlink.signing import signing_state
 from uav_insar_sim.vehicle.autopilot import Autopilot
-from uav_insar_sim.vehicle.cli import build_parser
 from uav_insar_sim.vehicle.commands import run_command
 from uav_insar_sim.vehicle.parameters import ParamTable, vehicle_params
-from uav_insar_sim.vehicle.telemetry import SITL_HOME, Streams, Telemetry, parse_home
+from uav_insar_sim.vehicle.telemetry import SITL_HOME, Streams, Telemetry
 
-__all__ = ["SimVehicle", "build_parser", "main"]
+__all__ = ["SimVehicle"]
 
 PHYSICS_HZ = 50.0
 MAX_COMMANDS_KEPT = 1000
@@ -348,37 +347,3 @@ def _param_name(param_id: str | bytes) -> str:
     if isinstance(param_id, bytes):
         param_id = param_id.decode("ascii", "replace")
     return param_id.rstrip("\x00")
-
-
-# ----------------------------------------------------------------------------- command line
-def _stderr(line: str) -> None:
-    print(f"uav-insar-vehicle: {line}", file=sys.stderr, flush=True)
-
-
-def main(argv: list[str] | None = None) -> int:
-    """Run one vehicle until SIGINT / SIGTERM; 2 on bad arguments, 0 on a clean stop."""
-    args = build_parser().parse_args(argv)
-    try:
-        key = None
-        if args.signing_key_file:
-            key, warning = read_key_file(args.signing_key_file)
-            if warning:
-                _stderr("warning: " + warning)
-        vehicle = SimVehicle(args.sysid, args.listen, args.autopilot, tuple(args.start_ned),
-                             args.speed, args.accel, args.airborne, args.offboard_timeout,
-                             boot_s=args.boot_s, home=parse_home(args.home),
-                             gcs_sysid=args.gcs_sysid, signing_key=key, log=_stderr)
-    except ValueError as exc:
-        _stderr(f"error: {exc}")
-        return 2
-    import signal
-
-    stop = threading.Event()
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda *_: stop.set())
-    print(f"vehicle sysid {args.sysid} ({args.autopilot}) on {args.listen}", flush=True)
-    try:
-        vehicle.run(stop)
-    finally:
-        vehicle.stop()
-    return 0 if vehicle.failure is None else EXIT_WORKER_DIED

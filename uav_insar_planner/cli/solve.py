@@ -1,0 +1,47 @@
+"""`uav-insar solve`: solve problem (P) for one scenario and print the plan.
+
+Exit codes (exit_codes.py): EXIT_OK solved, EXIT_INFEASIBLE when the scenario has no plan (the
+blocking constraints are printed), EXIT_BAD_INPUT, EXIT_CRASH when a solver fails on an allowed
+scenario.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+
+from uav_insar_planner.cli.scenario import add_scenario_arguments, scenario_params
+from uav_insar_planner.exit_codes import EXIT_INFEASIBLE, EXIT_OK
+from uav_insar_planner.params import SCHEMES, ParamError
+
+HELP = "solve problem (P) and print the plan"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    add_scenario_arguments(parser)
+    parser.add_argument("--scheme", choices=SCHEMES, help="proposed or benchmark 1-3")
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--min-separation-m", type=float, default=None, metavar="M",
+                        help="warn when two planned UAVs are closer than M metres (default "
+                        "2.0: standard GNSS error; 0 turns the warning off)")
+
+
+def main(args: argparse.Namespace) -> int:
+    from uav_insar_planner.plan import SAFE_SEPARATION_M, closest_pair
+    from uav_insar_planner.report.plan_text import format_plan
+    from uav_insar_planner.solver import solve
+
+    limit = SAFE_SEPARATION_M if args.min_separation_m is None else args.min_separation_m
+    if not (limit >= 0.0 and math.isfinite(limit)):
+        raise ParamError([f"--min-separation-m: value {limit!r} is not allowed; expected a "
+                          "finite number >= 0"])
+    plan = solve(scenario_params(args))
+    print(json.dumps(plan.to_dict(), indent=2) if args.json else format_plan(plan))
+    closest = closest_pair(plan.formation) if plan.feasible else None
+    if closest is not None and closest[0] < limit:
+        d, j, k = closest
+        print(f"uav-insar: warning: uav{j} and uav{k} are planned {d:.2f} m apart, closer than "
+              f"{limit:g} m: with standard GNSS (1.5-3 m error) they may collide; fly RTK "
+              "or raise d_min_m", file=sys.stderr)
+    return EXIT_OK if plan.feasible else EXIT_INFEASIBLE
