@@ -37,6 +37,7 @@ import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 from uav_insar_planner.demo.processes import (
     PRINT_LOCK,
@@ -55,6 +56,7 @@ from uav_insar_planner.demo.recorder import (
     stop_recorder,
 )
 from uav_insar_planner.report.flown import MavlinkPass, mavlink_table, rate_table, summary
+from uav_insar_planner.swarm import UAVS
 
 REPO_CONFIG = Path(__file__).resolve().parents[1] / "config" / "params.yaml"
 # MAVLink part: the bridge starts the pass once every vehicle is this close to its start point
@@ -140,6 +142,52 @@ def link_args(args: argparse.Namespace) -> list[str]:
     return [a for v in values for a in ("-p", v)]
 
 
+def set_by_the_demo(args: argparse.Namespace) -> dict[str, tuple[str, str]]:
+    """The parameters this run passes with -p itself, after the params file and the user's
+    -p (so rcl would take the demo's): name -> (the node it sets it on, the option to use)."""
+    own = {"uav_id": ("agent", "nothing: agentK flies UAV K"),
+           "time_scale": ("agent", "--time-scale"),
+           "position_noise_std_m": ("agent", "--noise-std"),
+           "offloading": ("agent", "--offloading"), "fading_seed": ("agent", "--seed")}
+    if args.fading:
+        own.update({text.split(":=")[0]: ("agent", "--fading") for text in FADING})
+    if args.wind:
+        own["wind_mps"] = ("agent", "--wind")
+    if args.uav_timeout is not None:
+        own["uav_timeout_s"] = ("planner", "--uav-timeout")
+    if not args.no_mavlink:
+        wired = "nothing: the demo wires the bridge to its vehicles"
+        own.update({"connections": ("mavlink_bridge", wired),
+                    "target_sysids": ("mavlink_bridge", wired),
+                    "velocity_feedforward": ("mavlink_bridge", "nothing: its pass uses true"),
+                    "capture_radius_m": ("mavlink_bridge",
+                                         f"nothing: its pass uses {CAPTURE_RADIUS_M:g}"),
+                    "track_duration_s": ("mavlink_bridge", "--mavlink-pass-s")})
+    return own
+
+
+def overridden_problems(args: argparse.Namespace, overrides: dict[str, Any]) -> list[str]:
+    """One line per value of the params file or -p that the demo's own -p would silently
+    override (set_by_the_demo), naming the option to use instead."""
+    from uav_insar_planner.params import shown
+    from uav_insar_planner.params_file import parse_params_file
+
+    own = set_by_the_demo(args)
+    given = [("-p ", name, value) for name, value in overrides.items() if name in own]
+    if args.params_file:
+        file = parse_params_file(args.params_file)
+        where = f"params file {str(args.params_file)[:200]!r}: "
+        for name, (node, _) in own.items():
+            for fqn in [f"agent{k}" for k in UAVS] if node == "agent" else [node]:
+                if name in (values := file.values_for(fqn)):
+                    given.append((where, name, values[name]))
+                    break
+    who = {"agent": "the agents", "planner": "the planner", "mavlink_bridge": "the bridge"}
+    return [f"{where}{name}: value {shown(value)} is not allowed in the demo, which sets it "
+            f"on {who[own[name][0]]} itself; expected {own[name][1]}"
+            for where, name, value in given]
+
+
 def run(args: argparse.Namespace) -> int:
     from uav_insar_planner.evaluate import rate_tolerance_bps
     from uav_insar_planner.params_file import ParamError, load_params, parse_override
@@ -149,6 +197,8 @@ def run(args: argparse.Namespace) -> int:
         if args.num_slots:
             overrides["num_slots"] = args.num_slots
         params = load_params(args.params_file, overrides)
+        if problems := overridden_problems(args, overrides):
+            raise ParamError(problems)
     except ParamError as exc:
         print("\n".join(exc.problems), file=sys.stderr)
         return 2
