@@ -12,9 +12,14 @@ import sys
 
 import pytest
 from rcl_interfaces.msg import ParameterType
-from rcl_interfaces.srv import GetParameters
+from rcl_interfaces.srv import GetParameters, ListParameters
 
-from uav_insar_planner.param_specs import SPEC_BY_NAME
+from uav_insar_planner.param_specs import (
+    NODE_SPECS,
+    RCLPY_PARAMETER_NAMES,
+    SPEC_BY_NAME,
+    nodes_taking,
+)
 from uav_insar_planner.params import ParamError, unknown_parameter
 from uav_insar_planner.params_file import load_params, read_params_file, section_matches
 
@@ -180,14 +185,17 @@ def test_sections_match_nodes_as_rclpy_does(name, fqn, matches):
     assert section_matches(name, fqn) is matches
 
 
-def _started(watcher, proc: subprocess.Popen, node: str) -> None:
-    """The node came up (its parameter services answer), and stops with 0 and no error."""
-    client = watcher.node.create_client(GetParameters, f"/{node}/get_parameters")
+def _started(watcher, proc: subprocess.Popen, node: str) -> set[str]:
+    """The node came up, and stops with 0 and no error; the names of its parameters."""
+    client = watcher.node.create_client(ListParameters, f"/{node}/list_parameters")
     assert watcher.spin_until(lambda: client.service_is_ready() or proc.poll() is not None,
                               30.0) and proc.poll() is None, (node, proc.communicate()[0])
+    future = client.call_async(ListParameters.Request())
+    assert watcher.spin_until(future.done, 10.0)
     proc.send_signal(signal.SIGINT)
     out, _ = proc.communicate(timeout=20)
     assert proc.returncode == 0 and "[ERROR]" not in out, (node, out)
+    return set(future.result().result.names)
 
 
 def _demo(ros_domain: int, *args: str) -> subprocess.CompletedProcess:
@@ -240,8 +248,9 @@ def test_a_file_for_every_node_serves_every_node_and_the_demo(watcher, procs, ro
     path = tmp_path / "suite.yaml"
     path.write_text(BASE + OTHER_NODES + "agent0:\n  ros__parameters:\n    noise_seed: 3\n")
     assert load_params(path).num_slots == N
-    for node in NODES:
-        _started(watcher, procs(node, "--params-file", str(path)), node)
+    for node in NODES:  # and the table of who takes what is what each node declares
+        names = _started(watcher, procs(node, "--params-file", str(path)), node)
+        assert names == {s.name for s in NODE_SPECS[node]} | set(RCLPY_PARAMETER_NAMES), node
     demo = _demo(ros_domain, "--params-file", str(path))
     assert demo.returncode == 0, demo.stdout + demo.stderr
 
@@ -256,3 +265,13 @@ def test_the_demo_refuses_a_value_it_would_override_itself(tmp_path):
     assert demo.stderr.splitlines() == [
         f"params file {str(path)!r}: offloading: value 'closed' is not allowed in the demo, "
         "which sets it on the agents itself; expected --offloading"]
+
+
+@pytest.mark.parametrize("name,nodes", [
+    ("speed_mps", NODES), ("looks", ("planner",)), ("uav_timeout_s", ("planner",)),
+    ("num_slots", ("planner", "agent")), ("offloading", ("agent",)),
+    ("origin_ned_m", ("agent", "mavlink_bridge")), ("connections", ("mavlink_bridge",)),
+    ("use_sim_time", NODES), ("num_slot", ()),
+])
+def test_the_table_says_which_nodes_take_a_name(name, nodes):
+    assert nodes_taking(name) == nodes
