@@ -1,9 +1,9 @@
 """Scenario parameters: the one place where dB, dBm, degrees and Mbit/s become SI.
 
 `PARAM_SPECS` (param_specs.py) is the single table of every scenario parameter: name, type,
-default, allowed range, unit and description. The planner node declares its ROS parameters from it; the CLI
-and `params_file.load_params` validate against it. `Params` holds the values converted to SI.
-Reading params files and `NAME=VALUE` overrides is `params_file`'s job.
+default, allowed range, unit and description. The planner node declares its ROS parameters
+from it; the CLI and `params_file.load_params` validate against it. `Params` holds the values
+converted to SI. Reading params files and `NAME=VALUE` overrides is `params_file`'s job.
 """
 from __future__ import annotations
 
