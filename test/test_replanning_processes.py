@@ -161,7 +161,7 @@ def test_demo_kill_uav_shows_the_replan_in_its_summary(ros_domain, repo):
 
     proc = subprocess.run(
         [sys.executable, "-m", "uav_insar_planner.demo", "--num-slots", "30", "--no-mavlink",
-         "--kill-uav", "2", "--at", "3", "--uav-timeout", str(TIMEOUT_S),
+         "--no-bag", "--kill-uav", "2", "--at", "3", "--uav-timeout", str(TIMEOUT_S),
          "--domain-id", str(ros_domain)],
         cwd=repo, capture_output=True, text=True, timeout=90)
     out = proc.stdout

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from uav_insar_planner.demo.processes import start_process, stop_node
+from uav_insar_planner.swarm import UAVS
 
 RECORDER_NODE = "uav_insar_recorder"  # ros/tools/record.NODE_NAME
 # The topics the recorder must have subscribed to before the plan starts the slots: the
@@ -30,7 +31,7 @@ def start_recorder(path: Path, env: dict[str, str]) -> subprocess.Popen:
                          env)
 
 
-def recorder_ready(node: Any, uavs: range = range(3)) -> bool:
+def recorder_ready(node: Any, uavs: range = UAVS) -> bool:
     """True once the recorder subscribes to each agent's AGENT_TOPICS (`node`: any rclpy node
     on the same domain)."""
     return all(any(info.node_name == RECORDER_NODE

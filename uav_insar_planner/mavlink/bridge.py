@@ -23,7 +23,7 @@ Contract:
   AUTO.LOITER (`hold.HoldOrder`).
 - Two planned UAVs closer than `min_separation_m` are warned about (an event per new
   formation, and `separation` in their status).
-- TCP links connect and reconnect without blocking (`link.TcpClient`), so a dead vehicle is
+- TCP links connect and reconnect without blocking (`tcp.TcpClient`), so a dead vehicle is
   reported lost after `heartbeat_timeout_s` while the others go on.
 - Bad values are dropped where they cross, counted in the link's counters and logged once per
   kind every DROP_LOG_PERIOD_S (`guard`): a setpoint or command whose values do not fit
@@ -62,7 +62,7 @@ from uav_insar_planner.mavlink.sequencer import (
 from uav_insar_planner.mavlink.setpoints import setpoint_message
 from uav_insar_planner.mavlink.signing import read_key_file, signing_state
 from uav_insar_planner.mavlink.supervision import WatchedVehicle, is_vehicle_heartbeat, phase
-from uav_insar_planner.mavlink.trajectory import PassTrajectory, clean_formation, too_close
+from uav_insar_planner.mavlink.trajectory import PassTrajectory, clean_formation, separation
 
 __all__ = ["Bridge", "BridgeConfig", "BridgeEvent", "VehicleStatus"]
 
@@ -117,6 +117,7 @@ class Bridge:
                           for k, (sysid, address)
                           in enumerate(zip(config.target_sysids, addresses, strict=True))]
         self._separation = [""] * len(self._vehicles)
+        self._sequences: dict[int, ArmingSequence] = {}  # per UAV, once arm_and_takeoff ran
         self._by_link: dict[int, dict[int, WatchedVehicle]] = {}
         for v in self._vehicles:
             self._by_link.setdefault(id(v.link), {})[v.sysid] = v
@@ -163,11 +164,13 @@ class Bridge:
                             f"{self._hold.mode_name} to every vehicle")
             if self._pass.set_formation(clean):
                 self._event(-1, "info", "new track start: approaching the formation again")
-            self._check_separation(clean)
+            self._separation, warnings = separation(clean, self.config.min_separation_m)
+            for text in warnings:
+                self._event(-1, "warn", text)
             if self.config.arm_and_takeoff:
                 for v in self._vehicles:
-                    if clean[v.uav] is not None and v.sequence is None:
-                        v.sequence = self._new_sequence(v)
+                    if clean[v.uav] is not None and v.uav not in self._sequences:
+                        self._sequences[v.uav] = self._new_sequence(v)
 
     def status(self) -> list[VehicleStatus]:
         """One snapshot per UAV, in UAV order."""
@@ -227,8 +230,8 @@ class Bridge:
                         self._handle(link, msg, source, now)
                 self._check_links(now)
                 for v in self._vehicles:
-                    if v.sequence_active and v.linked:
-                        v.sequence.step(now)
+                    if (seq := self._running(v)) and v.linked:
+                        seq.step(now)
                 if now >= next_heartbeat:
                     self._send_heartbeats()
                     next_heartbeat = max(next_heartbeat + 1.0, now)
@@ -249,16 +252,9 @@ class Bridge:
         if line is not None:
             self._event(v.uav, "warn", line)
 
-    def _check_separation(self, formation: list[Vec3 | None]) -> None:
-        self._separation = [""] * len(self._vehicles)
-        limit = self.config.min_separation_m
-        for j, k, d in too_close(formation, limit):
-            for a, b in ((j, k), (k, j)):
-                self._separation[a] = (self._separation[a] + "; " if self._separation[a]
-                                       else "") + f"{d:.2f} m from uav{b}"
-            self._event(-1, "warn", f"uav{j} and uav{k} are planned {d:.2f} m apart, closer "
-                                    f"than min_separation_m {limit:g} m (standard GNSS is "
-                                    "good to ~1.5-3 m; RTK needed)")
+    def _running(self, v: WatchedVehicle) -> ArmingSequence | None:
+        seq = self._sequences.get(v.uav)
+        return seq if seq is not None and seq.active else None
 
     def _new_sequence(self, v: WatchedVehicle) -> ArmingSequence:
         def start_down() -> float:
@@ -293,8 +289,8 @@ class Bridge:
                 self._event(v.uav, "info", found)
                 self._send_command(v, MAV.MAV_CMD_SET_MESSAGE_INTERVAL,
                                    (MAV.MAVLINK_MSG_ID_LOCAL_POSITION_NED, POSITION_INTERVAL_US))
-                if v.sequence_active:
-                    v.sequence.retry_now()
+                if seq := self._running(v):
+                    seq.retry_now()
         elif kind == "LOCAL_POSITION_NED":
             if not v.on_position(msg, now):
                 self._drop(v, "bad_value", f"LOCAL_POSITION_NED ({msg.x}, {msg.y}, {msg.z})")
@@ -312,8 +308,8 @@ class Bridge:
 
     def _on_ack(self, v: WatchedVehicle, command: int, result: int, now: float) -> None:
         v.last_ack = f"{command_name(command)}: {result_name(result)}"
-        if v.sequence_active:
-            v.sequence.on_ack(command, result, now)
+        if seq := self._running(v):
+            seq.on_ack(command, result, now)
         elif command != MAV.MAV_CMD_SET_MESSAGE_INTERVAL or result != MAV.MAV_RESULT_ACCEPTED:
             self._event(v.uav, "info", f"sysid {v.sysid} COMMAND_ACK {v.last_ack}")
 
@@ -345,7 +341,8 @@ class Bridge:
         if self._pass.t_start is not None or self._pass.formation is None:
             return
         gate = [v for v in self._vehicles
-                if self._pass.start_pose(v.uav) is not None and v.linked and not v.failed]
+                if self._pass.start_pose(v.uav) is not None and v.linked
+                and not (v.uav in self._sequences and self._sequences[v.uav].failed)]
         if self.config.capture_radius_m > 0.0:
             if not gate:
                 return
@@ -366,7 +363,7 @@ class Bridge:
                 self._hold.sent(v, now)
             target = self._pass.target(v.uav, now)
             ardupilot = self.config.autopilot == "ardupilot"
-            holding = ardupilot and (v.sequence_active or v.custom_mode != COPTER_MODE_GUIDED)
+            holding = ardupilot and (self._running(v) or v.custom_mode != COPTER_MODE_GUIDED)
             if target is None or holding:
                 v.stream_since = None
                 continue
@@ -385,6 +382,7 @@ class Bridge:
         track = None if v.position_ned is None else self.frame.from_ned(*v.position_ned)
         error = None if track is None or target is None else math.dist(track, target[0])
         radius = self.config.capture_radius_m if self.config.capture_radius_m > 0 else 1.0
+        seq = self._sequences.get(v.uav)
         return VehicleStatus(
             uav=v.uav, sysid=v.sysid, compid=v.compid, connection=v.link.address,
             link=v.link_state,
@@ -394,6 +392,7 @@ class Bridge:
             position_ned=v.position_ned,
             position_age_s=None if v.position_time is None else now - v.position_time,
             target_track=None if target is None else target[0], setpoints_sent=v.setpoints_sent,
-            sequence="off" if v.sequence is None else v.sequence.text(), last_ack=v.last_ack,
-            phase=phase(v, now, error, radius), prearm=v.prearm, link_up=v.link.up,
+            sequence="off" if seq is None else seq.text(), last_ack=v.last_ack,
+            phase=phase(v, now, error, radius, arming=seq.phase() if seq else ""),
+            prearm=v.prearm, link_up=v.link.up,
             separation=self._separation[v.uav])

@@ -122,6 +122,26 @@ class ArmingSequence:
             return "done"
         return self.steps[self.index].name
 
+    def phase(self) -> str:
+        """The sequence's part of the UAV's phase (`supervision.phase`): "failed: ...", the
+        readiness step ("waiting for position ...", "setting mode GUIDED (now STABILIZE)",
+        "prearm: <reason>", "arming", "armed, taking off", "streaming setpoints before
+        OFFBOARD"), or "" once done."""
+        if self.failed:
+            return "failed: " + self.failed
+        if not self.active:
+            return ""
+        v, step = self.vehicle, self.current
+        if step == "wait for position":
+            return self.waiting_for or "waiting for position"
+        if step.startswith("mode"):
+            return f"setting mode {step[5:]} (now {v.mode})"
+        if step == "arm" and not v.armed:
+            return f"prearm: {v.prearm}" if v.prearm else "arming"
+        if step == "stream setpoints":
+            return "streaming setpoints before OFFBOARD"
+        return "armed, taking off"
+
     def retry_now(self) -> None:
         """The link came back: resend the current step at once, with fresh retry counts."""
         self.sent_at, self.accepted_at, self.retry_at, self.attempts = None, None, None, 0

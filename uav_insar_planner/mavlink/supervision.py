@@ -19,15 +19,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 from pymavlink import mavutil
 
 from uav_insar_planner.mavlink.frames import Vec3
 from uav_insar_planner.mavlink.link import MAV, Link, Source
-
-if TYPE_CHECKING:
-    from uav_insar_planner.mavlink.sequencer import ArmingSequence
 
 _NOT_VEHICLE_TYPES = frozenset((MAV.MAV_TYPE_GCS, MAV.MAV_TYPE_ONBOARD_CONTROLLER,
                                 MAV.MAV_TYPE_GIMBAL, MAV.MAV_TYPE_ADSB, MAV.MAV_TYPE_CAMERA,
@@ -42,7 +38,8 @@ def is_vehicle_heartbeat(msg: MAV.MAVLink_message) -> bool:
 
 @dataclass
 class WatchedVehicle:
-    """One UAV as the bridge sees it; `sequence` is its arming sequence (None: not run)."""
+    """One UAV as the bridge sees it (its arming sequence, if any, is the bridge's:
+    `sequencer.ArmingSequence` reads this record, never the other way round)."""
 
     uav: int
     sysid: int
@@ -58,7 +55,6 @@ class WatchedVehicle:
     setpoints_sent: int = 0
     stream_since: float | None = None
     last_ack: str = ""
-    sequence: ArmingSequence | None = None
     home_seen: bool = False
     gps_fix: int | None = None  # GPS_RAW_INT.fix_type, None: never reported
     prearm: str = ""  # the latest arming refusal reason, "" once armed
@@ -105,14 +101,6 @@ class WatchedVehicle:
     def airborne(self) -> bool:
         return self.position_ned is not None and self.position_ned[2] < -0.5
 
-    @property
-    def sequence_active(self) -> bool:
-        return self.sequence is not None and self.sequence.active
-
-    @property
-    def failed(self) -> bool:
-        return self.sequence is not None and bool(self.sequence.failed)
-
     def on_heartbeat(self, msg: MAV.MAVLink_message, now: float,
                      source: Source | None = None) -> str | None:
         """Take a vehicle heartbeat; return the event text when the link is (re)found."""
@@ -154,28 +142,15 @@ class WatchedVehicle:
 
 
 def phase(v: WatchedVehicle, now: float, error_m: float | None, formation_radius_m: float,
-          lost_text: str = "lost") -> str:
+          lost_text: str = "lost", arming: str = "") -> str:
     """What an operator would say the UAV is doing, for the log and /diagnostics:
-    "waiting for heartbeat" | "lost" | "failed: ..." | the readiness step ("waiting for
-    position ...", "setting mode GUIDED (now STABILIZE)", "prearm: <reason>", "arming",
-    "taking off", "streaming setpoints before OFFBOARD") | "disarmed" | "armed" | "airborne" |
-    "in formation" (within `formation_radius_m` of its target)."""
+    "waiting for heartbeat" | "lost" | `arming` when not "" (`ArmingSequence.phase()`:
+    "failed: ..." or the readiness step) | "disarmed" | "armed" | "airborne" | "in formation"
+    (within `formation_radius_m` of its target)."""
     if not v.linked:
         return lost_text if v.last_heartbeat is not None else "waiting for heartbeat"
-    seq = v.sequence
-    if seq is not None and seq.failed:
-        return "failed: " + seq.failed
-    if seq is not None and seq.active:
-        step = seq.current
-        if step == "wait for position":
-            return seq.waiting_for or "waiting for position"
-        if step.startswith("mode"):
-            return f"setting mode {step[5:]} (now {v.mode})"
-        if step == "arm" and not v.armed:
-            return f"prearm: {v.prearm}" if v.prearm else "arming"
-        if step == "stream setpoints":
-            return "streaming setpoints before OFFBOARD"
-        return "armed, taking off"
+    if arming:
+        return arming
     if not v.armed:
         if v.prearm:
             return f"prearm: {v.prearm}"

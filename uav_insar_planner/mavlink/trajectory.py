@@ -99,3 +99,18 @@ def too_close(formation: Sequence[Vec3 | None], min_separation_m: float
                 if d < min_separation_m:
                     out.append((j, k, d))
     return out
+
+
+def separation(formation: Sequence[Vec3 | None], min_separation_m: float
+               ) -> tuple[list[str], list[str]]:
+    """`too_close` told: (per UAV, "D m from uavK" for each UAV it is too close to, "; "
+    joined; a warning line per pair)."""
+    notes = [""] * len(formation)
+    warnings = []
+    for j, k, d in too_close(formation, min_separation_m):
+        for a, b in ((j, k), (k, j)):
+            notes[a] = (notes[a] + "; " if notes[a] else "") + f"{d:.2f} m from uav{b}"
+        warnings.append(f"uav{j} and uav{k} are planned {d:.2f} m apart, closer than "
+                        f"min_separation_m {min_separation_m:g} m (standard GNSS is good to "
+                        "~1.5-3 m; RTK needed)")
+    return notes, warnings

@@ -1,0 +1,90 @@
+"""The demo's command line: its options and their checks, every error one line and exit 2
+before any process starts (no ROS import)."""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from uav_insar_planner.cli.parser import OneLineParser
+from uav_insar_planner.demo.recorder import default_bag_path
+from uav_insar_planner.swarm import NUM_UAVS, UAVS
+
+REPO_CONFIG = Path(__file__).resolve().parents[1] / "config" / "params.yaml"
+# --kill-uav: the agents' default time_scale, slow enough that the swarm flies on for a while
+# after uav_timeout_s (5 s: 20 slots at 4x); the planner's answer may take that long and more.
+KILL_TIME_SCALE = 4.0
+DEFAULT_TIME_SCALE = 20.0
+# --mavlink-base-port: vehicle k listens on PORT + PORT_STEP * k, the last one within 65535.
+PORT_STEP = 10
+MAX_BASE_PORT = 65535 - PORT_STEP * (NUM_UAVS - 1)
+
+
+def build_parser() -> OneLineParser:
+    """Every option of `python -m uav_insar_planner.demo` (README: `make demo`)."""
+    parser = OneLineParser(prog="python -m uav_insar_planner.demo",
+                           description="Fly one mission: the planner and one agent per UAV, "
+                                       "and the MAVLink bridge and one vehicle per UAV.")
+    add = parser.add_argument
+    add("--params-file", type=Path, default=REPO_CONFIG if REPO_CONFIG.exists() else None,
+        help="ROS 2 params file for every node (default: config/params.yaml)")
+    add("--num-slots", type=int, default=0,
+        help="override num_slots (default: the params file's)")
+    add("--time-scale", type=float, default=None,
+        help="agents' mission seconds per wall second (default 20, 4 with --kill-uav)")
+    add("--noise-std", type=float, default=0.0,
+        help="agents' position disturbance std per axis [m] (default 0)")
+    add("--offloading", choices=("open", "closed"), default="open",
+        help="agents' power per slot: the plan's, or closed loop (default open)")
+    add("--fading", action="store_true",
+        help="simulated link: 4 dB shadowing over 20 m and Rician K 6 dB")
+    add("--wind", type=float, nargs=3, metavar=("VX", "VY", "VZ"),
+        help="steady wind in the track frame [m/s] (each in [-50, 50])")
+    add("--seed", type=int, default=0, help="seed of the fading and the gusts (default 0)")
+    add("-p", "--param", action="append", default=[], metavar="NAME:=VALUE",
+        help="a parameter for every node, e.g. -p solver:=paper-ao")
+    add("--domain-id", type=int, default=None,
+        help="ROS_DOMAIN_ID to use (default: a random one in 1..101)")
+    add("--no-mavlink", action="store_true", help="skip the MAVLink part (bridge and vehicles)")
+    add("--mavlink-pass-s", type=float, default=5.0,
+        help="how long the vehicles fly along the track, wall clock (default 5)")
+    add("--mavlink-base-port", type=int, default=0,
+        help=f"vehicle K listens on UDP PORT + {PORT_STEP} K (default: free ports chosen by "
+             "the OS)")
+    add("--kill-uav", type=int, choices=UAVS, default=None, metavar="K",
+        help="kill agent K's process (SIGKILL) when the swarm reaches --at SLOT and show the "
+             "planner's re-plan")
+    add("--at", type=int, default=10, metavar="SLOT", help="the slot for --kill-uav (default 10)")
+    add("--uav-timeout", type=float, default=None, metavar="S",
+        help="the planner's uav_timeout_s (default: its own, 5 s)")
+    add("--bag", type=Path, default=None, metavar="PATH",
+        help="record the mission into this new rosbag2 folder (default: bags/demo_<UTC time>)")
+    add("--no-bag", action="store_true", help="do not record the mission")
+    return parser
+
+
+def parse_options(argv: list[str] | None = None) -> argparse.Namespace:
+    """The options, checked, with the defaults that depend on others filled in (`--bag`,
+    `--time-scale`); a bad one exits 2 with one line naming it."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    args.bag = args.bag or default_bag_path()
+    if not args.no_bag and args.bag.exists():
+        parser.error(f"--bag: {str(args.bag)[:200]!r} exists; expected a new folder")
+    if args.uav_timeout is not None and not 0.1 <= args.uav_timeout <= 3600.0:
+        parser.error("--uav-timeout must be in [0.1, 3600] s")
+    if args.time_scale is None:
+        args.time_scale = DEFAULT_TIME_SCALE if args.kill_uav is None else KILL_TIME_SCALE
+    if args.at < 0:
+        parser.error("--at must be >= 0")
+    if args.time_scale <= 0 or args.noise_std < 0:
+        parser.error("--time-scale must be > 0 and --noise-std >= 0")
+    if args.wind and not all(-50.0 <= v <= 50.0 for v in args.wind):
+        parser.error("--wind components must be finite and in [-50, 50] m/s")
+    if not 0 <= args.seed <= 2**31 - 1:
+        parser.error("--seed must be in 0..2147483647")
+    if args.domain_id is not None and not 0 <= args.domain_id <= 232:
+        parser.error("--domain-id must be in 0..232 (Fast DDS's range)")
+    if not args.mavlink_pass_s > 0 or not 0 <= args.mavlink_base_port <= MAX_BASE_PORT:
+        parser.error(f"--mavlink-pass-s must be > 0 and --mavlink-base-port in "
+                     f"0..{MAX_BASE_PORT}")
+    return args
