@@ -120,7 +120,7 @@ def test_integer_in_params_file_is_the_double_meant(watcher, procs, tmp_path):
 
 BAD_FILES = {
     "misspelt name": ('"/**":\n  ros__parameters:\n    num_slot: 3\n',
-                      "num_slot: no such parameter", "did you mean num_slots?"),
+                      "num_slot: unknown parameter", "did you mean num_slots?"),
     "section for no node": ("planer:\n  ros__parameters:\n    num_slots: 3\n",
                             "section 'planer' names no node", "did you mean planner?"),
     "empty file": ("", "is empty", "ros__parameters"),

@@ -7,10 +7,9 @@ from pathlib import Path
 
 import pytest
 
-from uav_insar_planner.mavlink.config import BRIDGE_SPECS
+from uav_insar_planner.param_specs import AGENT_SPECS, BRIDGE_SPECS, MAVLINK_SPECS, PLANNER_SPECS
 from uav_insar_planner.params import PARAM_SPECS
 from uav_insar_planner.params_file import yaml_load
-from uav_insar_planner.ros.parameters import AGENT_SPECS, MAVLINK_SPECS, PLANNER_SPECS
 
 REPO = Path(__file__).resolve().parent.parent
 README = (REPO / "README.md").read_text()

@@ -1,11 +1,18 @@
 """The table of every scenario parameter (`PARAM_SPECS`): name, type, default (Table I),
 allowed range with the reason it stops there, unit and description. `params` validates values
 against it and converts them to SI; the planner node declares its ROS parameters from it.
+
+Beside it, as plain data, the tables of every node's own parameters (PLANNER_SPECS,
+AGENT_SPECS, MAVLINK_SPECS, BRIDGE_SPECS) and which node takes which (`NODE_SPECS`,
+`nodes_taking`): `ros/parameters.py` and `mavlink/config.py` declare and check them, and the
+command line and the demo know from here, without ROS, every name a params file may hold.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 from typing import Any
+
+from uav_insar_planner.plan import SAFE_SEPARATION_M
 
 SCHEMES = ("proposed", "single-baseline", "fixed-master", "static-power")
 OBJECTIVES = ("exact", "bound", "multilook")
@@ -129,3 +136,128 @@ PARAM_SPECS: tuple[ParamSpec, ...] = (
               choices=SOLVERS),
 )
 SPEC_BY_NAME: dict[str, ParamSpec] = {s.name: s for s in PARAM_SPECS}
+
+
+# --- the nodes' own parameters --------------------------------------------------------------
+
+AXES = 3  # a position or velocity vector: (x, y, z) or (N, E, D), not the number of UAVs
+# MAVLink positions are float32: its spacing at 1e5 m is 2**-7 m = 7.8 mm.
+ORIGIN_LIMIT_M = 1e5
+AUTOPILOTS = ("ardupilot", "px4")  # the flavours mavlink/autopilots.py knows the modes of
+
+AGENT_SPECS = (
+    ParamSpec("uav_id", int, 0, "which UAV this agent flies: 0 master, 1, 2", 0, 2),
+    ParamSpec("time_scale", float, 1.0, "mission seconds per wall-clock second", 0.0, 1000.0,
+              True),
+    ParamSpec("position_noise_std_m", float, 0.0, "std of the position disturbance per axis "
+              "[m]", 0.0, 100.0),
+    ParamSpec("noise_seed", int, 0, "seed of the position disturbance", 0, 2**31 - 1),
+    ParamSpec("max_speed_mps", float, 10.0, "speed limit [m/s], at least speed_mps", 0.0,
+              100.0, True),
+    ParamSpec("max_accel_mps2", float, 3.0, "acceleration limit [m/s^2]", 0.0, 50.0, True),
+    ParamSpec("offloading", str, "open", "power per slot: open = the plan's P_com[k][n], "
+              "closed = least power meeting R_min from the measured rate and position",
+              choices=("open", "closed")),
+    ParamSpec("shadowing_std_db", float, 0.0, "simulated link: std of the log-normal "
+              "shadowing [dB] (0: off)", 0.0, 30.0),
+    ParamSpec("shadowing_corr_m", float, 20.0, "simulated link: correlation length of the "
+              "shadowing along the track [m]", 0.0, 10000.0, True),
+    ParamSpec("small_scale_fading", str, "off", "simulated link: small-scale fading, off or "
+              "rician (K-factor rician_k_db)", choices=("off", "rician")),
+    ParamSpec("rician_k_db", float, 10.0, "simulated link: Rician K-factor [dB], when "
+              "small_scale_fading is rician", -30.0, 60.0),
+    ParamSpec("fading_seed", int, 0, "seed of the simulated link fading and of the wind "
+              "gusts", 0, 2**31 - 1),
+    ParamSpec("wind_mps", float, [0.0, 0.0, 0.0], "steady wind (x, y, z) in the track frame "
+              "[m/s], self-flown agent only", -50.0, 50.0, length=AXES),
+    ParamSpec("gust_std_mps", float, 0.0, "std of the wind gusts per axis [m/s] (0: off)",
+              0.0, 30.0),
+    ParamSpec("gust_tau_s", float, 2.0, "time constant of the wind gusts [s]", 0.0, 1000.0,
+              True),
+)
+MAVLINK_SPECS = (
+    ParamSpec("mavlink_listen", str, "", "MAVLink mode: the embedded vehicle's connection "
+              "string, e.g. udpin:127.0.0.1:14552 (empty: fly /formation directly)"),
+    ParamSpec("mavlink_sysid", int, 0, "MAVLink mode: the embedded vehicle's sysid (0: 2 + "
+              "uav_id)", 0, 255),
+    ParamSpec("track_bearing_deg", float, 0.0, "MAVLink mode: bearing of the along-track "
+              "axis from north [deg], as the bridge's", -360.0, 360.0),
+    ParamSpec("origin_ned_m", float, [0.0, 0.0, 0.0], "MAVLink mode: track origin in the "
+              f"vehicle's local NED, as the bridge's; within +-{ORIGIN_LIMIT_M:g} m [m]",
+              -ORIGIN_LIMIT_M, ORIGIN_LIMIT_M, length=AXES),
+)
+#: The planner's own parameters beside the scenario's PARAM_SPECS; closed ranges, which rclpy
+#: checks at start and on every set, so nothing else validates them.
+PLANNER_SPECS = (
+    ParamSpec("uav_timeout_s", float, 5.0, "a UAV heard once and then silent (no pose, rate "
+              "or offload) this long [s] is lost: the swarm is re-planned without it", 0.1,
+              3600.0),
+)
+#: The scenario parameters an agent needs (P_max and E_max for the closed loop).
+AGENT_SCENARIO_SPECS = tuple(SPEC_BY_NAME[n] for n in (
+    "num_slots", "slot_duration_s", "speed_mps", "ground_station_m", "comm_bandwidth_hz",
+    "ref_snr_db", "rate_min_mbps", "p_com_max_db", "e_com_max_j"))
+
+# The bridge's parameters (ROS descriptors, README table, BridgeConfig.validate). Defaults
+# pair with `uav-insar-vehicle --sysid 2..4 --listen udpin:127.0.0.1:14552/14562/14572`.
+BRIDGE_SPECS = (
+    ParamSpec("connections", list, ["udpout:127.0.0.1:14552", "udpout:127.0.0.1:14562",
+                                    "udpout:127.0.0.1:14572"],
+              "pymavlink connection string per UAV (or one shared): udpout:HOST:PORT, "
+              "udpin:HOST:PORT, tcp:HOST:PORT, /dev/ttyUSB0,57600"),
+    ParamSpec("target_sysids", list, [2, 3, 4], "MAVLink system id of UAV 0, 1, 2 (1..255, "
+              "distinct)"),
+    ParamSpec("source_sysid", int, 255, "our own system id (ArduPilot: match SYSID_MYGCS)",
+              1, 255),
+    ParamSpec("track_bearing_deg", float, 0.0, "bearing of the along-track axis y from north "
+              "[deg]", -360.0, 360.0),
+    ParamSpec("origin_ned_m", float, [0.0, 0.0, 0.0], "track origin in local NED (N, E, D); "
+              f"within +-{ORIGIN_LIMIT_M:g} m, where MAVLink's float32 still resolves 8 mm [m]",
+              -ORIGIN_LIMIT_M, ORIGIN_LIMIT_M, length=AXES),
+    ParamSpec("setpoint_rate_hz", float, 10.0, "SET_POSITION_TARGET_LOCAL_NED rate per UAV "
+              "[Hz]", 2.0, 50.0),
+    ParamSpec("velocity_feedforward", bool, False, "send the along-track velocity too "
+              "(type_mask 3520)"),
+    ParamSpec("arm_and_takeoff", bool, False, "set GUIDED/OFFBOARD, arm and take off "
+              "(default: you do)"),
+    ParamSpec("autopilot", str, "ardupilot", "mode numbers and arming sequence",
+              choices=AUTOPILOTS),
+    ParamSpec("speed_mps", float, 4.3, "along-track speed v_y [m/s]", 0.0, 1000.0),
+    ParamSpec("track_duration_s", float, 0.0, "length of the pass in time, then hold at its "
+              "end; 0: no end [s]", 0.0, 1e6),
+    ParamSpec("capture_radius_m", float, 1.0, "start the pass when every UAV is this close to "
+              "its start point; 0: start at once [m]", 0.0, 1e4),
+    ParamSpec("heartbeat_timeout_s", float, 5.0, "report a UAV lost after this long without "
+              "heartbeat [s]", 0.0, 3600.0, True),
+    ParamSpec("readiness_timeout_s", float, 120.0, "arm_and_takeoff: how long to wait for "
+              "position, mode and a passed arming check (FAILED is retried) before giving up "
+              "[s]", 0.0, 3600.0, True),
+    ParamSpec("min_separation_m", float, SAFE_SEPARATION_M, "warn when two planned "
+              "UAVs are closer than this (standard GNSS ~1.5-3 m, RTK ~0.05 m); 0: no check "
+              "[m]", 0.0, 1e4),
+    ParamSpec("signing_key_file", str, "", "MAVLink 2 signing key (32 raw bytes or 64 hex "
+              "characters); sign everything, accept only signed frames; empty: no signing"),
+)
+
+#: Which parameters each executable of the suite declares (the agents, however renamed,
+#: are `agent`): the one answer to "who takes this name", for the nodes and the CLI alike.
+NODE_SPECS: dict[str, tuple[ParamSpec, ...]] = {
+    "planner": PARAM_SPECS + PLANNER_SPECS,
+    "agent": AGENT_SPECS + MAVLINK_SPECS + AGENT_SCENARIO_SPECS,
+    "mavlink_bridge": BRIDGE_SPECS,
+}
+#: The parameters rclpy declares on every node itself (Jazzy).
+RCLPY_PARAMETER_NAMES = ("use_sim_time", "start_type_description_service")
+#: Every parameter name of every node of the suite: a params file or an override may hold
+#: any of them (a `/**` section serves every node); each node takes its own.
+SUITE_PARAMETER_NAMES = frozenset(
+    [s.name for specs in NODE_SPECS.values() for s in specs] + list(RCLPY_PARAMETER_NAMES))
+
+
+def nodes_taking(name: str) -> tuple[str, ...]:
+    """The nodes of the suite that declare parameter `name`, in NODE_SPECS order (all of
+    them for rclpy's own; none for a name no node knows)."""
+    if name in RCLPY_PARAMETER_NAMES:
+        return tuple(NODE_SPECS)
+    return tuple(node for node, specs in NODE_SPECS.items()
+                 if any(s.name == name for s in specs))

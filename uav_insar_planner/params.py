@@ -1,9 +1,9 @@
 """Scenario parameters: the one place where dB, dBm, degrees and Mbit/s become SI.
 
-`PARAM_SPECS` (param_specs.py) is the single table of every parameter: name, type, default,
-allowed range, unit and description. The planner node declares its ROS parameters from it; the CLI
-and `params_file.load_params` validate against it. `Params` holds the values converted to SI.
-Reading params files and `NAME=VALUE` overrides is `params_file`'s job.
+`PARAM_SPECS` (param_specs.py) is the single table of every scenario parameter: name, type,
+default, allowed range, unit and description. The planner node declares its ROS parameters
+from it; the CLI and `params_file.load_params` validate against it. `Params` holds the values
+converted to SI. Reading params files and `NAME=VALUE` overrides is `params_file`'s job.
 """
 from __future__ import annotations
 
@@ -16,12 +16,15 @@ from typing import Any
 from uav_insar_planner.param_specs import (
     LENGTH_MAX_M,
     MULTILOOK_MAX_LOOKS,
+    NODE_SPECS,
     OBJECTIVES,
     PARAM_SPECS,
     SCHEMES,
     SOLVERS,
     SPEC_BY_NAME,
+    SUITE_PARAMETER_NAMES,
     ParamSpec,
+    nodes_taking,
 )
 
 # Re-exported: callers import the table and its choices from here, with the values.
@@ -193,6 +196,18 @@ def _in_range(spec: ParamSpec, v: float) -> bool:
     return not (spec.hi is not None and (v >= spec.hi if spec.hi_open else v > spec.hi))
 
 
+def unknown_parameter(name: str) -> str:
+    """The one line for a parameter name that no node of the suite takes, as the command line
+    and every node say it, with the closest name of any node when one is close."""
+    near = difflib.get_close_matches(name[:VALUE_SHOWN_CHARS], sorted(SUITE_PARAMETER_NAMES),
+                                     n=1)
+    hint = f" (did you mean {near[0]}?)" if near else ""
+    label = _cut(name) if name.isidentifier() else shown(name)  # one line, always
+    nodes = list(NODE_SPECS)
+    return (f"{label}: unknown parameter{hint}; expected a parameter of "
+            f"{', '.join(nodes[:-1])} or {nodes[-1]} (the README's tables)")
+
+
 def validate(values: Mapping[str, Any]) -> tuple[dict[str, Any], list[str]]:
     """Check every value against PARAM_SPECS and the cross-field rules; collect all problems."""
     problems: list[str] = []
@@ -201,12 +216,11 @@ def validate(values: Mapping[str, Any]) -> tuple[dict[str, Any], list[str]]:
         if not isinstance(name, str):
             problems.append(f"parameter name {shown(name)} is not allowed; expected a name "
                             "from config/params.yaml")
+        elif name in SUITE_PARAMETER_NAMES and name not in SPEC_BY_NAME:
+            problems.append(f"{name}: a parameter of {', '.join(nodes_taking(name))}, not "
+                            "of the scenario; expected a name in config/params.yaml")
         elif name not in SPEC_BY_NAME:
-            near = difflib.get_close_matches(name[:VALUE_SHOWN_CHARS], SPEC_BY_NAME, n=1)
-            hint = f" (did you mean {near[0]}?)" if near else ""
-            label = _cut(name) if name.isidentifier() else shown(name)  # one line, always
-            problems.append(f"{label}: unknown parameter{hint}; allowed: the names in "
-                            "config/params.yaml")
+            problems.append(unknown_parameter(name))
     bad: set[str] = set()
     for spec in PARAM_SPECS:
         value, problem = check_value(spec, values.get(spec.name, spec.default))

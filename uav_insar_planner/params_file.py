@@ -20,6 +20,7 @@ from typing import Any
 
 import yaml
 
+from uav_insar_planner.param_specs import SPEC_BY_NAME, SUITE_PARAMETER_NAMES
 from uav_insar_planner.params import ParamError, Params, params_from_mapping, shown
 from uav_insar_planner.swarm import UAVS
 
@@ -264,11 +265,25 @@ def parse_override(text: str) -> tuple[str, Any]:
     return name.strip(), value
 
 
+def not_for_the_scenario(values: Mapping[Any, Any]) -> list[str]:
+    """The names in `values` that another node of the suite takes but the planner's scenario
+    does not (`offloading`, `connections`, `uav_timeout_s`, rclpy's `use_sim_time`): the
+    planner node leaves them to their nodes, and so does `load_params`."""
+    return [name for name in values
+            if name in SUITE_PARAMETER_NAMES and name not in SPEC_BY_NAME]
+
+
 def load_params(path: str | Path | None = None, overrides: Mapping[str, Any] | None = None,
                 node_name: str = "planner") -> Params:
     """Load a params file (none: Table I defaults, as in config/params.yaml), apply overrides,
-    validate everything at once and convert to SI. Raises ParamError listing every problem."""
+    validate everything at once and convert to SI. Raises ParamError listing every problem.
+
+    The planner's verdict on names: another node's parameter (not_for_the_scenario), from the
+    file or the overrides, is ignored, as `-p` and `/**` serve every node; a name no node
+    takes is refused in `params.unknown_parameter`'s words."""
     values = read_params_file(path, node_name) if path is not None else {}
     if overrides:
         values.update(overrides)
+    for name in not_for_the_scenario(values):
+        del values[name]
     return params_from_mapping(values)

@@ -21,13 +21,13 @@ target_sysids) that `mavlink_bridge` flies; the agent then reads the vehicle's p
 the bridge's; default N = y, E = x, D = -z) and slot n starts when the vehicle crosses
 y = n v_y delta_t. `time_scale`, the position noise and the wind do not apply then.
 
-Parameters (ros/parameters.py, all read-only: a mission is set up once): uav_id, time_scale
+Parameters (param_specs.py, all read-only: a mission is set up once): uav_id, time_scale
 (mission seconds per wall second), position_noise_std_m, noise_seed, max_speed_mps,
 max_accel_mps2, offloading, the simulated link's shadowing_std_db, shadowing_corr_m,
 small_scale_fading, rician_k_db, fading_seed and the wind's wind_mps, gust_std_mps, gust_tau_s
 (AGENT_SPECS, all off by default, so the link is the paper's model), mavlink_listen,
 mavlink_sysid, track_bearing_deg, origin_ned_m (MAVLINK_SPECS) and the scenario parameters of
-AGENT_SCENARIO_NAMES from params.PARAM_SPECS (P_max and E_max included, for the closed loop),
+AGENT_SCENARIO_SPECS from params.PARAM_SPECS (P_max and E_max included, for the closed loop),
 so one params file serves every node. Invalid values or unknown names log one line each and exit
 with code 2; an embedded vehicle whose loop dies makes the agent log why and exit with code 1.
 """
@@ -41,12 +41,11 @@ from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension
 
 from uav_insar_planner.evaluate import rate_tolerance_bps
 from uav_insar_planner.exit_codes import EXIT_CRASH
+from uav_insar_planner.param_specs import AGENT_SCENARIO_SPECS as SCENARIO_SPECS
+from uav_insar_planner.param_specs import AGENT_SPECS, MAVLINK_SPECS
 from uav_insar_planner.params import ParamError, params_from_mapping
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.parameters import (
-    AGENT_SPECS,
-    MAVLINK_SPECS,
-    agent_scenario_specs,
     check_values,
     declare_specs,
     guard_sets,
@@ -59,7 +58,6 @@ from uav_insar_planner.ros.run import run_node
 from uav_insar_sim.flight import choose_flight
 from uav_insar_sim.vehicle.simulator import SimVehicle
 
-SCENARIO_SPECS = agent_scenario_specs()
 TICK_PERIOD_S = 0.05  # wall clock; the mission clock advances time_scale times faster
 
 

@@ -38,7 +38,7 @@ import sys
 
 from uav_insar_planner.demo.options import parse_options
 from uav_insar_planner.demo.processes import random_domain_id, ros_env
-from uav_insar_planner.demo.steps import Mission
+from uav_insar_planner.demo.steps import Mission, overridden_problems
 from uav_insar_planner.exit_codes import EXIT_BAD_INPUT, EXIT_CRASH, EXIT_OK
 
 
@@ -51,6 +51,8 @@ def run(args: argparse.Namespace) -> int:
         if args.num_slots:
             overrides["num_slots"] = args.num_slots
         params = load_params(args.params_file, overrides)
+        if problems := overridden_problems(args, overrides):
+            raise ParamError(problems)
     except ParamError as exc:
         print("\n".join(exc.problems), file=sys.stderr)
         return EXIT_BAD_INPUT

@@ -1,5 +1,7 @@
 """The demo's mission, step by step: each method of `Mission` is one step of `mission.run`,
-called in order; the processes it started and what its watcher saw are its state."""
+called in order; the processes it started and what its watcher saw are its state. What the
+demo sets on the nodes itself (`set_by_the_demo`) a params file or -p may not set too
+(`overridden_problems`): rcl would let the demo's value win, silently."""
 from __future__ import annotations
 
 import argparse
@@ -70,6 +72,52 @@ def start_mavlink(ports: Sequence[int], pass_s: float, common: Sequence[str],
         "-p", "velocity_feedforward:=true", "-p", f"capture_radius_m:={CAPTURE_RADIUS_M}",
         "-p", f"track_duration_s:={float(pass_s)}"], env, "[bridge]"))
     return procs
+
+
+def set_by_the_demo(args: argparse.Namespace) -> dict[str, tuple[str, str]]:
+    """The parameters this run passes with -p itself, after the params file and the user's
+    -p (so rcl would take the demo's): name -> (the node it sets it on, the option to use)."""
+    own = {"uav_id": ("agent", "nothing: agentK flies UAV K"),
+           "time_scale": ("agent", "--time-scale"),
+           "position_noise_std_m": ("agent", "--noise-std"),
+           "offloading": ("agent", "--offloading"), "fading_seed": ("agent", "--seed")}
+    if args.fading:
+        own.update({text.split(":=")[0]: ("agent", "--fading") for text in FADING})
+    if args.wind:
+        own["wind_mps"] = ("agent", "--wind")
+    if args.uav_timeout is not None:
+        own["uav_timeout_s"] = ("planner", "--uav-timeout")
+    if not args.no_mavlink:
+        wired = "nothing: the demo wires the bridge to its vehicles"
+        own.update({"connections": ("mavlink_bridge", wired),
+                    "target_sysids": ("mavlink_bridge", wired),
+                    "velocity_feedforward": ("mavlink_bridge", "nothing: its pass uses true"),
+                    "capture_radius_m": ("mavlink_bridge",
+                                         f"nothing: its pass uses {CAPTURE_RADIUS_M:g}"),
+                    "track_duration_s": ("mavlink_bridge", "--mavlink-pass-s")})
+    return own
+
+
+def overridden_problems(args: argparse.Namespace, overrides: dict[str, Any]) -> list[str]:
+    """One line per value of the params file or -p that the demo's own -p would silently
+    override (set_by_the_demo), naming the option to use instead."""
+    from uav_insar_planner.params import shown
+    from uav_insar_planner.params_file import parse_params_file
+
+    own = set_by_the_demo(args)
+    given = [("-p ", name, value) for name, value in overrides.items() if name in own]
+    if args.params_file:
+        file = parse_params_file(args.params_file)
+        where = f"params file {str(args.params_file)[:200]!r}: "
+        for name, (node, _) in own.items():
+            for fqn in [f"agent{k}" for k in UAVS] if node == "agent" else [node]:
+                if name in (values := file.values_for(fqn)):
+                    given.append((where, name, values[name]))
+                    break
+    who = {"agent": "the agents", "planner": "the planner", "mavlink_bridge": "the bridge"}
+    return [f"{where}{name}: value {shown(value)} is not allowed in the demo, which sets it "
+            f"on {who[own[name][0]]} itself; expected {own[name][1]}"
+            for where, name, value in given]
 
 
 class Mission:

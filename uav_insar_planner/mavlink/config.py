@@ -1,58 +1,14 @@
-"""The bridge's configuration and its validation (one line per problem)."""
+"""The bridge's configuration and its validation (one line per problem); its parameters are
+`param_specs.BRIDGE_SPECS` (the ROS descriptors, the README table and `validate` use them)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-from uav_insar_planner.mavlink.autopilots import AUTOPILOTS
 from uav_insar_planner.mavlink.frames import Vec3
 from uav_insar_planner.mavlink.link import parse_address
-from uav_insar_planner.params import ParamSpec, check_value
+from uav_insar_planner.param_specs import BRIDGE_SPECS, ORIGIN_LIMIT_M
+from uav_insar_planner.params import check_value
 from uav_insar_planner.plan import SAFE_SEPARATION_M as DEFAULT_MIN_SEPARATION_M
-
-ORIGIN_LIMIT_M = 1e5  # float32 spacing at 1e5 m is 2**-7 m = 7.8 mm
-
-# The bridge's parameters (ROS descriptors, README table, BridgeConfig.validate). Defaults
-# pair with `uav-insar-vehicle --sysid 2..4 --listen udpin:127.0.0.1:14552/14562/14572`.
-BRIDGE_SPECS = (
-    ParamSpec("connections", list, ["udpout:127.0.0.1:14552", "udpout:127.0.0.1:14562",
-                                    "udpout:127.0.0.1:14572"],
-              "pymavlink connection string per UAV (or one shared): udpout:HOST:PORT, "
-              "udpin:HOST:PORT, tcp:HOST:PORT, /dev/ttyUSB0,57600"),
-    ParamSpec("target_sysids", list, [2, 3, 4], "MAVLink system id of UAV 0, 1, 2 (1..255, "
-              "distinct)"),
-    ParamSpec("source_sysid", int, 255, "our own system id (ArduPilot: match SYSID_MYGCS)",
-              1, 255),
-    ParamSpec("track_bearing_deg", float, 0.0, "bearing of the along-track axis y from north "
-              "[deg]", -360.0, 360.0),
-    ParamSpec("origin_ned_m", float, [0.0, 0.0, 0.0], "track origin in local NED (N, E, D); "
-              f"within +-{ORIGIN_LIMIT_M:g} m, where MAVLink's float32 still resolves 8 mm [m]",
-              -ORIGIN_LIMIT_M, ORIGIN_LIMIT_M, length=3),
-    ParamSpec("setpoint_rate_hz", float, 10.0, "SET_POSITION_TARGET_LOCAL_NED rate per UAV "
-              "[Hz]", 2.0, 50.0),
-    ParamSpec("velocity_feedforward", bool, False, "send the along-track velocity too "
-              "(type_mask 3520)"),
-    ParamSpec("arm_and_takeoff", bool, False, "set GUIDED/OFFBOARD, arm and take off "
-              "(default: you do)"),
-    ParamSpec("autopilot", str, "ardupilot", "mode numbers and arming sequence",
-              choices=AUTOPILOTS),
-    ParamSpec("speed_mps", float, 4.3, "along-track speed v_y [m/s]", 0.0, 1000.0),
-    ParamSpec("track_duration_s", float, 0.0, "length of the pass in time, then hold at its "
-              "end; 0: no end [s]", 0.0, 1e6),
-    ParamSpec("capture_radius_m", float, 1.0, "start the pass when every UAV is this close to "
-              "its start point; 0: start at once [m]", 0.0, 1e4),
-    ParamSpec("heartbeat_timeout_s", float, 5.0, "report a UAV lost after this long without "
-              "heartbeat [s]", 0.0, 3600.0, True),
-    ParamSpec("readiness_timeout_s", float, 120.0, "arm_and_takeoff: how long to wait for "
-              "position, mode and a passed arming check (FAILED is retried) before giving up "
-              "[s]", 0.0, 3600.0, True),
-    ParamSpec("min_separation_m", float, DEFAULT_MIN_SEPARATION_M, "warn when two planned "
-              "UAVs are closer than this (standard GNSS ~1.5-3 m, RTK ~0.05 m); 0: no check "
-              "[m]", 0.0, 1e4),
-    ParamSpec("signing_key_file", str, "", "MAVLink 2 signing key (32 raw bytes or 64 hex "
-              "characters); sign everything, accept only signed frames; empty: no signing"),
-)
-
-
 
 
 @dataclass(frozen=True)

@@ -1,7 +1,7 @@
 """The MAVLink bridge node (`ros2 run uav_insar_planner mavlink_bridge`): a thin ROS adapter
 over `uav_insar_planner.mavlink.bridge.Bridge`, which does all MAVLink work in its own thread.
 
-Parameters (mavlink/config.py BRIDGE_SPECS, all read-only: the links are opened once):
+Parameters (param_specs.py BRIDGE_SPECS, all read-only: the links are opened once):
   connections (string[]), target_sysids (int[]), source_sysid, track_bearing_deg,
   origin_ned_m (double[3], N E D), setpoint_rate_hz, velocity_feedforward, arm_and_takeoff,
   autopilot (ardupilot|px4), speed_mps, track_duration_s, capture_radius_m,
@@ -39,9 +39,9 @@ from rclpy.node import Node
 
 from uav_insar_planner.exit_codes import EXIT_CRASH
 from uav_insar_planner.mavlink.bridge import Bridge, BridgeConfig, VehicleStatus
+from uav_insar_planner.param_specs import BRIDGE_SPECS
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.parameters import (
-    BRIDGE_SPECS,
     declare_specs,
     guard_sets,
     spec_values,

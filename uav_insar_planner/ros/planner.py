@@ -19,7 +19,7 @@ Publishes (names relative to the node's namespace, except /diagnostics):
 Subscribes uav{K}/pose (PoseStamped), uav{K}/achieved_rate (Float64, bit/s), uav{K}/plan; the
 swarm watch (swarm_watch.py: lost UAVs, saturated closed loops, the re-plans they call for)
 also uav{K}/offload and /diagnostics. Planner-only parameter: uav_timeout_s
-(parameters.PLANNER_SPECS).
+(param_specs.PLANNER_SPECS).
 Service ~/replan (std_srvs/Trigger): solve again with the current parameters.
 Solves run on a worker thread (solve_worker), so the node keeps serving while one runs; a
 worker that dies turns the plan status ERROR ("solve worker died: ...") and the node exits
@@ -40,6 +40,7 @@ from std_msgs.msg import Float64, Float64MultiArray
 from std_srvs.srv import Trigger
 
 from uav_insar_planner.exit_codes import EXIT_CRASH
+from uav_insar_planner.param_specs import PLANNER_SPECS
 from uav_insar_planner.params import (
     PARAM_SPECS,
     SPEC_BY_NAME,
@@ -52,7 +53,6 @@ from uav_insar_planner.ros import diagnostics as report
 from uav_insar_planner.ros import plan_msgs, topics
 from uav_insar_planner.ros.markers import PlannerMarkers
 from uav_insar_planner.ros.parameters import (
-    PLANNER_SPECS,
     declare_specs,
     guard_sets,
     shown,
