@@ -7,6 +7,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+from uav_insar_planner.swarm import NUM_UAVS
+
 SCHEMES = ("proposed", "single-baseline", "fixed-master", "static-power")
 OBJECTIVES = ("exact", "bound", "multilook")
 # The multilook objective tabulates the exact phase std per n_L (multilook.py): O(n_L) work.
@@ -81,7 +83,7 @@ PARAM_SPECS: tuple[ParamSpec, ...] = (
     _f("e_com_max_j", 594.0, "E_com^max, communication energy budget per UAV [J] (C11)",
        0.0, None, True),
     _f("rate_min_mbps", [10.0, 16.95, 1.0], "R_min,k, minimum data rate of U0, U1, U2 "
-       "[Mbit/s] (C10)", 0.0, None, length=3),
+       "[Mbit/s] (C10)", 0.0, None, length=NUM_UAVS),
     _f("comm_bandwidth_hz", 1.0e9, "B_c, FDMA bandwidth per UAV [Hz]", 0.0, None, True),
     _f("ref_snr_db", 18.69, "beta_c, channel gain at 1 m over noise power [dB]", -200.0, 200.0),
     _f("coherence_rg_min", 0.8, "gamma_Rg^min, minimum baseline coherence (C7)", 0.01, 1.0,

@@ -63,6 +63,7 @@ from uav_insar_planner.mavlink.setpoints import setpoint_message
 from uav_insar_planner.mavlink.signing import read_key_file, signing_state
 from uav_insar_planner.mavlink.supervision import WatchedVehicle, is_vehicle_heartbeat, phase
 from uav_insar_planner.mavlink.trajectory import PassTrajectory, clean_formation, too_close
+from uav_insar_planner.swarm import uav_name
 
 __all__ = ["Bridge", "BridgeConfig", "BridgeEvent", "VehicleStatus"]
 
@@ -255,10 +256,10 @@ class Bridge:
         for j, k, d in too_close(formation, limit):
             for a, b in ((j, k), (k, j)):
                 self._separation[a] = (self._separation[a] + "; " if self._separation[a]
-                                       else "") + f"{d:.2f} m from uav{b}"
-            self._event(-1, "warn", f"uav{j} and uav{k} are planned {d:.2f} m apart, closer "
-                                    f"than min_separation_m {limit:g} m (standard GNSS is "
-                                    "good to ~1.5-3 m; RTK needed)")
+                                       else "") + f"{d:.2f} m from {uav_name(b)}"
+            self._event(-1, "warn", f"{uav_name(j)} and {uav_name(k)} are planned {d:.2f} m "
+                                    f"apart, closer than min_separation_m {limit:g} m "
+                                    "(standard GNSS is good to ~1.5-3 m; RTK needed)")
 
     def _new_sequence(self, v: WatchedVehicle) -> ArmingSequence:
         def start_down() -> float:

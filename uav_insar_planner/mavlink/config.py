@@ -8,18 +8,23 @@ from uav_insar_planner.mavlink.frames import Vec3
 from uav_insar_planner.mavlink.link import parse_address
 from uav_insar_planner.params import ParamSpec, check_value
 from uav_insar_planner.plan import SAFE_SEPARATION_M as DEFAULT_MIN_SEPARATION_M
+from uav_insar_planner.swarm import UAVS
 
 ORIGIN_LIMIT_M = 1e5  # float32 spacing at 1e5 m is 2**-7 m = 7.8 mm
+
+# Vehicle k's default sysid and local UDP port: FIRST_SYSID + k, FIRST_PORT + PORT_STEP k.
+FIRST_SYSID = 2
+FIRST_PORT, PORT_STEP = 14552, 10
 
 # The bridge's parameters (ROS descriptors, README table, BridgeConfig.validate). Defaults
 # pair with `uav-insar-vehicle --sysid 2..4 --listen udpin:127.0.0.1:14552/14562/14572`.
 BRIDGE_SPECS = (
-    ParamSpec("connections", list, ["udpout:127.0.0.1:14552", "udpout:127.0.0.1:14562",
-                                    "udpout:127.0.0.1:14572"],
+    ParamSpec("connections", list,
+              [f"udpout:127.0.0.1:{FIRST_PORT + PORT_STEP * k}" for k in UAVS],
               "pymavlink connection string per UAV (or one shared): udpout:HOST:PORT, "
               "udpin:HOST:PORT, tcp:HOST:PORT, /dev/ttyUSB0,57600"),
-    ParamSpec("target_sysids", list, [2, 3, 4], "MAVLink system id of UAV 0, 1, 2 (1..255, "
-              "distinct)"),
+    ParamSpec("target_sysids", list, [FIRST_SYSID + k for k in UAVS],
+              "MAVLink system id of UAV 0, 1, 2 (1..255, distinct)"),
     ParamSpec("source_sysid", int, 255, "our own system id (ArduPilot: match SYSID_MYGCS)",
               1, 255),
     ParamSpec("track_bearing_deg", float, 0.0, "bearing of the along-track axis y from north "

@@ -32,9 +32,10 @@ from rclpy.parameter import Parameter
 
 from uav_insar_planner.mavlink.config import BRIDGE_SPECS, ORIGIN_LIMIT_M
 from uav_insar_planner.params import PARAM_SPECS, SPEC_BY_NAME, ParamSpec, check_value, shown
+from uav_insar_planner.swarm import NUM_UAVS
 
 AGENT_SPECS = (
-    ParamSpec("uav_id", int, 0, "which UAV this agent flies: 0 master, 1, 2", 0, 2),
+    ParamSpec("uav_id", int, 0, "which UAV this agent flies: 0 master, 1, 2", 0, NUM_UAVS - 1),
     ParamSpec("time_scale", float, 1.0, "mission seconds per wall-clock second", 0.0, 1000.0,
               True),
     ParamSpec("position_noise_std_m", float, 0.0, "std of the position disturbance per axis "
