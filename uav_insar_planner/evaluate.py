@@ -83,7 +83,7 @@ def evaluate(p: Params, formation: np.ndarray, p_com: np.ndarray, scheme: str) -
     pairs = {k: pair_metrics(p, q[0], q[k]) for k in slaves}
 
     sig = [pairs[k]["sigma_h_m"] for k in slaves]
-    sigma_h = float(model.fused_height_error(*sig)) if len(sig) == 2 else sig[0]
+    sigma_h = model.fused_height_error_of_pairs(sig)
     r0 = float(model.slant_range(q[0, 0], q[0, 1], p.x_t))
     bsq = sum(pairs[k]["b_perp_m"] ** 2 for k in slaves)
     bound = float(model.height_error_bound(p.wavelength, r0, p.theta0, bsq,

@@ -186,6 +186,12 @@ def fused_height_error(sigma_h1: ArrayLike, sigma_h2: ArrayLike) -> ArrayLike:
     return np.sqrt((w1**2 * s1**2 + w2**2 * s2**2) / (w1 + w2) ** 2)
 
 
+def fused_height_error_of_pairs(sigmas: list[float]) -> float:
+    """The DEM's sigma_h from the flown pairs' sigma_hk: eq. 15 for the dual baseline, the
+    pair's own sigma_h1 for a single baseline."""
+    return float(fused_height_error(*sigmas)) if len(sigmas) == 2 else sigmas[0]
+
+
 def worst_case_coherence(p: Params) -> float:
     """A = gamma_Rg^min gamma_SNR^min gamma_other  (Proposition 1)."""
     return p.coherence_rg_min * p.coherence_snr_min * p.coherence_other
