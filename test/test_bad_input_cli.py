@@ -1,5 +1,6 @@
-"""Hostile and careless input to `uav-insar` and the params reader (issue 12, findings 5, 6, 10):
-every case is one line on stderr and exit 2, no traceback, refused before any solve starts."""
+"""Hostile and careless input to `uav-insar` and the params reader (bad values, files, paths
+and command lines): every case is one line on stderr and exit 2, no traceback, refused before
+any solve starts."""
 from __future__ import annotations
 
 import time

@@ -1,6 +1,7 @@
-"""Degenerate and extreme scenarios (issue 12, findings 6 and 7): every allowed scenario gets a
-right verdict from both back ends without an exception or a numpy RuntimeWarning; values that
-make the model meaningless are refused by the parameter ranges, with the reason in the line."""
+"""Degenerate and extreme scenarios (relaxations of Table I, every parameter at the edge of
+its range, extreme allowed values): every allowed scenario gets a right verdict from both back
+ends without an exception or a numpy RuntimeWarning; values that make the model meaningless
+are refused by the parameter ranges, with the reason in the line."""
 from __future__ import annotations
 
 import re

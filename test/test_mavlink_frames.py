@@ -1,4 +1,4 @@
-"""Track frame <-> NED, against hand-worked cases (DESIGN.md section 6)."""
+"""Track frame <-> NED, against hand-worked cases (README, MAVLink, section "Frames")."""
 import math
 
 import pytest

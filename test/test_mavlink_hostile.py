@@ -1,4 +1,4 @@
-"""Hostile and careless MAVLink input (issue 12), bridge side, on real loopback UDP: values
+"""Hostile and careless MAVLink input, bridge side, on real loopback UDP: values
 that do not fit MAVLink's float32 going out, non-finite positions coming in, heartbeats for a
 known sysid from a stranger. Each is dropped and counted, logged at a bounded rate, and the
 I/O thread lives on."""

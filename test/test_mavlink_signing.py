@@ -1,4 +1,4 @@
-"""MAVLink 2 signing (issue 12): the key file, and on real loopback UDP a signed vehicle that
+"""MAVLink 2 signing: the key file, and on real loopback UDP a signed vehicle that
 obeys only correctly signed setpoints, with the bridge and the vehicle signed end to end."""
 import os
 import time

@@ -12,7 +12,7 @@ from uav_insar_planner.model import slave_range_max
 from uav_insar_planner.params import default_params
 from uav_insar_planner.schemes import static_power_w
 from uav_insar_planner.solver import solve
-from uav_insar_planner.solver.ao.closed_forms import c4_surrogate, c7_slopes, master_range_max
+from uav_insar_planner.solver.ao.closed_forms import c7_slopes, master_range_max
 from uav_insar_planner.solver.power import schedules
 from uav_insar_planner.solver.start_grid import find_start
 
@@ -97,6 +97,13 @@ def test_proposition2_equivalence(gamma_rg_min):
         else:
             prop2 = alpha_b is None or math.tan(theta) <= alpha_b
         assert (g >= gamma_rg_min) == prop2, math.degrees(theta)
+
+
+def c4_surrogate(q: np.ndarray, q_ref: np.ndarray, q_other: np.ndarray) -> float:
+    """Eq. (18) as a number: 2 q^T (q_ref - q_other) - ||q_ref||^2 + ||q_other||^2, the form
+    the AO sub-problems' C4~ constraints (ao/master.py, ao/slave.py) hold >= d_min^2 (the paper
+    prints d_min; a bound on the squared distance needs the squared threshold)."""
+    return float(2.0 * q @ (q_ref - q_other) - q_ref @ q_ref + q_other @ q_other)
 
 
 def test_c4_surrogate_is_a_lower_bound():

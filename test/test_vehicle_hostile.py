@@ -1,4 +1,4 @@
-"""Hostile and careless input to the SITL-style vehicle (issue 12), over loopback UDP from a
+"""Hostile and careless input to the SITL-style vehicle, over loopback UDP from a
 bare pymavlink ground station: every bad value is refused with the right MAV_RESULT or
 ignored, counted, and the position never turns NaN; bad command lines are one line and exit
 2; a vehicle loop that dies is recorded and makes the program exit 1."""

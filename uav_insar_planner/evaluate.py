@@ -16,8 +16,8 @@ from uav_insar_planner import model
 from uav_insar_planner.params import Params
 from uav_insar_planner.plan import ConstraintStatus
 from uav_insar_planner.schemes import active_uavs, slave_uavs, static_power_w
+from uav_insar_planner.swarm import uav_name
 
-CONSTRAINT_NAMES = tuple(f"C{i}" for i in range(1, 12))
 # Relative feasibility tolerance: a constraint counts as met when its slack is at least
 # -FEAS_TOL times the constraint's own scale (numerical solvers stop at ~1e-8 accuracy).
 FEAS_TOL = 1e-6
@@ -74,8 +74,8 @@ def pair_metrics(p: Params, q0: np.ndarray, qk: np.ndarray) -> dict[str, float]:
 
 
 def evaluate(p: Params, formation: np.ndarray, p_com: np.ndarray, scheme: str) -> Evaluation:
-    """Metrics and C1..C11 for `formation` ((3, 2) rows (x_k, z_k), NaN rows for UAVs the
-    scheme does not fly) and `p_com` ((3, N) watts)."""
+    """Metrics and C1..C11 for `formation` ((NUM_UAVS, 2) rows (x_k, z_k), NaN rows for UAVs the
+    scheme does not fly) and `p_com` ((NUM_UAVS, N) watts)."""
     q = np.asarray(formation, dtype=float)
     power = np.asarray(p_com, dtype=float)
     uavs = active_uavs(scheme)
@@ -83,7 +83,7 @@ def evaluate(p: Params, formation: np.ndarray, p_com: np.ndarray, scheme: str) -
     pairs = {k: pair_metrics(p, q[0], q[k]) for k in slaves}
 
     sig = [pairs[k]["sigma_h_m"] for k in slaves]
-    sigma_h = float(model.fused_height_error(*sig)) if len(sig) == 2 else sig[0]
+    sigma_h = model.fused_height_error_of_pairs(sig)
     r0 = float(model.slant_range(q[0, 0], q[0, 1], p.x_t))
     bsq = sum(pairs[k]["b_perp_m"] ** 2 for k in slaves)
     bound = float(model.height_error_bound(p.wavelength, r0, p.theta0, bsq,
@@ -134,12 +134,12 @@ def evaluate(p: Params, formation: np.ndarray, p_com: np.ndarray, scheme: str) -
             c["C9"] = ConstraintStatus(False, -dev, "static schedule")
 
     metrics = {
-        "pairs": {f"uav{k}": pairs[k] for k in slaves},
-        "slant_range_m": {f"uav{k}": ranges[k] for k in uavs},
-        "look_angle_deg": {f"uav{k}": float(np.degrees(looks[k])) for k in uavs},
-        "swath_m": {f"uav{k}": swaths[k] for k in uavs},
-        "min_rate_mbps": {f"uav{k}": float(rates[k].min() / 1e6) for k in uavs},
-        "energy_j": {f"uav{k}": float(power[k].sum() * p.slot_duration_s) for k in uavs},
+        "pairs": {uav_name(k): pairs[k] for k in slaves},
+        "slant_range_m": {uav_name(k): ranges[k] for k in uavs},
+        "look_angle_deg": {uav_name(k): float(np.degrees(looks[k])) for k in uavs},
+        "swath_m": {uav_name(k): swaths[k] for k in uavs},
+        "min_rate_mbps": {uav_name(k): float(rates[k].min() / 1e6) for k in uavs},
+        "energy_j": {uav_name(k): float(power[k].sum() * p.slot_duration_s) for k in uavs},
     }
     return Evaluation(sigma_h, bound, metrics, c)
 

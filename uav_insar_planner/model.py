@@ -95,9 +95,22 @@ def slave_range_max(p: Params, r0: ArrayLike) -> ArrayLike:
         return gm / r0**2 * (1.0 / (p.coherence_snr_min**2 * (1.0 + r0**3 / gm)) - 1.0)
 
 
+def coherence_snr_of_noise(nsr0: ArrayLike, nsrk: ArrayLike) -> ArrayLike:
+    """gamma_SNR,k = 1/sqrt(1 + 1/SNR_0) * 1/sqrt(1 + 1/SNR_k)  (eq. 7), from the
+    noise-to-signal ratios nsr = 1/SNR: the one place eq. 7 is written."""
+    return 1.0 / np.sqrt((1.0 + np.asarray(nsr0)) * (1.0 + np.asarray(nsrk)))
+
+
 def coherence_snr(snr0: ArrayLike, snrk: ArrayLike) -> ArrayLike:
-    """gamma_SNR,k = 1/sqrt(1 + 1/SNR_0) * 1/sqrt(1 + 1/SNR_k)  (eq. 7)."""
-    return 1.0 / np.sqrt((1.0 + 1.0 / np.asarray(snr0)) * (1.0 + 1.0 / np.asarray(snrk)))
+    """gamma_SNR,k from the SNRs of eqs. 8-9 (eq. 7); the checker's form."""
+    return coherence_snr_of_noise(1.0 / np.asarray(snr0), 1.0 / np.asarray(snrk))
+
+
+def coherence_snr_at_ranges(r0: ArrayLike, rk: ArrayLike, gm: float) -> ArrayLike:
+    """gamma_SNR,k from the ranges (eq. 7 with eqs. 8-9: 1/SNR_0 = r_0^3/gamma_m,
+    1/SNR_k = r_0^2 r_k/gamma_m): decreasing in both r_0 and r_k; the ray model's form."""
+    r0 = np.asarray(r0, dtype=float)
+    return coherence_snr_of_noise(r0**3 / gm, r0**2 * np.asarray(rk) / gm)
 
 
 def chi(theta0: float, thetak: ArrayLike) -> ArrayLike:
@@ -132,6 +145,21 @@ def height_of_ambiguity(wavelength: float, r0: ArrayLike, theta0: float,
         return wavelength * np.asarray(r0) * np.sin(theta0) / np.asarray(b_perp)
 
 
+def baseline_max(p: Params, r0: ArrayLike) -> ArrayLike:
+    """C8 as a baseline limit: h_amb,k >= h_amb^min with h_amb,k = lambda r_0 sin(theta_0) /
+    b_perp,k (eq. 12) is b_perp,k <= b_max(r_0) = lambda r_0 sin(theta_0) / h_amb^min.
+
+    Linear in r_0 (at r_0 = 1 it is the limit per metre of master range). Every back end's
+    C8 asks here; `master_range_min_c8` is its inverse."""
+    return p.wavelength * r0 * math.sin(p.theta0) / p.h_amb_min
+
+
+def master_range_min_c8(p: Params, b_perp: ArrayLike) -> ArrayLike:
+    """C8 as a master-range limit, the inverse of `baseline_max`: the least r_0 with
+    b_max(r_0) >= b_perp, r_0 >= h_amb^min b_perp / (lambda sin(theta_0))  (eq. 12)."""
+    return p.h_amb_min * b_perp / (p.wavelength * math.sin(p.theta0))
+
+
 def phase_error_crb(gamma: ArrayLike, looks: int) -> ArrayLike:
     """sigma_Phi,k = (1/gamma_k) sqrt((1 - gamma_k^2) / (2 n_L))  (eq. 14, Cramer-Rao bound)."""
     g = np.asarray(gamma, dtype=float)
@@ -156,6 +184,12 @@ def fused_height_error(sigma_h1: ArrayLike, sigma_h2: ArrayLike) -> ArrayLike:
     s1, s2 = np.asarray(sigma_h1, dtype=float), np.asarray(sigma_h2, dtype=float)
     w1, w2 = fusion_weights(s1, s2)
     return np.sqrt((w1**2 * s1**2 + w2**2 * s2**2) / (w1 + w2) ** 2)
+
+
+def fused_height_error_of_pairs(sigmas: list[float]) -> float:
+    """The DEM's sigma_h from the flown pairs' sigma_hk: eq. 15 for the dual baseline, the
+    pair's own sigma_h1 for a single baseline."""
+    return float(fused_height_error(*sigmas)) if len(sigmas) == 2 else sigmas[0]
 
 
 def worst_case_coherence(p: Params) -> float:

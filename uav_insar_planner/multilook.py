@@ -138,16 +138,6 @@ def phase_std(gamma, looks: int) -> np.ndarray:
     return np.where(g >= 1.0, 0.0, out)
 
 
-def single_look_std(gamma) -> np.ndarray:
-    """Closed form for n_L = 1: sigma^2 = pi^2/3 - pi arcsin(g) + arcsin(g)^2 - Li2(g^2)/2
-    (Li2 the dilogarithm), the test of the integration."""
-    from scipy.special import spence
-
-    g = np.asarray(gamma, dtype=float)
-    a = np.arcsin(g)
-    return np.sqrt(math.pi**2 / 3.0 - math.pi * a + a * a - 0.5 * spence(1.0 - g * g))
-
-
 def plan_metrics(pairs: dict[str, dict[str, float]], looks: int) -> dict[str, object]:
     """The multilook figures of a checked plan, from the checker's per-pair coherence and h_amb:
     per pair sigma_Phi (exact) and sigma_hk (eq. 13), fused with eq. 15's weights."""
@@ -158,5 +148,5 @@ def plan_metrics(pairs: dict[str, dict[str, float]], looks: int) -> dict[str, ob
         s_h = float(model.height_error(pm["h_amb_m"], s_phi))
         out["pairs"][name] = {"phase_error_rad": s_phi, "sigma_h_m": s_h}
         sig.append(s_h)
-    out["sigma_h_m"] = float(model.fused_height_error(*sig)) if len(sig) == 2 else sig[0]
+    out["sigma_h_m"] = model.fused_height_error_of_pairs(sig)
     return out

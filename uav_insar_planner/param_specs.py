@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from uav_insar_planner.plan import SAFE_SEPARATION_M
+from uav_insar_planner.swarm import NUM_UAVS, UAVS
 
 SCHEMES = ("proposed", "single-baseline", "fixed-master", "static-power")
 OBJECTIVES = ("exact", "bound", "multilook")
@@ -91,7 +92,7 @@ PARAM_SPECS: tuple[ParamSpec, ...] = (
     _f("e_com_max_j", 594.0, "E_com^max, communication energy budget per UAV [J] (C11)",
        0.0, None, True),
     _f("rate_min_mbps", [10.0, 16.95, 1.0], "R_min,k, minimum data rate of U0, U1, U2 "
-       "[Mbit/s] (C10)", 0.0, None, length=3),
+       "[Mbit/s] (C10)", 0.0, None, length=NUM_UAVS),
     _f("comm_bandwidth_hz", 1.0e9, "B_c, FDMA bandwidth per UAV [Hz]", 0.0, None, True),
     _f("ref_snr_db", 18.69, "beta_c, channel gain at 1 m over noise power [dB]", -200.0, 200.0),
     _f("coherence_rg_min", 0.8, "gamma_Rg^min, minimum baseline coherence (C7)", 0.01, 1.0,
@@ -143,10 +144,13 @@ SPEC_BY_NAME: dict[str, ParamSpec] = {s.name: s for s in PARAM_SPECS}
 AXES = 3  # a position or velocity vector: (x, y, z) or (N, E, D), not the number of UAVs
 # MAVLink positions are float32: its spacing at 1e5 m is 2**-7 m = 7.8 mm.
 ORIGIN_LIMIT_M = 1e5
+# Vehicle k's default sysid and local UDP port: FIRST_SYSID + k, FIRST_PORT + PORT_STEP k.
+FIRST_SYSID = 2
+FIRST_PORT, PORT_STEP = 14552, 10
 AUTOPILOTS = ("ardupilot", "px4")  # the flavours mavlink/autopilots.py knows the modes of
 
 AGENT_SPECS = (
-    ParamSpec("uav_id", int, 0, "which UAV this agent flies: 0 master, 1, 2", 0, 2),
+    ParamSpec("uav_id", int, 0, "which UAV this agent flies: 0 master, 1, 2", 0, NUM_UAVS - 1),
     ParamSpec("time_scale", float, 1.0, "mission seconds per wall-clock second", 0.0, 1000.0,
               True),
     ParamSpec("position_noise_std_m", float, 0.0, "std of the position disturbance per axis "
@@ -201,12 +205,12 @@ AGENT_SCENARIO_SPECS = tuple(SPEC_BY_NAME[n] for n in (
 # The bridge's parameters (ROS descriptors, README table, BridgeConfig.validate). Defaults
 # pair with `uav-insar-vehicle --sysid 2..4 --listen udpin:127.0.0.1:14552/14562/14572`.
 BRIDGE_SPECS = (
-    ParamSpec("connections", list, ["udpout:127.0.0.1:14552", "udpout:127.0.0.1:14562",
-                                    "udpout:127.0.0.1:14572"],
+    ParamSpec("connections", list,
+              [f"udpout:127.0.0.1:{FIRST_PORT + PORT_STEP * k}" for k in UAVS],
               "pymavlink connection string per UAV (or one shared): udpout:HOST:PORT, "
               "udpin:HOST:PORT, tcp:HOST:PORT, /dev/ttyUSB0,57600"),
-    ParamSpec("target_sysids", list, [2, 3, 4], "MAVLink system id of UAV 0, 1, 2 (1..255, "
-              "distinct)"),
+    ParamSpec("target_sysids", list, [FIRST_SYSID + k for k in UAVS],
+              "MAVLink system id of UAV 0, 1, 2 (1..255, distinct)"),
     ParamSpec("source_sysid", int, 255, "our own system id (ArduPilot: match SYSID_MYGCS)",
               1, 255),
     ParamSpec("track_bearing_deg", float, 0.0, "bearing of the along-track axis y from north "

@@ -43,10 +43,6 @@ def dbm_to_watt(dbm: float) -> float:
     return 10.0 ** ((dbm - 30.0) / 10.0)
 
 
-def linear_to_db(value: float) -> float:
-    return 10.0 * math.log10(value)
-
-
 
 
 class ParamError(ValueError):
@@ -74,7 +70,7 @@ class Params:
     speed: float
     p_max_w: float
     e_max_j: float
-    rate_min_bps: tuple[float, float, float]
+    rate_min_bps: tuple[float, ...]  # one per UAV (swarm.NUM_UAVS)
     comm_bandwidth_hz: float
     beta_c: float
     coherence_rg_min: float
@@ -103,7 +99,7 @@ class Params:
     solver: str
     #: Per-UAV budgets [J] in place of E_com^max in C11, for a re-plan in mid-mission
     #: (replan.py); None: e_max_j for every UAV. Not a user parameter: `replace` drops it.
-    energy_budget_uav_j: tuple[float, float, float] | None = None
+    energy_budget_uav_j: tuple[float, ...] | None = None  # one per UAV (swarm.NUM_UAVS)
 
     def energy_budget_j(self, k: int) -> float:
         """E_com^max of UAV k in C11: e_max_j, unless a re-plan gave each UAV its own."""

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from uav_insar_planner.swarm import UAV_NAMES
+from uav_insar_planner.swarm import UAV_NAMES, UAVS
 
 # Two UAVs planned closer than this may touch once each flies with its own position error:
 # standard GNSS (single frequency, SBAS) is good to about 1.5-3 m horizontally (95 %), RTK to
@@ -44,9 +44,9 @@ class ConstraintStatus:
 class Plan:
     """A solved (or infeasible) instance of problem (P).
 
-    formation: (3, 2) array of (x_k, z_k) in metres, row k = U_k; a row is NaN when the scheme
-      does not fly that UAV (single-baseline has no U_2).
-    p_com_w: (3, N) communication power in watts, P_com[k][n]; zeros for a UAV not flown.
+    formation: (NUM_UAVS, 2) array of (x_k, z_k) in metres, row k = U_k; a row is NaN when
+      the scheme does not fly that UAV (single-baseline has no U_2).
+    p_com_w: (NUM_UAVS, N) communication power in watts, P_com[k][n]; zeros for a UAV not flown.
     """
 
     feasible: bool
@@ -69,7 +69,7 @@ class Plan:
 
     @property
     def active_uavs(self) -> list[int]:
-        return [k for k in range(3) if np.all(np.isfinite(self.formation[k]))]
+        return [k for k in UAVS if np.all(np.isfinite(self.formation[k]))]
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary (see README, 'uav-insar solve --json')."""

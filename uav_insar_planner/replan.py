@@ -8,12 +8,13 @@ the N - n0 slots left, each within the energy it has left. The reduced problem i
     num_slots N' = N - n0,  g_y' = g_y - y[n0]  (the along-track origin moved to slot n0: only
                                                  y[n] - g_y enters the model, so this is exact)
     scheme single-baseline,  R_min,1' = R_min,s  (the survivor plays U1's part)
-    energy_budget_uav_j = (E_left,0, E_left,s, 0)  (C11 per UAV, `Params.energy_budget_j`)
+    energy_budget_uav_j = (E_left,0, E_left,s, 0 ...)  (C11 per UAV, `Params.energy_budget_j`)
 
 and the objective and solver of the scenario. `full_plan` maps its answer back: formation
-rows 0 and s, the lost slave NaN (DESIGN.md section 4: a UAV not flown); P_com[k][:n0] keeps
-the schedule flown so far, P_com[k][n0:] is the new one, the lost UAV's row is zero. The plan's
-metrics and constraint report are the reduced problem's (the remaining slots).
+rows 0 and s, the lost slave NaN (as in every Plan, a NaN row is a UAV not flown);
+P_com[k][:n0] keeps the schedule flown so far, P_com[k][n0:] is the new one, the lost UAV's row
+is zero. The plan's metrics and constraint report are the reduced problem's (the remaining
+slots).
 
 Power re-plan (`power_replan`), formation unchanged, for a UAV whose closed loop saturates:
 over the slots n >= n0 left, the least power meeting R_min at the planned position over the
@@ -38,10 +39,10 @@ import numpy as np
 
 from uav_insar_planner import model
 from uav_insar_planner.params import Params
-from uav_insar_planner.plan import UAV_NAMES, Plan
-from uav_insar_planner.schemes import slave_uavs
+from uav_insar_planner.plan import Plan
 from uav_insar_planner.solver import solve
 from uav_insar_planner.solver.power import power_schedule
+from uav_insar_planner.swarm import MASTER, NUM_UAVS, SLAVES, UAV_NAMES, uav_name
 
 REDUCED_SCHEME = "single-baseline"
 
@@ -60,14 +61,14 @@ class ReducedProblem:
 
 def energy_left_j(params: Params, power_w: np.ndarray, k: int, first_slot: int) -> float:
     """E_com^max - sum_{n < first_slot} P_com[k][n] delta_t: what UAV k has left when it flew
-    the schedule `power_w` (3, N) up to slot first_slot."""
+    the schedule `power_w` (NUM_UAVS, N) up to slot first_slot."""
     used = float(np.sum(np.asarray(power_w, dtype=float)[k, :first_slot]))
     return params.e_max_j - used * params.slot_duration_s
 
 
 def surviving_slave(flown: list[int], lost: int) -> int | None:
     """The slave still flying when `lost` is lost from the UAVs `flown`, or None if none is."""
-    left = [k for k in flown if k > 0 and k != lost]
+    left = [k for k in flown if k != MASTER and k != lost]
     return left[0] if len(left) == 1 else None
 
 
@@ -75,13 +76,14 @@ def remaining_problem(params: Params, lost: int, survivor: int, first_slot: int,
                       energy_left: Mapping[int, float]) -> ReducedProblem:
     """The reduced problem of the module doc. ValueError for the master, a slot outside
     0..N-1 or a negative energy (one line naming the value)."""
-    if lost == 0 or survivor not in (1, 2) or survivor == lost:
-        raise ValueError(f"lost: value {lost!r} is not allowed; expected a slave (1 or 2) "
-                         f"other than the survivor uav{survivor}")
+    if lost not in SLAVES or survivor not in SLAVES or survivor == lost:
+        raise ValueError(f"lost: value {lost!r} is not allowed; expected a slave "
+                         f"({' or '.join(map(str, SLAVES))}) other than the survivor "
+                         f"{uav_name(survivor)}")
     if not 0 <= first_slot < params.num_slots:
         raise ValueError(f"first_slot: value {first_slot!r} is not allowed; expected 0.."
                          f"{params.num_slots - 1}")
-    budgets = (float(energy_left[0]), float(energy_left[survivor]))
+    budgets = (float(energy_left[MASTER]), float(energy_left[survivor]))
     if not all(np.isfinite(e) and e > 0.0 for e in budgets):
         raise ValueError(f"energy_left: value {list(budgets)!r} is not allowed; expected "
                          "finite energies > 0 for the master and the survivor")
@@ -91,15 +93,16 @@ def remaining_problem(params: Params, lost: int, survivor: int, first_slot: int,
     rate[1] = rate[survivor]
     reduced = params.replace(num_slots=params.num_slots - first_slot, scheme=REDUCED_SCHEME,
                              ground_station_m=[gx, gy - y0, gz], rate_min_mbps=rate)
-    reduced = dataclasses.replace(reduced, energy_budget_uav_j=(*budgets, 0.0))
-    return ReducedProblem(reduced, (0, survivor), first_slot, lost)
+    unflown = (0.0,) * (NUM_UAVS - len(budgets))
+    reduced = dataclasses.replace(reduced, energy_budget_uav_j=budgets + unflown)
+    return ReducedProblem(reduced, (MASTER, survivor), first_slot, lost)
 
 
 def full_plan(problem: ReducedProblem, answer: Plan, flown_power_w: np.ndarray) -> Plan:
     """`answer` to `problem` as a plan of the whole mission (see the module doc)."""
     n0, rows = problem.first_slot, problem.rows
     power = np.array(flown_power_w, dtype=float, copy=True)
-    formation = np.full((3, 2), np.nan)
+    formation = np.full((NUM_UAVS, 2), np.nan)
     power[:, n0:] = 0.0
     for i, k in enumerate(rows):
         formation[k] = answer.formation[i]
@@ -110,7 +113,7 @@ def full_plan(problem: ReducedProblem, answer: Plan, flown_power_w: np.ndarray) 
                      if isinstance(value, dict) else value)
                for key, value in answer.metrics.items()}
     note = (f"re-planned from slot {n0} without {UAV_NAMES[problem.lost]}: "
-            f"{REDUCED_SCHEME} for uav0 and {UAV_NAMES[rows[1]]}")
+            f"{REDUCED_SCHEME} for {UAV_NAMES[MASTER]} and {UAV_NAMES[rows[1]]}")
     return dataclasses.replace(answer, formation=formation, p_com_w=power, metrics=metrics,
                                message=note + ("; " + answer.message if answer.message else ""))
 
@@ -156,12 +159,7 @@ def power_replan(params: Params, plan: Plan, k: int, first_slot: int, energy_lef
 def hold_plan(params: Params, why: str) -> Plan:
     """The plan of a mission that cannot continue: every pose NaN (hold), every power zero."""
     return Plan(feasible=False, scheme=params.scheme, objective=params.objective,
-                solver=params.solver, formation=np.full((3, 2), np.nan),
-                p_com_w=np.zeros((3, params.num_slots)), sigma_h_m=float("nan"),
+                solver=params.solver, formation=np.full((NUM_UAVS, 2), np.nan),
+                p_com_w=np.zeros((NUM_UAVS, params.num_slots)), sigma_h_m=float("nan"),
                 sigma_h_bound_m=float("nan"), iterations=0, solve_time_s=0.0,
                 constraints={}, message=why)
-
-
-def flown_slaves(plan: Plan) -> list[int]:
-    """The slaves `plan` flies (rows not NaN)."""
-    return [k for k in plan.active_uavs if k in slave_uavs("proposed")]

@@ -8,16 +8,18 @@
 from __future__ import annotations
 
 from uav_insar_planner.params import Params
+from uav_insar_planner.swarm import MASTER, SLAVES, UAVS
 
 
 def active_uavs(scheme: str) -> tuple[int, ...]:
-    """The UAVs a scheme flies: benchmark 1 (single-baseline) has no U2."""
-    return (0, 1) if scheme == "single-baseline" else (0, 1, 2)
+    """The UAVs a scheme flies: benchmark 1 (single-baseline) flies the master and its first
+    slave only."""
+    return (MASTER, SLAVES[0]) if scheme == "single-baseline" else tuple(UAVS)
 
 
 def slave_uavs(scheme: str) -> tuple[int, ...]:
-    """The slaves a scheme flies: (1,) for single-baseline, else (1, 2)."""
-    return tuple(k for k in active_uavs(scheme) if k > 0)
+    """The slaves a scheme flies: (1,) for single-baseline, else every slave."""
+    return tuple(k for k in active_uavs(scheme) if k != MASTER)
 
 
 def static_power_w(p: Params) -> float:

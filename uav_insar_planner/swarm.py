@@ -17,4 +17,9 @@ def uav_name(k: int) -> str:
     return f"uav{k}"
 
 
+def agent_name(k: int) -> str:
+    """The node name of UAV `k`'s agent when several run on one graph (`-r __node:=agentK`)."""
+    return f"agent{k}"
+
+
 UAV_NAMES = tuple(uav_name(k) for k in UAVS)

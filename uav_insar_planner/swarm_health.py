@@ -29,6 +29,7 @@ import numpy as np
 from uav_insar_planner.evaluate import rate_tolerance_bps
 from uav_insar_planner.params import Params
 from uav_insar_planner.replan import measured_gain
+from uav_insar_planner.swarm import NUM_UAVS
 
 SATURATED_MISSES = 3
 SATURATION_RTOL = 1e-3
@@ -77,7 +78,7 @@ class UavState:
 class SwarmMonitor:
     """The state machine of the module doc for the scenario `params` (SI)."""
 
-    def __init__(self, params: Params, num_uavs: int = 3):
+    def __init__(self, params: Params, num_uavs: int = NUM_UAVS):
         self.params = params
         self.uavs = [UavState() for _ in range(num_uavs)]
         self.lost: dict[int, Lost] = {}
@@ -87,7 +88,7 @@ class SwarmMonitor:
 
     # --- what is heard -------------------------------------------------------------------
     def set_plan(self, power_w: np.ndarray, params: Params | None = None) -> None:
-        """The schedule now flown (3, N) [W]; saturation counts start again."""
+        """The schedule now flown (NUM_UAVS, N) [W]; saturation counts start again."""
         if params is not None:
             self.params, self._tol = params, rate_tolerance_bps(params.rate_min_bps)
         self.plan_power_w = np.asarray(power_w, dtype=float)

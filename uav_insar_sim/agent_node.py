@@ -55,6 +55,7 @@ from uav_insar_planner.ros.parameters import (
 from uav_insar_planner.ros.plan_gate import PlanGate
 from uav_insar_planner.ros.plan_msgs import Formation, PowerSchedule
 from uav_insar_planner.ros.run import run_node
+from uav_insar_planner.swarm import uav_name
 from uav_insar_sim.flight import choose_flight
 from uav_insar_sim.vehicle.simulator import SimVehicle
 
@@ -89,6 +90,7 @@ class AgentNode(Node):
         self.vehicle = self.flight.vehicle
         self.mission = self.flight.mission
         self.k = own["uav_id"]
+        self.uav_name = uav_name(self.k)  # the prefix of every log line
         self._announced = False
         self._phase = self.mission.phase
         self._pose_pub = self.create_publisher(PoseStamped, topics.pose(self.k), topics.DEPTH)
@@ -96,13 +98,13 @@ class AgentNode(Node):
                                                topics.RATE_DEPTH)
         self._offload_pub = self.create_publisher(Float64MultiArray, topics.offload(self.k),
                                                   topics.RATE_DEPTH)
-        self.gate = PlanGate(self, self._adopt_plan, f"uav{self.k}: ",  # one plan at a time
+        self.gate = PlanGate(self, self._adopt_plan, f"{self.uav_name}: ",  # one plan at a time
                              topics.flown_plan(self.k))
         self.create_timer(TICK_PERIOD_S, self._tick)
         note = self.flight.start()
         if note:
-            self.get_logger().info(f"uav{self.k}: {note}")
-        self.get_logger().info(f"uav{self.k}: waiting for the formation")
+            self.get_logger().info(f"{self.uav_name}: {note}")
+        self.get_logger().info(f"{self.uav_name}: waiting for the formation")
 
     def destroy_node(self) -> None:
         if self.flight is not None:
@@ -113,7 +115,7 @@ class AgentNode(Node):
     def _adopt_plan(self, formation: Formation, power: PowerSchedule) -> None:
         """A matched, validated pair of the sole planner (ros/plan_gate.py)."""
         if len(formation.points) <= self.k:
-            self.get_logger().error(f"uav{self.k}: {power.plan_id} has no entry for this UAV; "
+            self.get_logger().error(f"{self.uav_name}: {power.plan_id} has no entry for this UAV; "
                                     "ignored")
             return
         # None: not flown by this plan (single-baseline's U2); the NaN target holds it at home.
@@ -121,19 +123,19 @@ class AgentNode(Node):
         n = power.p_com_w.shape[1]
         powers = [float(v) for v in power.p_com_w[self.k]]
         if n != self.mission.params.num_slots:
-            self.get_logger().warning(f"uav{self.k}: plan has {n} slots, num_slots is "
+            self.get_logger().warning(f"{self.uav_name}: plan has {n} slots, num_slots is "
                                       f"{self.mission.params.num_slots}; flying the plan's {n}")
         self.flight.set_plan(x, y, z, powers)
-        self.get_logger().info(f"uav{self.k}: flying {power.plan_id}")
+        self.get_logger().info(f"{self.uav_name}: flying {power.plan_id}")
         if not self._announced and self.mission.phase == "transit":
             self._announced = True
-            self.get_logger().info(f"uav{self.k}: plan received, {self.flight.how} to "
+            self.get_logger().info(f"{self.uav_name}: plan received, {self.flight.how} to "
                                    f"x={x:.3f} m, z={z:.3f} m for {n} slots")
 
     # --- flight --------------------------------------------------------------------------
     def _tick(self) -> None:
         if self.vehicle is not None and self.vehicle.failure is not None:
-            self.get_logger().error(f"uav{self.k}: embedded MAVLink vehicle died: "
+            self.get_logger().error(f"{self.uav_name}: embedded MAVLink vehicle died: "
                                     f"{self.vehicle.failure}; exiting")
             raise SystemExit(EXIT_CRASH)  # never a zombie agent that flies nothing
         for sample in self.flight.tick():
@@ -165,18 +167,18 @@ class AgentNode(Node):
     def _log_phase(self) -> None:
         log = self.get_logger()
         if self._phase == "track":
-            log.info(f"uav{self.k}: {self.flight.track_started_text()}")
+            log.info(f"{self.uav_name}: {self.flight.track_started_text()}")
         elif self._phase == "hold":
-            log.warning(f"uav{self.k}: the plan took this UAV out in mid-flight (NaN target): "
+            log.warning(f"{self.uav_name}: the plan took this UAV out in mid-flight (NaN target): "
                         f"holding position after {len(self.mission.samples)} slots")
         elif self._phase == "idle":
-            log.info(f"uav{self.k}: this scheme does not fly uav{self.k}; holding at home")
+            log.info(f"{self.uav_name}: this scheme does not fly {self.uav_name}; holding at home")
         elif self._phase == "done":
             samples = self.mission.samples
             tol = rate_tolerance_bps(self.mission.params.rate_min_bps)
             met = sum(s.margin_bps >= -tol for s in samples)
             worst = min(s.margin_bps for s in samples) / 1e6 if samples else float("nan")
-            log.info(f"uav{self.k}: mission complete: {len(samples)} slots flown, rate met in "
+            log.info(f"{self.uav_name}: mission complete: {len(samples)} slots flown, rate met in "
                      f"{met}, worst margin {worst:+.4g} Mbit/s")
 
 

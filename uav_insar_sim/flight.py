@@ -19,6 +19,7 @@ import time
 from collections.abc import Sequence
 
 from uav_insar_planner.mavlink.frames import TrackFrame
+from uav_insar_planner.param_specs import FIRST_SYSID
 from uav_insar_planner.params import Params
 from uav_insar_sim.fading import LinkFading
 from uav_insar_sim.mission import Mission, home_position
@@ -126,7 +127,7 @@ def embedded_vehicle(own: dict, frame: TrackFrame) -> SimVehicle:
     airborne in GUIDED at MAVLINK_START_HEIGHT_M above the agent's home, with the agent's
     speed and acceleration limits. ValueError (one line) for a bad connection string."""
     x, y, _ = home_position(own["uav_id"])
-    sysid = own["mavlink_sysid"] or 2 + own["uav_id"]
+    sysid = own["mavlink_sysid"] or FIRST_SYSID + own["uav_id"]
     start = frame.to_ned(float(x), float(y), MAVLINK_START_HEIGHT_M)
     try:
         return SimVehicle(sysid, own["mavlink_listen"], "ardupilot", start_ned=start,

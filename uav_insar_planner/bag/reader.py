@@ -16,9 +16,11 @@ from pathlib import Path
 
 import numpy as np
 
+from uav_insar_planner.swarm import UAV_NAMES
+
 PLAN_STATUS_NAME = "planner: plan"  # ros/diagnostics.PLAN_STATUS_NAME
-_UAV_TOPIC = re.compile(r"(?:^|/)uav(\d)/(achieved_rate|offload|pose)$")
-UAVS = range(3)
+_UAV_TOPIC = re.compile(rf"(?:^|/)({'|'.join(map(re.escape, UAV_NAMES))})/"
+                        r"(achieved_rate|offload|pose)$")
 
 
 class BagError(ValueError):
@@ -29,8 +31,8 @@ class BagError(ValueError):
 class MissionRecord:
     """What a bag holds about one mission (see the module docstring). Per UAV k:
     `rates[k]` (t_s, rate_bps) rows, `offloads[k]` (t_s, slot, power_w, energy_used_j,
-    energy_left_j) rows, `poses[k]` (t_s, x, y, z) rows; `formation` (3, 3) planned (x, y, z)
-    with NaN rows for UAVs not flown and `power` (3, N) planned P_com [W], None when absent;
+    energy_left_j) rows, `poses[k]` (t_s, x, y, z) rows; `formation` (NUM_UAVS, 3) planned (x, y, z)
+    with NaN rows for UAVs not flown and `power` (NUM_UAVS, N) planned P_com [W], None when absent;
     `plan_values` the plan status's key/values; `counts` messages per topic."""
 
     formation: np.ndarray | None = None
@@ -45,7 +47,7 @@ class MissionRecord:
 def _kind(topic: str) -> tuple[str, int]:
     m = _UAV_TOPIC.search(topic)
     if m:
-        return m[2], int(m[1])
+        return m[2], UAV_NAMES.index(m[1])
     if topic == "/diagnostics":
         return "diagnostics", -1
     for name in ("formation/power", "formation"):

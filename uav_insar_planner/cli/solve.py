@@ -14,6 +14,7 @@ import sys
 from uav_insar_planner.cli.scenario import add_scenario_arguments, scenario_params
 from uav_insar_planner.exit_codes import EXIT_INFEASIBLE, EXIT_OK
 from uav_insar_planner.params import SCHEMES, ParamError
+from uav_insar_planner.swarm import uav_name
 
 HELP = "solve problem (P) and print the plan"
 
@@ -41,7 +42,7 @@ def main(args: argparse.Namespace) -> int:
     closest = closest_pair(plan.formation) if plan.feasible else None
     if closest is not None and closest[0] < limit:
         d, j, k = closest
-        print(f"uav-insar: warning: uav{j} and uav{k} are planned {d:.2f} m apart, closer than "
-              f"{limit:g} m: with standard GNSS (1.5-3 m error) they may collide; fly RTK "
-              "or raise d_min_m", file=sys.stderr)
+        print(f"uav-insar: warning: {uav_name(j)} and {uav_name(k)} are planned {d:.2f} m "
+              f"apart, closer than {limit:g} m: with standard GNSS (1.5-3 m error) they may "
+              "collide; fly RTK or raise d_min_m", file=sys.stderr)
     return EXIT_OK if plan.feasible else EXIT_INFEASIBLE

@@ -7,7 +7,7 @@ import subprocess
 import time
 from typing import Any
 
-from uav_insar_planner.swarm import uav_name
+from uav_insar_planner.swarm import agent_name, uav_name
 
 # The planner's answer comes after uav_timeout_s (5 s by default) and a re-plan, and may take
 # that long and more on a busy host.
@@ -29,10 +29,10 @@ def kill_agent(w: Any, procs: list[subprocess.Popen], k: int, slot: int,
         return [f"  kill: the swarm never reached slot {slot}"], False
     agent.send_signal(signal.SIGKILL)
     killed, at, seen = time.monotonic(), swarm_slot(w), len(w.formations)
-    print(f"demo: killed agent{k} (SIGKILL) at slot {at}", flush=True)
+    print(f"demo: killed {agent_name(k)} (SIGKILL) at slot {at}", flush=True)
     others = [p for p in procs if p is not agent]
     if not w.spin_until(lambda: len(w.formations) > seen, ANSWER_TIMEOUT_S, others):
-        return [f"  kill: agent{k} killed at slot {at}; no new formation came"], False
+        return [f"  kill: {agent_name(k)} killed at slot {at}; no new formation came"], False
     after = time.monotonic() - killed
     w.spin_until(lambda: False, 1.0, others)  # the agents' and the bridge's reactions, logged
     w.spin_until(lambda: (s := w.plan_status()) is not None and uav_name(k) in s.message
@@ -42,7 +42,7 @@ def kill_agent(w: Any, procs: list[subprocess.Popen], k: int, slot: int,
     swarm = [s for m in w.diagnostics for s in m.status if s.name == "planner: swarm"]
     timeout_s = {kv.key: kv.value for kv in swarm[-1].values}.get("uav_timeout_s", "?") \
         if swarm else "?"
-    lines = [f"  kill: agent{k} killed (SIGKILL) at slot {at}; new formation {after:.2f} s "
+    lines = [f"  kill: {agent_name(k)} killed (SIGKILL) at slot {at}; new formation {after:.2f} s "
              f"later (uav_timeout_s {timeout_s} s)"]
     if "replan_latency_s" in values:
         lines.append(f"  planner: detection to new formation "

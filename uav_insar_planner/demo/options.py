@@ -7,6 +7,7 @@ from pathlib import Path
 
 from uav_insar_planner.cli.parser import OneLineParser
 from uav_insar_planner.demo.recorder import default_bag_path
+from uav_insar_planner.param_specs import PORT_STEP
 from uav_insar_planner.swarm import NUM_UAVS, UAVS
 
 REPO_CONFIG = Path(__file__).resolve().parents[1] / "config" / "params.yaml"
@@ -15,7 +16,6 @@ REPO_CONFIG = Path(__file__).resolve().parents[1] / "config" / "params.yaml"
 KILL_TIME_SCALE = 4.0
 DEFAULT_TIME_SCALE = 20.0
 # --mavlink-base-port: vehicle k listens on PORT + PORT_STEP * k, the last one within 65535.
-PORT_STEP = 10
 MAX_BASE_PORT = 65535 - PORT_STEP * (NUM_UAVS - 1)
 
 

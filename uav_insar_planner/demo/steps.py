@@ -12,7 +12,6 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 from uav_insar_planner.demo.kill import kill_agent
-from uav_insar_planner.demo.options import PORT_STEP
 from uav_insar_planner.demo.processes import (
     PRINT_LOCK,
     executable,
@@ -23,8 +22,9 @@ from uav_insar_planner.demo.processes import (
     stop_nodes,
 )
 from uav_insar_planner.demo.recorder import recorder_ready, start_recorder, stop_recorder
+from uav_insar_planner.param_specs import FIRST_SYSID, PORT_STEP
 from uav_insar_planner.report.flown import MavlinkPass, mavlink_table, rate_table, summary
-from uav_insar_planner.swarm import MASTER, NUM_UAVS, UAVS
+from uav_insar_planner.swarm import MASTER, NUM_UAVS, UAVS, agent_name
 
 if TYPE_CHECKING:
     from uav_insar_planner.params import Params
@@ -34,7 +34,6 @@ if TYPE_CHECKING:
 CAPTURE_RADIUS_M = 0.2
 SETTLE_S = 3.0  # after the pass: the vehicles brake past its end and return; then the final error
 MAVLINK_TIMEOUT_S = 30.0  # for the approach and the pass, after the agents are done
-FIRST_SYSID = 2  # vehicle k is sysid FIRST_SYSID + k: the bridge's default target_sysids
 AGENTS_UP_S = 20.0  # until the watcher (and the recorder) sees every agent
 PLAN_S = 40.0  # until the first plan, after the planner started
 TRANSIT_S = 60.0  # mission seconds beyond the slots: transit and run-up
@@ -110,7 +109,7 @@ def overridden_problems(args: argparse.Namespace, overrides: dict[str, Any]) -> 
         file = parse_params_file(args.params_file)
         where = f"params file {str(args.params_file)[:200]!r}: "
         for name, (node, _) in own.items():
-            for fqn in [f"agent{k}" for k in UAVS] if node == "agent" else [node]:
+            for fqn in [agent_name(k) for k in UAVS] if node == "agent" else [node]:
                 if name in (values := file.values_for(fqn)):
                     given.append((where, name, values[name]))
                     break
@@ -160,7 +159,8 @@ class Mission:
                 "agent", [*self.common, "-p", f"uav_id:={k}", "-p",
                           f"time_scale:={args.time_scale}", "-p",
                           f"position_noise_std_m:={args.noise_std}", *link_args(args),
-                          "-r", f"__node:=agent{k}"], self.env, f"[agent{k}]"))
+                          "-r", f"__node:={agent_name(k)}"], self.env,
+                                     f"[{agent_name(k)}]"))
         if not w.spin_until(lambda: w.agents_matched() and (
                 self.recorder is None or recorder_ready(w.node)), AGENTS_UP_S, self.procs):
             print("demo: the agents did not come up (see their log above)", flush=True)

@@ -11,6 +11,7 @@ import math
 from collections.abc import Sequence
 
 from uav_insar_planner.mavlink.frames import Vec3
+from uav_insar_planner.swarm import uav_name
 
 # Braking at the end of a finite pass, gentle for a multicopter's position controller.
 BRAKE_MPS2 = 1.5
@@ -109,8 +110,8 @@ def separation(formation: Sequence[Vec3 | None], min_separation_m: float
     warnings = []
     for j, k, d in too_close(formation, min_separation_m):
         for a, b in ((j, k), (k, j)):
-            notes[a] = (notes[a] + "; " if notes[a] else "") + f"{d:.2f} m from uav{b}"
-        warnings.append(f"uav{j} and uav{k} are planned {d:.2f} m apart, closer than "
+            notes[a] = (notes[a] + "; " if notes[a] else "") + f"{d:.2f} m from {uav_name(b)}"
+        warnings.append(f"{uav_name(j)} and {uav_name(k)} are planned {d:.2f} m apart, closer than "
                         f"min_separation_m {min_separation_m:g} m (standard GNSS is good to "
                         "~1.5-3 m; RTK needed)")
     return notes, warnings

@@ -1,6 +1,7 @@
 """Figures: sweeps in the style of the paper's Figures 3 and 4, and the across-track formation.
 
-Only this module imports matplotlib (with the Agg back end, so it works without a screen).
+Drawn with matplotlib's Agg back end, so it works without a screen (as recorded_plots.py,
+the mission report's PNGs; cli/checks.py asks matplotlib only which file types it saves).
 """
 from __future__ import annotations
 
@@ -19,6 +20,7 @@ from uav_insar_planner.plan import Plan  # noqa: E402
 from uav_insar_planner.scene import swath_edges  # noqa: E402
 from uav_insar_planner.solver import rays  # noqa: E402
 from uav_insar_planner.solver.power import station_radius_sq  # noqa: E402
+from uav_insar_planner.swarm import UAVS  # noqa: E402
 from uav_insar_planner.sweep import SweepRow  # noqa: E402
 
 SCHEME_STYLE = {
@@ -91,7 +93,7 @@ def plot_formation(p: Params, plan: Plan, path: str | Path) -> None:
     """The across-track plane: target line, the UAVs with their beams and swaths, the ground
     station with each UAV's communication disk (C9-C11), the master's C2 line and each slave's
     feasible region with the others at the plan."""
-    flown = [k for k in range(3) if np.isfinite(plan.formation[k, 0])]
+    flown = [k for k in UAVS if np.isfinite(plan.formation[k, 0])]
     gx, _, gz = p.ground_station
     xs_all = [plan.formation[k, 0] for k in flown] + [p.x_t, gx]
     xlo, xhi = min(xs_all) - 40, max(xs_all) + 40

@@ -7,6 +7,8 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
+from uav_insar_planner.swarm import uav_name
+
 Vec3 = tuple[float, float, float]
 
 
@@ -62,7 +64,7 @@ def rate_table(rates: Mapping[int, Sequence[float]], uavs: Sequence[int],
     """Each UAV's rates in Mbit/s, `per_line` slots a line; '!' marks a slot below R_min."""
     rows = []
     for k in uavs:
-        rows.append(f"uav{k} (R_min {rate_min_bps[k] / 1e6:g} Mbit/s)")
+        rows.append(f"{uav_name(k)} (R_min {rate_min_bps[k] / 1e6:g} Mbit/s)")
         for first in range(0, len(rates[k]), per_line):
             cells = [f"{r / 1e6:6.2f}{'!' if r < rate_min_bps[k] - tol_bps else ' '}"
                      for r in rates[k][first:first + per_line]]
@@ -79,7 +81,7 @@ def mavlink_table(mavlink_pass: MavlinkPass, sysids: Sequence[int],
     for k, (x_k, _, z_k) in mavlink_pass.starts.items():
         last = mavlink_pass.latest.get(k)
         where = "-" if last is None else " ".join(f"{c:8.3f}" for c in last)
-        rows.append(f"  uav{k}  {sysids[k]:5d}  {endpoints[k]:<24s} "
+        rows.append(f"  {uav_name(k)}  {sysids[k]:5d}  {endpoints[k]:<24s} "
                     f"{mavlink_pass.poses[k]:5d}  {x_k:8.3f} {z_k:7.3f}  {where}")
     return rows
 
@@ -103,7 +105,7 @@ def summary(plan_message: str | None, targets: Mapping[int, Vec3],
         verdict = "rate met in every slot" if got and not missed else f"missed in {missed}"
         used = (energy_j or {}).get(k)
         energy = "" if used is None else f", energy {used:.1f} of {energy_max_j:g} J"
-        lines.append(f"  uav{k}: x={x:8.3f} m z={z:7.3f} m  {len(got)}/{num_slots}"
+        lines.append(f"  {uav_name(k)}: x={x:8.3f} m z={z:7.3f} m  {len(got)}/{num_slots}"
                      f" slots, {verdict}, worst margin {worst:+.3g} bit/s{energy}")
     mp = mavlink_pass
     if mp is not None and mp.began is None:
@@ -112,7 +114,7 @@ def summary(plan_message: str | None, targets: Mapping[int, Vec3],
         lines.append(f"  MAVLink: formation established {mp.began - plan_time:.1f} s after the "
                      f"plan (all within {mp.capture_radius:g} m), then the pass")
         for k, r in mp.records.items():
-            lines.append(f"  uav{k} via MAVLink: across-track error max {r.max_error:.3f} m, "
-                         f"final {r.final_error:.3f} m; flew {r.along_track:.1f} m along track "
-                         f"(pass {pass_m:.1f} m)")
+            lines.append(f"  {uav_name(k)} via MAVLink: across-track error max "
+                         f"{r.max_error:.3f} m, final {r.final_error:.3f} m; flew "
+                         f"{r.along_track:.1f} m along track (pass {pass_m:.1f} m)")
     return "\n".join(lines)

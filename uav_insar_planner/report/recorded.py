@@ -26,6 +26,7 @@ from uav_insar_planner.bag.reader import MissionRecord
 from uav_insar_planner.evaluate import evaluate, rate_tolerance_bps
 from uav_insar_planner.params import Params
 from uav_insar_planner.report.flown import summary
+from uav_insar_planner.swarm import NUM_UAVS, UAVS, uav_name
 
 
 class ReportError(ValueError):
@@ -58,7 +59,7 @@ class MissionFigures:
     budget_j: dict[int, float]
     tracks: dict[int, UavTrack]
     flown_xz: dict[int, tuple[float, float]]  # mean (x, z) on the track
-    planned_power_w: np.ndarray  # (3, N)
+    planned_power_w: np.ndarray  # (NUM_UAVS, N)
     sigma_h_plan_m: float
     sigma_h_recorded_m: float  # the planner's figure on /diagnostics (NaN if none)
     sigma_h_flown_m: float
@@ -90,11 +91,11 @@ def mission_figures(record: MissionRecord, p: Params) -> MissionFigures:
         raise ReportError("the bag holds no formation and formation/power: was the planner "
                           "running while it recorded?")
     formation, power = record.formation, record.power
-    if formation.shape != (3, 3) or power.shape[0] != 3:
+    if formation.shape != (NUM_UAVS, 3) or power.shape[0] != NUM_UAVS:
         raise ReportError(f"the recorded plan has {formation.shape[0]} UAVs and power rows "
-                          f"{power.shape}; expected 3")
+                          f"{power.shape}; expected {NUM_UAVS}")
     scheme = record.plan_values.get("scheme", p.scheme)
-    uavs = [k for k in range(3) if np.isfinite(formation[k]).all()]
+    uavs = [k for k in UAVS if np.isfinite(formation[k]).all()]
     targets = {k: tuple(float(v) for v in formation[k]) for k in uavs}
     offloads = {k: record.offloads.get(k, np.zeros((0, 5))) for k in uavs}
     tracks = {k: _track(record.poses.get(k), offloads[k], targets[k]) for k in uavs}
@@ -135,9 +136,9 @@ def report_table(f: MissionFigures, p: Params) -> str:
     for k in f.uavs:
         t = f.tracks[k]
         if not len(t.dx):
-            lines.append(f"  uav{k}: no pose on the track")
+            lines.append(f"  {uav_name(k)}: no pose on the track")
             continue
-        lines.append(f"  uav{k}: on the track {len(t.dx)} poses, worst position error "
+        lines.append(f"  {uav_name(k)}: on the track {len(t.dx)} poses, worst position error "
                      f"{t.worst_error_m:.3f} m (across-track {np.abs(t.dx).max():.3f} m, height "
                      f"{np.abs(t.dz).max():.3f} m)")
     recorded = (f" (planner: {f.sigma_h_recorded_m:.4g} m)"

@@ -20,6 +20,7 @@ import numpy as np  # noqa: E402
 
 from uav_insar_planner.params import Params  # noqa: E402
 from uav_insar_planner.report.recorded import MissionFigures  # noqa: E402
+from uav_insar_planner.swarm import uav_name  # noqa: E402
 
 COLORS = ("tab:red", "tab:blue", "tab:green")  # U0, U1, U2 as in plot-formation
 FILES = ("report_rate.png", "report_power.png", "report_energy.png", "report_error.png",
@@ -48,7 +49,7 @@ def plot_report(f: MissionFigures, p: Params, out: Path) -> list[Path]:
         slots = np.arange(len(f.rates[k]))
         ax.plot(slots, f.rates[k] / 1e6, "o-", color=COLORS[k], ms=3, label="achieved")
         ax.axhline(p.rate_min_bps[k] / 1e6, ls="--", color="k", lw=1, label="R_min")
-        ax.set(title=f"uav{k}", xlabel="slot n", ylabel="rate [Mbit/s]")
+        ax.set(title=uav_name(k), xlabel="slot n", ylabel="rate [Mbit/s]")
     _finish(axes)
     written.append(_save(fig, out / FILES[0]))
 
@@ -58,7 +59,7 @@ def plot_report(f: MissionFigures, p: Params, out: Path) -> list[Path]:
                 lw=1, label="planned")
         ax.step(np.arange(len(f.applied_w[k])), f.applied_w[k], where="post", color=COLORS[k],
                 label="applied")
-        ax.set(title=f"uav{k}", xlabel="slot n", ylabel="P_com [W]")
+        ax.set(title=uav_name(k), xlabel="slot n", ylabel="P_com [W]")
     _finish(axes)
     written.append(_save(fig, out / FILES[1]))
 
@@ -66,7 +67,7 @@ def plot_report(f: MissionFigures, p: Params, out: Path) -> list[Path]:
     for k, ax in axes.items():
         ax.plot(np.arange(len(f.energy_j[k])), f.energy_j[k], color=COLORS[k], label="used")
         ax.axhline(f.budget_j[k], ls="--", color="k", lw=1, label="budget")
-        ax.set(title=f"uav{k}", xlabel="slot n", ylabel="energy [J]")
+        ax.set(title=uav_name(k), xlabel="slot n", ylabel="energy [J]")
     _finish(axes)
     written.append(_save(fig, out / FILES[2]))
 
@@ -75,7 +76,7 @@ def plot_report(f: MissionFigures, p: Params, out: Path) -> list[Path]:
         t = f.tracks[k]
         ax.plot(t.y, t.dx, color=COLORS[k], label="across-track x - x_k")
         ax.plot(t.y, t.dz, ":", color=COLORS[k], label="height z - z_k")
-        ax.set(title=f"uav{k}", xlabel="y (along-track) [m]", ylabel="error [m]")
+        ax.set(title=uav_name(k), xlabel="y (along-track) [m]", ylabel="error [m]")
     _finish(axes)
     written.append(_save(fig, out / FILES[3]))
 

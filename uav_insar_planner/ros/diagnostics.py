@@ -11,13 +11,26 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from uav_insar_planner.evaluate import rate_tolerance_bps
-from uav_insar_planner.plan import UAV_NAMES, Plan
+from uav_insar_planner.plan import Plan
+from uav_insar_planner.swarm import UAV_NAMES, uav_name
 
 # diagnostic_msgs/DiagnosticStatus levels.
 OK, WARN, ERROR, STALE = 0, 1, 2, 3
 LEVEL_NAMES = {OK: "OK", WARN: "WARN", ERROR: "ERROR", STALE: "STALE"}
 
 HARDWARE_ID = "uav_insar_planner"
+BRIDGE_STATUS_PREFIX = "mavlink_bridge: "  # + the UAV's name: the bridge's per-vehicle status
+
+
+def bridge_status_name(k: int) -> str:
+    """The MAVLink bridge's status of vehicle k, e.g. `mavlink_bridge: uav1`."""
+    return BRIDGE_STATUS_PREFIX + uav_name(k)
+
+
+def bridge_status_uav(name: str) -> int | None:
+    """The UAV a `bridge_status_name` names; None for any other status."""
+    rest = name[len(BRIDGE_STATUS_PREFIX):] if name.startswith(BRIDGE_STATUS_PREFIX) else ""
+    return UAV_NAMES.index(rest) if rest in UAV_NAMES else None
 PLAN_STATUS_NAME = "planner: plan"
 
 
@@ -47,7 +60,8 @@ def formation_points(plan: Plan) -> list[tuple[float, float, float]]:
 
 
 def power_rows(plan: Plan) -> tuple[int, int, list[float]]:
-    """(3, N, P_com[k][n] row-major in watts) for a Float64MultiArray with dims [uav, slot]."""
+    """(NUM_UAVS, N, P_com[k][n] row-major in watts) for a Float64MultiArray with dims
+    [uav, slot]."""
     p = np.asarray(plan.p_com_w, dtype=float)
     return int(p.shape[0]), int(p.shape[1]), [float(v) for v in p.ravel()]
 

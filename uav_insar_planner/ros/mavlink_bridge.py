@@ -40,6 +40,7 @@ from rclpy.node import Node
 from uav_insar_planner.exit_codes import EXIT_CRASH
 from uav_insar_planner.mavlink.bridge import Bridge, BridgeConfig, VehicleStatus
 from uav_insar_planner.param_specs import BRIDGE_SPECS
+from uav_insar_planner.ros import diagnostics as report
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.parameters import (
     declare_specs,
@@ -50,6 +51,7 @@ from uav_insar_planner.ros.parameters import (
 from uav_insar_planner.ros.plan_gate import PlanGate
 from uav_insar_planner.ros.plan_msgs import Formation, PowerSchedule
 from uav_insar_planner.ros.run import run_node
+from uav_insar_planner.swarm import uav_name
 
 POSE_PERIOD_S = 0.05  # poll the bridge at 20 Hz: vehicles report at ~10 Hz
 DIAGNOSTICS_PERIOD_S = 1.0
@@ -100,7 +102,7 @@ class MavlinkBridgeNode(Node):
     def _publish_poses(self) -> None:
         logger = self.get_logger()
         for event in self.bridge.drain_events():
-            text = ("swarm" if event.uav < 0 else f"uav{event.uav}") + ": " + event.text
+            text = ("swarm" if event.uav < 0 else uav_name(event.uav)) + ": " + event.text
             # rclpy ties a severity to each call site: one call per severity.
             if event.level == "error":
                 logger.error(text)
@@ -173,7 +175,7 @@ class MavlinkBridgeNode(Node):
                   ("bad_plan_messages", self._gate.dropped),
                   ("bad_signature", link.bad_signature), ("spoofed", link.spoofed),
                   ("bad_value", link.bad_value), ("unsendable", link.unsendable)]
-        return DiagnosticStatus(level=level, name=f"mavlink_bridge: uav{s.uav}",
+        return DiagnosticStatus(level=level, name=report.bridge_status_name(s.uav),
                                 message=text, hardware_id=f"mavlink sysid {s.sysid}",
                                 values=[KeyValue(key=k, value=fmt(v)) for k, v in values])
 

@@ -37,6 +37,7 @@ from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 from uav_insar_planner.plan import Plan
 from uav_insar_planner.ros import diagnostics as report
 from uav_insar_planner.ros import topics
+from uav_insar_planner.swarm import uav_name
 
 POSITION_BOUND_M = 1e6
 FLOAT32_MAX = 3.4e38
@@ -213,5 +214,5 @@ class DropLog:
 
 def describe(points: Sequence[tuple[float, float, float] | None]) -> str:
     """'uav0 (x, z), uav1 (x, z), uav2 not flown' for a log line."""
-    return ", ".join(f"uav{k} not flown" if p is None else f"uav{k} ({p[0]:.3f}, {p[2]:.3f})"
-                     for k, p in enumerate(points))
+    return ", ".join(f"{uav_name(k)} not flown" if p is None
+                     else f"{uav_name(k)} ({p[0]:.3f}, {p[2]:.3f})" for k, p in enumerate(points))

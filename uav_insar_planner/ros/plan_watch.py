@@ -25,9 +25,9 @@ from uav_insar_planner.ros import diagnostics as report
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.plan_gate import publisher_names
 from uav_insar_planner.ros.plan_msgs import PlanId
+from uav_insar_planner.swarm import UAVS
 
 PUBLISHERS_STATUS_NAME = "planner: formation publishers"
-UAVS = range(3)
 
 
 class PlanWatch:

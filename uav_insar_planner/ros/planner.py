@@ -65,6 +65,7 @@ from uav_insar_planner.ros.run import run_node
 from uav_insar_planner.ros.solve_worker import SolveWorker
 from uav_insar_planner.ros.swarm_watch import SwarmWatch
 from uav_insar_planner.solver import solve
+from uav_insar_planner.swarm import UAVS
 
 DIAGNOSTICS_PERIOD_S = 1.0
 
@@ -88,7 +89,7 @@ class PlannerNode(Node):
         self._plan: Plan | None = None  # the last published (feasible) plan
         self._plan_status: report.Status | None = None
         self._scenario: Params = params
-        self._reports = [report.UavReport() for _ in range(3)]
+        self._reports = [report.UavReport() for _ in UAVS]
 
         self._formation_pub = self.create_publisher(PoseArray, topics.FORMATION,
                                                     topics.LATCHED)
@@ -98,7 +99,7 @@ class PlannerNode(Node):
         self._plan_id: PlanId | None = None  # the identity _plan was published under
         self._plans = PlanWatch(self)  # other planners, the plan each agent flies
         self._markers = PlannerMarkers(self)
-        for k in range(3):
+        for k in UAVS:
             self.create_subscription(PoseStamped, topics.pose(k),
                                      lambda msg, k=k: self._on_pose(k, msg), topics.DEPTH)
             self.create_subscription(Float64, topics.achieved_rate(k),
@@ -175,7 +176,7 @@ class PlannerNode(Node):
             self._plan_status = status
             if plan is not None and plan.feasible:
                 self._plan = plan
-                self._reports = [report.UavReport() for _ in range(3)]
+                self._reports = [report.UavReport() for _ in UAVS]
         if plan is not None and plan.feasible:
             # With a UAV lost, the full plan is not flown: the swarm watch re-plans it (or
             # re-publishes the hold) at once, so a three-UAV plan never reaches the agents.
@@ -190,7 +191,7 @@ class PlannerNode(Node):
         with self._state_lock:
             self._plan_status = status
             self._plan = plan
-            self._reports = [report.UavReport() for _ in range(3)]
+            self._reports = [report.UavReport() for _ in UAVS]
         self._publish_plan(plan)
         self._publish_diagnostics()
 

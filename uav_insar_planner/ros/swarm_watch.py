@@ -36,15 +36,15 @@ from std_msgs.msg import Float64MultiArray
 
 from uav_insar_planner import replan
 from uav_insar_planner.params import Params
-from uav_insar_planner.plan import SAFE_SEPARATION_M, UAV_NAMES, Plan
+from uav_insar_planner.plan import SAFE_SEPARATION_M, Plan
 from uav_insar_planner.ros import diagnostics as report
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.solve_worker import SolveWorker
+from uav_insar_planner.swarm import MASTER, UAV_NAMES, UAVS
 from uav_insar_planner.swarm_health import Lost, Saturated, SwarmMonitor
 
 CHECK_PERIOD_S = 0.1
 SWARM_STATUS_NAME = "planner: swarm"
-BRIDGE_STATUS_PREFIX = "mavlink_bridge: uav"
 
 
 @dataclass(frozen=True)
@@ -69,7 +69,7 @@ class SwarmWatch:
         self.monitor = SwarmMonitor(params)
         self._ended: str | None = None  # why the mission cannot continue
         self._warnings: list[str] = []
-        for k in range(3):
+        for k in UAVS:
             node.create_subscription(Float64MultiArray, topics.offload(k),
                                      lambda msg, k=k: self._on_offload(k, msg),
                                      topics.RATE_DEPTH)
@@ -105,13 +105,13 @@ class SwarmWatch:
 
     def _on_diagnostics(self, msg: Any) -> None:
         for s in msg.status:
-            if not s.name.startswith(BRIDGE_STATUS_PREFIX):
+            k = report.bridge_status_uav(s.name)
+            if k is None:
                 continue
             values = {kv.key: kv.value for kv in s.values}
-            suffix = s.name[len(BRIDGE_STATUS_PREFIX):]
-            if values.get("link") == "lost" and suffix.isdigit():
+            if values.get("link") == "lost":
                 with self._lock:
-                    lost = self.monitor.bridge_lost(int(suffix), time.monotonic(), s.message)
+                    lost = self.monitor.bridge_lost(k, time.monotonic(), s.message)
                 if lost is not None:
                     self._react(lost)
 
@@ -151,8 +151,8 @@ class SwarmWatch:
         if plan is None or lost.uav not in plan.active_uavs:
             return  # not flown by the plan: nothing to re-plan
         survivor = replan.surviving_slave(plan.active_uavs, lost.uav)
-        if lost.uav == 0 or survivor is None:
-            who = f"master {name}" if lost.uav == 0 else f"{name}, the last slave,"
+        if lost.uav == MASTER or survivor is None:
+            who = f"master {name}" if lost.uav == MASTER else f"{name}, the last slave,"
             self._hold(params, lost, f"mission cannot continue: {who} lost at slot "
                                      f"{lost.slot} ({lost.why}); every UAV holds position")
             return

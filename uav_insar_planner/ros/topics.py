@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+from uav_insar_planner.swarm import uav_name
+
 FRAME_ID = "insar_track"
 # A plan's identity (ros/plan_msgs.py): formation's header.stamp, and the same stamp with the
 # planner's name in the power message's third layout dimension, "plan /planner <sec>.<ns>".
@@ -33,12 +35,12 @@ DEPTH = 10
 
 def pose(k: int) -> str:
     """geometry_msgs/PoseStamped: agent k's actual position."""
-    return f"uav{k}/pose"
+    return f"{uav_name(k)}/pose"
 
 
 def achieved_rate(k: int) -> str:
     """std_msgs/Float64: bit/s agent k achieved in the slot just flown (RATE_DEPTH)."""
-    return f"uav{k}/achieved_rate"
+    return f"{uav_name(k)}/achieved_rate"
 
 
 #: The fields of one `offload(k)` message, in order (its layout's single dimension label).
@@ -49,15 +51,15 @@ def offload(k: int) -> str:
     """std_msgs/Float64MultiArray: agent k's slot just started, data = OFFLOAD_FIELDS (power
     applied [W], energy used so far this slot included and left of E_com^max [J]),
     RATE_DEPTH."""
-    return f"uav{k}/offload"
+    return f"{uav_name(k)}/offload"
 
 
 def flown_plan(k: int) -> str:
     """std_msgs/String, LATCHED: the identity label of the plan agent k flies
     ("plan /planner <sec>.<nanosec>"), published each time it adopts one (ros/plan_gate.py)."""
-    return f"uav{k}/plan"
+    return f"{uav_name(k)}/plan"
 
 
 def mavlink_pose(k: int) -> str:
     """geometry_msgs/PoseStamped: vehicle k's LOCAL_POSITION_NED in the track frame (bridge)."""
-    return f"uav{k}/mavlink/pose"
+    return f"{uav_name(k)}/mavlink/pose"

@@ -10,7 +10,8 @@ constraint family allows an interval of ranges:
 - C5: r >= S_min cos(theta) / Theta_3dB;
 - C6: r <= gamma_m / r_0^2 (1 / (gamma_SNR^min^2 (1 + r_0^3 / gamma_m)) - 1)  (eqs. 7-9,
   model.slave_range_max);
-- C8: r |sin(theta - theta_0)| <= lambda r_0 sin(theta_0) / h_amb^min  (eq. 12);
+- C8: r |sin(theta - theta_0)| <= lambda r_0 sin(theta_0) / h_amb^min  (eq. 12,
+  model.baseline_max);
 - C9-C11: the cheapest schedule turns them into a disk about the ground station in the x-z
   plane (power.station_radius_sq), i.e. an interval [r_a, r_b] of the ray;
 - C4 to the master removes an open interval (a hole) around the master's nearest point;
@@ -32,6 +33,7 @@ from uav_insar_planner import model
 from uav_insar_planner.params import Params
 from uav_insar_planner.schemes import slave_uavs
 from uav_insar_planner.solver.power import station_radius_sq
+from uav_insar_planner.swarm import UAVS
 
 HALF_PI = 0.5 * math.pi
 # Look angles are kept strictly inside (-pi/2, pi/2) so that z = r cos(theta) > 0.
@@ -51,7 +53,7 @@ class Scenario:
     th0: float
     sin0: float
     bp: float
-    disk_r2: tuple[float, float, float]   # per UAV, +inf when unconstrained
+    disk_r2: tuple[float, ...]            # per UAV, +inf when unconstrained
     station_dist: float                    # |g - p_t| in the x-z plane
     station_angle: float                   # look angle of the station seen from p_t
     r0_lo: float                           # master range interval; lo > hi when empty
@@ -69,7 +71,7 @@ def make_scenario(p: Params, scheme: str, objective: str,
     th0 = p.theta0
     bp = p.radar_bandwidth_hz / p.center_frequency_hz
     ox, oz = p.ground_station[0] - p.x_t, p.ground_station[2]
-    disk = tuple(station_radius_sq(p, k, scheme, off) for k in range(3))
+    disk = tuple(station_radius_sq(p, k, scheme, off) for k in UAVS)
     sc = Scenario(p=p, scheme=scheme, objective=objective, off=off,
                   slaves=slave_uavs(scheme),
                   gm=model.gamma_m(p), th0=th0, sin0=math.sin(th0), bp=bp, disk_r2=disk,
@@ -151,10 +153,10 @@ def snr_limit(sc: Scenario, r0):
 
 
 def baseline_limit(sc: Scenario, r0):
-    """C8's largest perpendicular baseline lambda r0 sin(theta_0) / h_amb^min."""
+    """C8's largest perpendicular baseline (model.baseline_max); +inf when C8 is off."""
     if not sc.on("C8"):
         return np.full(np.shape(r0), math.inf)
-    return sc.p.wavelength * np.asarray(r0, dtype=float) * sc.sin0 / sc.p.h_amb_min
+    return model.baseline_max(sc.p, np.asarray(r0, dtype=float))
 
 
 def ray_limits(sc: Scenario, k: int, r0, theta):
@@ -196,9 +198,8 @@ def coherence_rg(sc: Scenario, theta):
 
 
 def snr_factor(sc: Scenario, r0, r):
-    """gamma_SNR (eq. 7 with eqs. 8-9): decreasing in both r0 and r."""
-    r0 = np.asarray(r0, dtype=float)
-    return 1.0 / np.sqrt((1.0 + r0**3 / sc.gm) * (1.0 + r0**2 * np.asarray(r) / sc.gm))
+    """gamma_SNR (model.coherence_snr_at_ranges): decreasing in both r0 and r."""
+    return model.coherence_snr_at_ranges(r0, r, sc.gm)
 
 
 def weight(sc: Scenario, b_perp, g_rg, g_snr):

@@ -37,6 +37,7 @@ from uav_insar_planner.schemes import slave_uavs
 from uav_insar_planner.solver import rays
 from uav_insar_planner.solver.blocking import ALL_FAMILIES
 from uav_insar_planner.solver.power import station_radius_sq
+from uav_insar_planner.swarm import MASTER, NUM_UAVS
 
 Z_GRID = 801
 THETA_GRID = 181
@@ -45,7 +46,7 @@ RAY_WINDOW = 1000.0  # metres searched along a ray beyond its lower limit
 
 @dataclass
 class Start:
-    """A feasible formation ((3, 2), NaN row for an unflown UAV)."""
+    """A feasible formation ((NUM_UAVS, 2), NaN row for an unflown UAV)."""
 
     formation: np.ndarray
 
@@ -125,7 +126,7 @@ def _slave_pieces(p: Params, k: int, scheme: str, fam: frozenset[str], q0: np.nd
         hi = np.where(g_rg >= p.coherence_rg_min, hi, -np.inf)
     if "C8" in fam:
         # b_perp = |c0 + r sin(theta_0 - theta)| (eq. 3 projected on the LOS normal)
-        bmax = p.wavelength * r0 * math.sin(p.theta0) / p.h_amb_min
+        bmax = model.baseline_max(p, r0)
         c0 = (p.x_t - q0[0]) * math.cos(p.theta0) - q0[1] * math.sin(p.theta0)
         s = np.sin(p.theta0 - thetas)
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -220,8 +221,8 @@ def find_start(p: Params, scheme: str, families: Iterable[str] = ALL_FAMILIES,
     if not feasible:
         return None
     i, chosen = feasible[_middle(np.arange(len(feasible)))]
-    formation = np.full((3, 2), np.nan)
-    formation[0] = masters[i]
+    formation = np.full((NUM_UAVS, 2), np.nan)
+    formation[MASTER] = masters[i]
     for k, q in chosen.items():
         formation[k] = q
     return Start(formation)

@@ -28,8 +28,8 @@ from std_msgs.msg import Float64, Float64MultiArray, String
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.diagnostics import PLAN_STATUS_NAME
 from uav_insar_planner.ros.plan_msgs import PlanMessageError, decode_formation, decode_power
+from uav_insar_planner.swarm import UAVS
 
-UAVS = range(3)
 SPIN_STEP_S = 0.05
 
 

@@ -37,6 +37,7 @@ from uav_insar_planner.solver.ao.slave import SlaveProblem
 from uav_insar_planner.solver.power import schedules
 from uav_insar_planner.solver.result import SolverResult
 from uav_insar_planner.solver.start_grid import find_start
+from uav_insar_planner.swarm import NUM_UAVS
 
 MAX_OUTER = 50
 
@@ -58,7 +59,8 @@ def solve_ao(p: Params, scheme: str, objective: str) -> SolverResult:
     start = find_start(p, scheme)
     if start is None:
         blocking = blocking_families(p, scheme)
-        return SolverResult(False, np.full((3, 2), np.nan), np.zeros((3, p.num_slots)), 0,
+        return SolverResult(False, np.full((NUM_UAVS, 2), np.nan),
+                            np.zeros((NUM_UAVS, p.num_slots)), 0,
                             blocking=blocking,
                             message=note + "no feasible start: constraint families "
                             + ", ".join(blocking) + " cannot hold together")

@@ -4,8 +4,7 @@
   b_perp,k from eq. 16),
 - Proposition 2's C7a/C7b slopes alpha_a, alpha_b (None when the side is unconstrained),
 - C6 as the master's range limit (exact: gamma_SNR is monotone in each slant range; the
-  slaves' limit is model.slave_range_max),
-- the C4 surrogate (eq. 18) as a number, for tests and diagnostics.
+  slaves' limit is model.slave_range_max).
 """
 from __future__ import annotations
 
@@ -63,14 +62,3 @@ def master_range_max(p: Params, slave_ranges: list[float]) -> float:
                 z.real > 0.0]
         best = min(best, max(real) if real else 0.0)
     return best
-
-
-def c4_surrogate(q: np.ndarray, q_ref: np.ndarray, q_other: np.ndarray) -> float:
-    """Eq. (18): 2 q^T (q_ref - q_other) - ||q_ref||^2 + ||q_other||^2, the tangent plane of
-    ||q - q_other||^2 at q = q_ref; never above ||q - q_other||^2 (convexity), equal at q_ref.
-
-    We compare it with d_min^2 (the paper prints d_min; a bound on the squared distance needs
-    the squared threshold for the surrogate to imply C4).
-    """
-    q, q_ref, q_other = (np.asarray(v, dtype=float) for v in (q, q_ref, q_other))
-    return float(2.0 * q @ (q_ref - q_other) - q_ref @ q_ref + q_other @ q_other)

@@ -68,7 +68,7 @@ class MasterProblem:
         self.scale.value = k_bound / math.sqrt(max(sum(v * v for v in b), 1e-300))
         ranges = [float(np.hypot(formation[k, 0] - p.x_t, formation[k, 1])) for k in self.slaves]
         self.r0_max.value = master_range_max(p, ranges)
-        self.r0_min.value = p.h_amb_min * max(b) / (p.wavelength * math.sin(p.theta0))
+        self.r0_min.value = model.master_range_min_c8(p, max(b))
         for k in self.slaves:
             qk = formation[k]
             self.c4_lin[k].value = 2.0 * (q0_ref - qk)

@@ -83,7 +83,7 @@ class SlaveProblem:
         self.c5_const.value = float(r2 - grad @ q_ref)
         r0 = float(np.hypot(formation[0, 0] - p.x_t, formation[0, 1]))
         self.r_max.value = max(float(model.slave_range_max(p, r0)), 0.0)
-        self.b_max.value = p.wavelength * r0 * math.sin(p.theta0) / p.h_amb_min
+        self.b_max.value = model.baseline_max(p, r0)
 
     def _sca(self, half: str, formation: np.ndarray):
         """SCA on one half from the current slave position: (q, P, b_perp, steps) or None."""

@@ -157,7 +157,7 @@ def polish(sc: Scenario, point, steps, iterations: int = 80):
     step = np.array(steps, dtype=float)
     if not two:
         step[2] = 0.0
-    grid = np.array(np.meshgrid([-1, 0, 1], [-1, 0, 1], [-1, 0, 1])).reshape(3, -1).T
+    grid = np.array(np.meshgrid(*[[-1, 0, 1]] * x.size)).reshape(x.size, -1).T  # 3^d stencil
     f0, r1, r2 = slave_ranges.best_ranges(sc, x[:1], x[1:2], x[2:3] if two else None)
     best = (float(f0[0]), tuple(x) + (float(r1[0]), float(r2[0])))
     for _ in range(iterations):

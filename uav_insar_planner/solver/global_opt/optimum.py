@@ -20,6 +20,7 @@ from uav_insar_planner.params import Params
 from uav_insar_planner.solver import power, rays
 from uav_insar_planner.solver.global_opt import branch_bound, infeasibility
 from uav_insar_planner.solver.result import SolverResult
+from uav_insar_planner.swarm import MASTER, NUM_UAVS
 
 # Branch and bound closes a box when its bound is within REL_GAP of the incumbent, so the
 # reported relative gap is at most REL_GAP (the target is 1e-4).
@@ -27,8 +28,8 @@ REL_GAP = 5e-5
 
 
 def _nan_result(p: Params, nodes: int, **kw) -> SolverResult:
-    return SolverResult(feasible=False, formation=np.full((3, 2), np.nan),
-                        p_com=np.zeros((3, p.num_slots)), iterations=nodes, **kw)
+    return SolverResult(feasible=False, formation=np.full((NUM_UAVS, 2), np.nan),
+                        p_com=np.zeros((NUM_UAVS, p.num_slots)), iterations=nodes, **kw)
 
 
 def master_on_c2(p: Params) -> bool:
@@ -38,16 +39,17 @@ def master_on_c2(p: Params) -> bool:
 
 
 def formation_of(sc: rays.Scenario, point) -> np.ndarray:
-    """(3, 2) formation from (r0, theta1, theta2, r1, r2); NaN row for a UAV not flown."""
+    """(NUM_UAVS, 2) formation from (r0, theta1, theta2, r1, r2), the dual-baseline point of
+    the search (the second slave's part unused when the scheme flies one); NaN row for a UAV
+    not flown."""
     r0, t1, t2, r1, r2 = point
-    q = np.full((3, 2), np.nan)
+    q = np.full((NUM_UAVS, 2), np.nan)
     if sc.scheme == "fixed-master":
-        q[0] = sc.p.master_fixed
+        q[MASTER] = sc.p.master_fixed
     else:
-        q[0] = rays.position(sc, r0, sc.th0)
-    q[1] = rays.position(sc, r1, t1)
-    if len(sc.slaves) == 2:
-        q[2] = rays.position(sc, r2, t2)
+        q[MASTER] = rays.position(sc, r0, sc.th0)
+    for k, r, t in zip(sc.slaves, (r1, r2), (t1, t2), strict=False):  # one or two slaves
+        q[k] = rays.position(sc, r, t)
     return q
 
 

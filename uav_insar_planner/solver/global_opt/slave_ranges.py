@@ -27,6 +27,7 @@ import math
 
 import numpy as np
 
+from uav_insar_planner import model
 from uav_insar_planner.solver import rays
 from uav_insar_planner.solver.rays import Scenario
 
@@ -157,7 +158,7 @@ def weight_bound(sc: Scenario, r0a, rho, smax, g_rg):
     of r0) and sigma_Phi >= sigma_Phi(g_rg_max gamma_SNR(r0a, r)). Uncapped, the bound grows
     with r (module docstring); capped, it falls with r. So its maximum over r <= rho is at
     min(rho, r_cap): the result is non-decreasing in rho, as the Pareto argument needs."""
-    cap = sc.p.wavelength * sc.sin0 / sc.p.h_amb_min if sc.on("C8") else math.inf
+    cap = model.baseline_max(sc.p, 1.0) if sc.on("C8") else math.inf
     with np.errstate(divide="ignore", invalid="ignore"):
         r = np.minimum(rho, np.where(smax > 0, cap * r0a / smax, math.inf))
         bn = np.where(smax > 0, np.minimum(r * smax / r0a, cap), 0.0)
@@ -202,5 +203,4 @@ def box_lower_bound(sc: Scenario, r0a, r0b, t1a, t1b, t2a=None, t2b=None):
 
 def _from_normalised(sc: Scenario, wn):
     """The objective lambda r0 sin(theta_0) / (2 pi sqrt(w)) written with wn = w / r0^2."""
-    with np.errstate(divide="ignore"):
-        return sc.p.wavelength * sc.sin0 / (2.0 * math.pi * np.sqrt(np.maximum(wn, 0.0)))
+    return rays.objective_from_weights(sc, 1.0, np.maximum(wn, 0.0))
