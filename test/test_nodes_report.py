@@ -9,7 +9,7 @@ from uav_insar_planner.evaluate import evaluate, rate_tolerance_bps
 from uav_insar_planner.params import SPEC_BY_NAME, ParamSpec
 from uav_insar_planner.params_file import load_params
 from uav_insar_planner.plan import Plan
-from uav_insar_planner.ros import diagnostics as report
+from uav_insar_planner.report import planner_messages as report
 from uav_insar_planner.ros.solve_worker import SolveWorker
 from uav_insar_planner.solver.power import schedules
 

@@ -16,9 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
+from uav_insar_planner.report.planner_messages import PLAN_STATUS_NAME
 from uav_insar_planner.swarm import UAV_NAMES
 
-PLAN_STATUS_NAME = "planner: plan"  # ros/diagnostics.PLAN_STATUS_NAME
 _UAV_TOPIC = re.compile(rf"(?:^|/)({'|'.join(map(re.escape, UAV_NAMES))})/"
                         r"(achieved_rate|offload|pose)$")
 

@@ -1,4 +1,5 @@
-"""A Plan as text for the terminal (`uav-insar solve`); ros/diagnostics.py is the ROS view."""
+"""A Plan as text for the terminal (`uav-insar solve`); planner_messages.py is what the
+planner publishes."""
 from __future__ import annotations
 
 import numpy as np

@@ -40,7 +40,7 @@ from rclpy.node import Node
 from uav_insar_planner.exit_codes import EXIT_CRASH
 from uav_insar_planner.mavlink.bridge import Bridge, BridgeConfig, VehicleStatus
 from uav_insar_planner.param_specs import BRIDGE_SPECS
-from uav_insar_planner.ros import diagnostics as report
+from uav_insar_planner.report import planner_messages as report
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.parameters import (
     declare_specs,

@@ -35,7 +35,7 @@ from geometry_msgs.msg import Point, Pose, PoseArray, Quaternion
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
 from uav_insar_planner.plan import Plan
-from uav_insar_planner.ros import diagnostics as report
+from uav_insar_planner.report import planner_messages as report
 from uav_insar_planner.ros import topics
 from uav_insar_planner.swarm import uav_name
 

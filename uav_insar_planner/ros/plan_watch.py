@@ -21,7 +21,7 @@ from rclpy.node import Node
 from std_msgs.msg import String
 
 from uav_insar_planner.plan import Plan
-from uav_insar_planner.ros import diagnostics as report
+from uav_insar_planner.report import planner_messages as report
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.plan_gate import publisher_names
 from uav_insar_planner.ros.plan_msgs import PlanId

@@ -49,7 +49,7 @@ from uav_insar_planner.params import (
     params_from_mapping,
 )
 from uav_insar_planner.plan import Plan
-from uav_insar_planner.ros import diagnostics as report
+from uav_insar_planner.report import planner_messages as report
 from uav_insar_planner.ros import plan_msgs, topics
 from uav_insar_planner.ros.markers import PlannerMarkers
 from uav_insar_planner.ros.parameters import (

@@ -37,7 +37,7 @@ from std_msgs.msg import Float64MultiArray
 from uav_insar_planner import replan
 from uav_insar_planner.params import Params
 from uav_insar_planner.plan import SAFE_SEPARATION_M, Plan
-from uav_insar_planner.ros import diagnostics as report
+from uav_insar_planner.report import planner_messages as report
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.solve_worker import SolveWorker
 from uav_insar_planner.swarm import MASTER, UAV_NAMES, UAVS

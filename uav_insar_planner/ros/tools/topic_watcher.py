@@ -25,8 +25,8 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from std_msgs.msg import Float64, Float64MultiArray, String
 
+from uav_insar_planner.report.planner_messages import PLAN_STATUS_NAME
 from uav_insar_planner.ros import topics
-from uav_insar_planner.ros.diagnostics import PLAN_STATUS_NAME
 from uav_insar_planner.ros.plan_msgs import PlanMessageError, decode_formation, decode_power
 from uav_insar_planner.swarm import UAVS
 
