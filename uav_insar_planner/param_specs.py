@@ -124,8 +124,8 @@ PARAM_SPECS: tuple[ParamSpec, ...] = (
        0.0, 90.0),
     _f("slave_look_angle_max_deg", 48.7, "theta_max, slave look angle upper limit [deg] (C3)",
        0.0, 90.0),
-    ParamSpec("looks", int, 4, "n_L, number of independent looks", 1, MULTILOOK_MAX_LOOKS,
-              why=_LOOKS_WHY),
+    ParamSpec("looks", int, 4, f"n_L, number of independent looks; {_LOOKS_WHY}", 1,
+              MULTILOOK_MAX_LOOKS, why=_LOOKS_WHY),
     _f("tolerance", 1.0e-2, "eps_0 = eps_1 = eps_2, AO/SCA relative stopping tolerance",
        0.0, 1.0, True),
     _f("master_fixed_xz_m", [-54.0, 74.0], "q0_fixed = (x_0, z_0) for the fixed-master scheme "
