@@ -128,6 +128,9 @@ def test_three_arducopters_cold_start_fly_the_pass_and_one_is_lost(
     figures["armed_s"] = time.monotonic() - t0
     assert watcher.spin_until(started, 90.0, nodes), log()
     figures["formation_s"] = time.monotonic() - t0
+    # The bridge's log line can overtake the poses still queued for the watcher on a loaded
+    # machine (seen once: uav0 1.8 m short, on its way in, at y = 0.05): take those first.
+    watcher.spin_until(lambda: False, 0.3, nodes)
     for k in range(3):
         assert pose(k)[2] > 0.5, f"uav{k} not airborne: {pose(k)}"
         assert cross_error(k) < 0.5 + 1.0, (k, pose(k), planned(k))  # capture radius 1 m
