@@ -8,6 +8,8 @@ domain (ros/plan_gate.py).
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from uav_insar_planner.swarm import uav_name
@@ -63,3 +65,15 @@ def flown_plan(k: int) -> str:
 def mavlink_pose(k: int) -> str:
     """geometry_msgs/PoseStamped: vehicle k's LOCAL_POSITION_NED in the track frame (bridge)."""
     return f"{uav_name(k)}/mavlink/pose"
+
+
+def matching_qos(offered: Sequence[QoSProfile], depth: int) -> QoSProfile:
+    """The QoS of a subscriber that matches every offered profile and loses nothing they keep,
+    as `ros2 topic echo` and `ros2 bag record` choose it: reliable only if every publisher is,
+    transient_local only if every publisher is (so a late subscriber gets latched topics)."""
+    reliable = all(q.reliability == ReliabilityPolicy.RELIABLE for q in offered)
+    latched = all(q.durability == DurabilityPolicy.TRANSIENT_LOCAL for q in offered)
+    return QoSProfile(
+        depth=depth,
+        reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
+        durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)

@@ -27,7 +27,7 @@ from rclpy.exceptions import InvalidTopicNameException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import QoSProfile
 from rclpy.signals import SignalHandlerOptions
 from rclpy.validate_full_topic_name import validate_full_topic_name
 
@@ -36,6 +36,7 @@ from uav_insar_planner.bag.writer import McapBagWriter
 from uav_insar_planner.exit_codes import EXIT_BAD_INPUT, EXIT_OK, CommandFailed
 from uav_insar_planner.ros.run import startup_problems
 from uav_insar_planner.ros.tools.echo import check_ros_args, message_class
+from uav_insar_planner.ros.topics import matching_qos
 
 PROG = "uav-insar record"
 NODE_NAME = "uav_insar_recorder"
@@ -57,16 +58,6 @@ def qos_dict(qos: QoSProfile) -> dict[str, Any]:
             "liveliness": qos.liveliness.name.lower(),
             "liveliness_lease_duration": duration(qos.liveliness_lease_duration),
             "avoid_ros_namespace_conventions": bool(qos.avoid_ros_namespace_conventions)}
-
-
-def subscription_qos(offered: Sequence[QoSProfile]) -> QoSProfile:
-    """The QoS that matches every offered profile (rclpy QoSProfiles) and loses nothing."""
-    reliable = all(q.reliability == ReliabilityPolicy.RELIABLE for q in offered)
-    latched = all(q.durability == DurabilityPolicy.TRANSIENT_LOCAL for q in offered)
-    return QoSProfile(
-        depth=RECORD_DEPTH,
-        reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
-        durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)
 
 
 class BagRecorder(Node):
@@ -109,8 +100,8 @@ class BagRecorder(Node):
             except (CommandFailed, DefinitionError) as exc:
                 self._skip(topic, str(exc))
                 continue
-            self.create_subscription(cls, topic, self._writer(topic), subscription_qos(offered),
-                                     raw=True)
+            self.create_subscription(cls, topic, self._writer(topic),
+                                     matching_qos(offered, RECORD_DEPTH), raw=True)
             self._log(f"recording {topic} ({types[0]}, "
                       f"{offered[0].durability.name.lower()})")
 

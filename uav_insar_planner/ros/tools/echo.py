@@ -23,6 +23,8 @@ from typing import Any
 from uav_insar_planner.exit_codes import EXIT_BAD_INPUT, EXIT_CRASH, EXIT_OK, CommandFailed
 from uav_insar_planner.ros.tools.msg_yaml import TRUNCATE_LENGTH, message_to_yaml
 
+ECHO_DEPTH = 10  # as ros2 topic echo
+
 PROG = "uav-insar echo"
 
 
@@ -141,7 +143,7 @@ def _echo(args: argparse.Namespace) -> int:
 def _wait_for_publishers(node: Any, topic: str, end: float | None,
                          timeout: float | None) -> tuple[type, Any]:
     """The message class on `topic` and a QoS profile matching its publishers, once it has any."""
-    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+    from uav_insar_planner.ros.topics import matching_qos
 
     while True:
         infos = [i for i in node.get_publishers_info_by_topic(topic)  # not our own publishers
@@ -154,13 +156,7 @@ def _wait_for_publishers(node: Any, topic: str, end: float | None,
         time.sleep(0.05)
     if len(types) > 1:
         raise CommandFailed(f"{topic} has more than one type: {', '.join(types)}", EXIT_CRASH)
-    reliable = all(i.qos_profile.reliability == ReliabilityPolicy.RELIABLE for i in infos)
-    latched = all(i.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL for i in infos)
-    qos = QoSProfile(
-        depth=10,
-        reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
-        durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)
-    return message_class(types[0], topic), qos
+    return message_class(types[0], topic), matching_qos([i.qos_profile for i in infos], ECHO_DEPTH)
 
 
 def message_class(type_name: str, topic: str) -> type:
