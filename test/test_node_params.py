@@ -34,12 +34,9 @@ class Probe:
         return self.w.spin_until(done, timeout)
 
     def call(self, srv_type, name: str, request, timeout: float = 10.0):
-        client = self.w.node.create_client(srv_type, name)
-        assert self.spin_until(client.service_is_ready, 15.0), f"no service {name}"
-        future = client.call_async(request)
-        assert self.spin_until(future.done, timeout), f"{name}: no answer"
-        self.w.node.destroy_client(client)
-        return future.result()
+        answer = self.w.call(srv_type, name, request, 15.0 + timeout)
+        assert answer is not None, f"{name}: no answer"
+        return answer
 
     def set(self, node: str, name: str, value: ParameterValue):
         request = SetParameters.Request(parameters=[ParameterMsg(name=name, value=value)])

@@ -160,11 +160,10 @@ def test_accepted_file_gives_the_node_the_values_the_reader_returns(watcher, pro
         assert cli.returncode == 0, cli.stderr
     args = ["-r", f"__ns:={namespace}"] if namespace else []
     planner = procs("planner", "--params-file", path, *args)
-    client = watcher.node.create_client(GetParameters, f"{fqn}/get_parameters")
-    assert watcher.spin_until(client.service_is_ready, 20.0), f"no {fqn}"
-    future = client.call_async(GetParameters.Request(names=list(expected)))
-    assert watcher.spin_until(future.done, 10.0)
-    got = dict(zip(expected, map(_value, future.result().values), strict=True))
+    answer = watcher.call(GetParameters, f"{fqn}/get_parameters",
+                          GetParameters.Request(names=list(expected)), 30.0)
+    assert answer is not None, f"no answer from {fqn}"
+    got = dict(zip(expected, map(_value, answer.values), strict=True))
     assert got == expected
     planner.send_signal(signal.SIGINT)
     out, _ = planner.communicate(timeout=20)
@@ -190,12 +189,13 @@ def _started(watcher, proc: subprocess.Popen, node: str) -> set[str]:
     client = watcher.node.create_client(ListParameters, f"/{node}/list_parameters")
     assert watcher.spin_until(lambda: client.service_is_ready() or proc.poll() is not None,
                               30.0) and proc.poll() is None, (node, proc.communicate()[0])
-    future = client.call_async(ListParameters.Request())
-    assert watcher.spin_until(future.done, 10.0)
+    watcher.node.destroy_client(client)
+    answer = watcher.call(ListParameters, f"/{node}/list_parameters", ListParameters.Request())
+    assert answer is not None, f"no answer from /{node}"
     proc.send_signal(signal.SIGINT)
     out, _ = proc.communicate(timeout=20)
     assert proc.returncode == 0 and "[ERROR]" not in out, (node, out)
-    return set(future.result().result.names)
+    return set(answer.result.names)
 
 
 def _demo(ros_domain: int, *args: str) -> subprocess.CompletedProcess:

@@ -96,6 +96,26 @@ class TopicWatcher:
             self.executor.spin_once(timeout_sec=SPIN_STEP_S)
         return True
 
+    def call(self, srv_type: Any, name: str, request: Any, timeout: float = 10.0,
+             resend_s: float = 2.0) -> Any:
+        """The answer of service `name`, or None after `timeout` s; for idempotent services
+        only (parameters), because the request is sent again every `resend_s` s: a client
+        that has just seen the service ready can still miss its answer while the server has
+        not yet discovered the client's response reader (a DDS discovery race)."""
+        client = self.node.create_client(srv_type, name)
+        try:
+            end = time.monotonic() + timeout
+            if not self.spin_until(client.service_is_ready, timeout):
+                return None
+            while time.monotonic() < end:
+                future = client.call_async(request)
+                if self.spin_until(future.done, min(resend_s, end - time.monotonic())):
+                    return future.result()
+                client.remove_pending_request(future)
+            return None
+        finally:
+            self.node.destroy_client(client)
+
     def agents_matched(self) -> bool:
         """True once every agent's achieved_rate publisher has been discovered: a new process
         can take a discovery announcement period (~3 s) to be seen, and rates sent before
