@@ -1,5 +1,9 @@
 """The simulated UAV agent (`ros2 run uav_insar_planner agent --ros-args -p uav_id:=1`).
 
+Runs beside the planner or, as a stack on the UAV's computer, in the UAV's own namespace
+(`-r __ns:=/uav1 -p uav_id:=1`, node /uav1/agent); its topics are the swarm's either way
+(topics.swarm_namespace: /uav1/pose, /formation).
+
 Waits for the latched `formation` and `formation/power` of one plan (ros/plan_gate.py: both
 validated, of the same plan identity, from the sole planner on the domain; the plan flown is
 logged and published on `uav{K}/plan`), flies to its across-track target
@@ -82,6 +86,7 @@ class AgentNode(Node):
         if self.problems:
             return
         try:
+            ns = topics.swarm_namespace(self.get_namespace(), own["uav_id"])
             self.flight = choose_flight(own, params)
         except ValueError as exc:
             self.problems.append(str(exc))
@@ -93,13 +98,14 @@ class AgentNode(Node):
         self.uav_name = uav_name(self.k)  # the prefix of every log line
         self._announced = False
         self._phase = self.mission.phase
-        self._pose_pub = self.create_publisher(PoseStamped, topics.pose(self.k), topics.DEPTH)
-        self._rate_pub = self.create_publisher(Float64, topics.achieved_rate(self.k),
-                                               topics.RATE_DEPTH)
-        self._offload_pub = self.create_publisher(Float64MultiArray, topics.offload(self.k),
-                                                  topics.RATE_DEPTH)
+        self._pose_pub = self.create_publisher(PoseStamped, topics.resolve(ns, topics.pose(
+            self.k)), topics.DEPTH)
+        self._rate_pub = self.create_publisher(Float64, topics.resolve(
+            ns, topics.achieved_rate(self.k)), topics.RATE_DEPTH)
+        self._offload_pub = self.create_publisher(Float64MultiArray, topics.resolve(
+            ns, topics.offload(self.k)), topics.RATE_DEPTH)
         self.gate = PlanGate(self, self._adopt_plan, f"{self.uav_name}: ",  # one plan at a time
-                             topics.flown_plan(self.k))
+                             topics.flown_plan(self.k), swarm_ns=ns)
         self.create_timer(TICK_PERIOD_S, self._tick)
         note = self.flight.start()
         if note:

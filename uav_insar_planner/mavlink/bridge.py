@@ -39,7 +39,6 @@ ROS node calls.
 """
 from __future__ import annotations
 
-import math
 import select
 import threading
 import time
@@ -52,7 +51,8 @@ from uav_insar_planner.mavlink.frames import TrackFrame, Vec3
 from uav_insar_planner.mavlink.guard import DropLog, fits_float32
 from uav_insar_planner.mavlink.hold import HoldOrder
 from uav_insar_planner.mavlink.link import MAV, Link, LinkStats, Source
-from uav_insar_planner.mavlink.report import BridgeEvent, VehicleStatus
+from uav_insar_planner.mavlink.pass_start import captured
+from uav_insar_planner.mavlink.report import BridgeEvent, VehicleStatus, vehicle_status
 from uav_insar_planner.mavlink.sequencer import (
     COPTER_MODE_GUIDED,
     ArmingSequence,
@@ -61,7 +61,7 @@ from uav_insar_planner.mavlink.sequencer import (
 )
 from uav_insar_planner.mavlink.setpoints import setpoint_message
 from uav_insar_planner.mavlink.signing import read_key_file, signing_state
-from uav_insar_planner.mavlink.supervision import WatchedVehicle, is_vehicle_heartbeat, phase
+from uav_insar_planner.mavlink.supervision import WatchedVehicle, is_vehicle_heartbeat
 from uav_insar_planner.mavlink.trajectory import PassTrajectory, clean_formation, separation
 
 __all__ = ["Bridge", "BridgeConfig", "BridgeEvent", "VehicleStatus"]
@@ -343,18 +343,11 @@ class Bridge:
         gate = [v for v in self._vehicles
                 if self._pass.start_pose(v.uav) is not None and v.linked
                 and not (v.uav in self._sequences and self._sequences[v.uav].failed)]
-        if self.config.capture_radius_m > 0.0:
-            if not gate:
-                return
-            for v in gate:
-                if not v.position_fresh(now, self.config.heartbeat_timeout_s):
-                    return
-                start = self.frame.to_ned(*self._pass.start_pose(v.uav))
-                if not math.dist(start, v.position_ned) <= self.config.capture_radius_m:
-                    return  # (written so that a NaN distance never counts as inside)
-        self._pass.t_start = now
-        self._event(-1, "info", f"formation established; flying the track at "
-                                f"{self.config.speed_mps:g} m/s")
+        if captured(gate, self._pass, self.frame, now, self.config.capture_radius_m,
+                    self.config.heartbeat_timeout_s):
+            self._pass.t_start = now
+            self._event(-1, "info", f"formation established; flying the track at "
+                                    f"{self.config.speed_mps:g} m/s")
 
     def _send_setpoints(self, now: float) -> None:
         for v in self._vehicles:
@@ -378,21 +371,5 @@ class Bridge:
                 v.stream_since = now
 
     def _status(self, v: WatchedVehicle, now: float) -> VehicleStatus:
-        target = self._pass.target(v.uav, now)
-        track = None if v.position_ned is None else self.frame.from_ned(*v.position_ned)
-        error = None if track is None or target is None else math.dist(track, target[0])
-        radius = self.config.capture_radius_m if self.config.capture_radius_m > 0 else 1.0
-        seq = self._sequences.get(v.uav)
-        return VehicleStatus(
-            uav=v.uav, sysid=v.sysid, compid=v.compid, connection=v.link.address,
-            link=v.link_state,
-            heartbeat_age_s=None if v.last_heartbeat is None else now - v.last_heartbeat,
-            mode=v.mode, armed=v.armed,
-            position_track=track,
-            position_ned=v.position_ned,
-            position_age_s=None if v.position_time is None else now - v.position_time,
-            target_track=None if target is None else target[0], setpoints_sent=v.setpoints_sent,
-            sequence="off" if seq is None else seq.text(), last_ack=v.last_ack,
-            phase=phase(v, now, error, radius, arming=seq.phase() if seq else ""),
-            prearm=v.prearm, link_up=v.link.up,
-            separation=self._separation[v.uav])
+        return vehicle_status(v, now, self._pass, self.frame, self.config.capture_radius_m,
+                              self._sequences.get(v.uav), self._separation[v.uav])

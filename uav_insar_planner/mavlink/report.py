@@ -1,9 +1,13 @@
-"""What the bridge reports: events worth a log line and one snapshot per UAV."""
+"""What the bridge reports: events worth a log line and one snapshot per UAV (`vehicle_status`)."""
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
-from uav_insar_planner.mavlink.frames import Vec3
+from uav_insar_planner.mavlink.frames import TrackFrame, Vec3
+from uav_insar_planner.mavlink.sequencer import ArmingSequence
+from uav_insar_planner.mavlink.supervision import WatchedVehicle, phase
+from uav_insar_planner.mavlink.trajectory import PassTrajectory
 
 
 @dataclass(frozen=True)
@@ -39,3 +43,26 @@ class VehicleStatus:
     prearm: str = ""  # the latest arming refusal reason the vehicle sent
     link_up: bool = True  # False while its TCP link is (re)connecting
     separation: str = ""  # "" or why this UAV is planned too close to another
+
+
+def vehicle_status(v: WatchedVehicle, now: float, pass_: PassTrajectory, frame: TrackFrame,
+                   capture_radius_m: float, seq: ArmingSequence | None,
+                   separation: str) -> VehicleStatus:
+    """The snapshot of vehicle `v` at `now` under the pass `pass_` (its arming sequence `seq`,
+    None when it has none)."""
+    target = pass_.target(v.uav, now)
+    track = None if v.position_ned is None else frame.from_ned(*v.position_ned)
+    error = None if track is None or target is None else math.dist(track, target[0])
+    radius = capture_radius_m if capture_radius_m > 0 else 1.0
+    return VehicleStatus(
+        uav=v.uav, sysid=v.sysid, compid=v.compid, connection=v.link.address,
+        link=v.link_state,
+        heartbeat_age_s=None if v.last_heartbeat is None else now - v.last_heartbeat,
+        mode=v.mode, armed=v.armed,
+        position_track=track,
+        position_ned=v.position_ned,
+        position_age_s=None if v.position_time is None else now - v.position_time,
+        target_track=None if target is None else target[0], setpoints_sent=v.setpoints_sent,
+        sequence="off" if seq is None else seq.text(), last_ack=v.last_ack,
+        phase=phase(v, now, error, radius, arming=seq.phase() if seq else ""),
+        prearm=v.prearm, link_up=v.link.up, separation=separation)

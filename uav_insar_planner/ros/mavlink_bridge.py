@@ -70,6 +70,7 @@ class MavlinkBridgeNode(Node):
             return
         values = spec_values(self, BRIDGE_SPECS)
         try:
+            ns = topics.swarm_namespace(self.get_namespace(), None)
             config = BridgeConfig(**{name: tuple(v) if isinstance(v, list) else v
                                      for name, v in values.items()})
             self.bridge = Bridge(config)
@@ -77,12 +78,11 @@ class MavlinkBridgeNode(Node):
             self.problems.append(str(exc))
             return
         n = len(config.target_sysids)
-        self._pose_pubs = [self.create_publisher(PoseStamped, topics.mavlink_pose(k),
-                                                   topics.DEPTH)
-                           for k in range(n)]
+        self._pose_pubs = [self.create_publisher(PoseStamped, topics.resolve(
+            ns, topics.mavlink_pose(k)), topics.DEPTH) for k in range(n)]
         self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, topics.DEPTH)
         self._last_pose_age: list[float | None] = [None] * n
-        self._gate = PlanGate(self, self._on_plan)  # validated, one plan at a time
+        self._gate = PlanGate(self, self._on_plan, swarm_ns=ns)  # validated, one at a time
         self.create_timer(POSE_PERIOD_S, self._publish_poses)
         self.create_timer(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)
         guard_sets(self)

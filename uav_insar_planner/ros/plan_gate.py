@@ -18,7 +18,8 @@ the sole publisher of both topics in the ROS graph:
   until the graph shows both.
 With `flown_topic` (an agent's `uav{K}/plan`), the plan in use is published there
 (std_msgs/String, latched) as its identity label, for the planner to report which plan each
-agent flies. `prefix` starts every log line (e.g. "uav1: ").
+agent flies. `prefix` starts every log line (e.g. "uav1: "). The topics are those of
+`swarm_ns` (topics.swarm_namespace; default the node's namespace).
 """
 from __future__ import annotations
 
@@ -115,19 +116,21 @@ class PlanGate:
     """See the module docstring. `dropped` counts the messages refused by validation."""
 
     def __init__(self, node: Node, on_plan: Callable[[Formation, PowerSchedule], None],
-                 prefix: str = "", flown_topic: str | None = None) -> None:
+                 prefix: str = "", flown_topic: str | None = None,
+                 swarm_ns: str | None = None) -> None:
         self._node, self._on_plan, self._prefix = node, on_plan, prefix
         self._pairing = PlanPairing()
         log = node.get_logger()
         self._drops = DropLog(log.warning, time.monotonic)
         self._held: tuple[str, ...] = ()
-        self._formation_topic = node.resolve_topic_name(topics.FORMATION)
-        self._power_topic = node.resolve_topic_name(topics.POWER)
-        self._flown_pub = (node.create_publisher(String, flown_topic, topics.LATCHED)
-                           if flown_topic else None)
-        node.create_subscription(PoseArray, topics.FORMATION, self._on_formation,
+        ns = node.get_namespace() if swarm_ns is None else swarm_ns
+        self._formation_topic = node.resolve_topic_name(topics.resolve(ns, topics.FORMATION))
+        self._power_topic = node.resolve_topic_name(topics.resolve(ns, topics.POWER))
+        self._flown_pub = (node.create_publisher(String, topics.resolve(ns, flown_topic),
+                                                 topics.LATCHED) if flown_topic else None)
+        node.create_subscription(PoseArray, self._formation_topic, self._on_formation,
                                  topics.LATCHED)
-        node.create_subscription(Float64MultiArray, topics.POWER, self._on_power,
+        node.create_subscription(Float64MultiArray, self._power_topic, self._on_power,
                                  topics.LATCHED)
         node.create_timer(GRAPH_PERIOD_S, self._check)
 

@@ -1,6 +1,9 @@
 """The suite's ROS interface in one place: topic names, the frame id and the QoS of each.
 
-Names are relative (a namespace moves the whole swarm) except /diagnostics. Frame
+Names are relative (a namespace moves the whole swarm) except /diagnostics. A node of one UAV
+(an agent, a bridge given `uav_id`) may also run in that UAV's own namespace, as a stack on the
+UAV's computer does (`-r __ns:=/uav1`): `swarm_namespace` finds the swarm's namespace above it
+and `resolve` names its topics absolutely, so they stay /uav1/pose and /formation. Frame
 `insar_track`: x = range / across-track, y = azimuth / along-track, z = up; SI on every topic.
 A plan is `formation` + `formation/power` under one identity, validated wherever it enters
 (ros/plan_msgs.py); agents and the bridge apply one plan at a time, of the sole planner on the
@@ -12,7 +15,7 @@ from collections.abc import Sequence
 
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-from uav_insar_planner.swarm import uav_name
+from uav_insar_planner.swarm import UAVS, uav_name
 
 FRAME_ID = "insar_track"
 # A plan's identity (ros/plan_msgs.py): formation's header.stamp, and the same stamp with the
@@ -65,6 +68,32 @@ def flown_plan(k: int) -> str:
 def mavlink_pose(k: int) -> str:
     """geometry_msgs/PoseStamped: vehicle k's LOCAL_POSITION_NED in the track frame (bridge)."""
     return f"{uav_name(k)}/mavlink/pose"
+
+
+def swarm_namespace(node_namespace: str, k: int | None) -> str:
+    """The namespace of the swarm's topics for a node in `node_namespace` flying UAV `k`
+    (None: the whole swarm): the node's own, or its parent when it is the UAV's own
+    (/uav1 or /field/uav1 for k = 1). ValueError (one line) when it is another UAV's, whose
+    topics the node would then publish."""
+    ns = "/" + node_namespace.strip("/")
+    parent, _, last = ns.rpartition("/")
+    if k is not None and last == uav_name(k):
+        return parent or "/"
+    names = {uav_name(j) for j in UAVS}
+    if last in names:
+        raise ValueError(f"namespace: {ns!r} is another UAV's; expected {uav_name(k)!r} "
+                         f"(its own) or the swarm's namespace" if k is not None else
+                         f"namespace: {ns!r} is one UAV's; expected the swarm's namespace "
+                         "for a node of the whole swarm, or uav_id")
+    return ns
+
+
+def resolve(swarm_ns: str, name: str) -> str:
+    """The absolute name of topic `name` (as the constants and functions above give it)
+    in the swarm namespace `swarm_ns`; absolute names (/diagnostics) stay."""
+    if name.startswith("/"):
+        return name
+    return swarm_ns.rstrip("/") + "/" + name
 
 
 def matching_qos(offered: Sequence[QoSProfile], depth: int) -> QoSProfile:
