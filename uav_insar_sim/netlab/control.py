@@ -6,7 +6,8 @@
     cut PORT [dir=...]       drop every frame (the link is gone)
     restore PORT [dir=...]   lift the cut (loss and delay stay as set)
     clear PORT [dir=...]     a perfect link again (no loss, no delay, no cut)
-    stats                    JSON: per port rx (frames read from it), tx (written to it),
+    stats                    JSON: per port rx (frames read from it), rx_multicast (those of
+                             them to an IPv4 multicast group, e.g. DDS SPDP), tx (written to it),
                              dropped_in, dropped_out, write_errors; and queued (delayed frames)
 
 Replies: "ok", a JSON line for stats, or "error: ..." (one line naming the word, the value

@@ -176,6 +176,10 @@ class NetLab:
             why = " ".join(self._switch.stderr.read().split())
             raise RuntimeError(f"the switch did not start: {why}")
 
+    def switch_pid(self) -> int:
+        """The switch's process id (for a benchmark's CPU figures)."""
+        return self._switch.pid
+
     def switch_exit_code(self) -> int | None:
         """The switch's exit code if it has ended (a crash is EXIT_CRASH), else None."""
         return self._switch.poll() if self._switch else None

@@ -37,6 +37,7 @@ from uav_insar_sim.netlab.tap import check_ifname, open_tap
 
 PROG = "uav-insar-netswitch"
 FRAME_MAX_BYTES = 65536
+IPV4_MULTICAST_MAC = b"\x01\x00\x5e"  # RFC 1112: 01:00:5e + the group's low 23 bits
 READ_BATCH = 64  # frames read from one port before the others get their turn
 
 
@@ -47,8 +48,8 @@ class Port:
         self.label, self.ifname = label, ifname
         self.fd = open_tap(ifname)
         self.dirs = {d: Direction(seed, label, d) for d in ("in", "out")}
-        self.stats = dict.fromkeys(("rx", "tx", "dropped_in", "dropped_out",
-                                    "write_errors"), 0)
+        self.stats = dict.fromkeys(("rx", "rx_multicast", "tx", "dropped_in",
+                                    "dropped_out", "write_errors"), 0)
 
     def write(self, frame: bytes) -> None:
         try:
@@ -88,12 +89,14 @@ class Switch:
     def forward(self, src: Port, frame: bytes, now: float) -> None:
         """Send `frame`, read from `src` at `now`, where it goes, through the impairments."""
         src.stats["rx"] += 1
+        if len(frame) < 14:
+            return  # not Ethernet
+        if frame.startswith(IPV4_MULTICAST_MAC):
+            src.stats["rx_multicast"] += 1
         delay_in = src.dirs["in"].fate()
         if delay_in is None:
             src.stats["dropped_in"] += 1
             return
-        if len(frame) < 14:
-            return  # not Ethernet
         self.macs[frame[6:12]] = src
         known = None if frame[0] & 1 else self.macs.get(frame[0:6])
         targets = [known] if known is not None else self.ports.values()
