@@ -1,8 +1,8 @@
 """UDP probe for test_netlab.py: numbered, time-stamped datagrams between two namespaces.
 
-    netlab_udp.py recv PORT SECONDS        print "listening", receive for SECONDS after the
-                                           first datagram (or SECONDS in all if none comes),
-                                           then print one JSON line {seq: one-way delay [s]}
+    netlab_udp.py recv PORT QUIET          print "listening", receive until QUIET seconds pass
+                                           without a datagram, then print one JSON line
+                                           {seq: one-way delay [s]}
     netlab_udp.py send ADDR PORT COUNT GAP send COUNT datagrams, GAP seconds apart
 
 The one-way delay is receive time minus send time on CLOCK_MONOTONIC, one clock for every
@@ -19,23 +19,19 @@ import time
 STAMP = struct.Struct("!Id")
 
 
-def recv(port: int, seconds: float) -> None:
+def recv(port: int, quiet: float) -> None:
     sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     sock.bind(("0.0.0.0", port))
+    sock.settimeout(quiet)
     print("listening", flush=True)
     delays: dict[int, float] = {}
-    deadline = time.monotonic() + seconds
-    while (left := deadline - time.monotonic()) > 0:
-        sock.settimeout(left)
+    while True:
         try:
             data = sock.recv(2048)
         except TimeoutError:
             break
-        now = time.monotonic()
         seq, sent = STAMP.unpack_from(data)
-        if not delays:
-            deadline = now + seconds
-        delays[seq] = now - sent
+        delays[seq] = time.monotonic() - sent
     print(json.dumps(delays), flush=True)
 
 

@@ -8,7 +8,8 @@
     clear PORT [dir=...]     a perfect link again (no loss, no delay, no cut)
     stats                    JSON: per port rx (frames read from it), rx_multicast (those of
                              them to an IPv4 multicast group, e.g. DDS SPDP), tx (written to it),
-                             dropped_in, dropped_out, write_errors; and queued (delayed frames)
+                             dropped_in, dropped_out, write_errors, and "in" and "out" (the
+                             LinkSpec of each direction); and queued (delayed frames)
 
 Replies: "ok", a JSON line for stats, or "error: ..." (one line naming the word, the value
 and what is allowed); a refused command changes nothing.
@@ -65,7 +66,7 @@ def parse(line: str, ports: Sequence[str]) -> Command:
     verb, args = words[0], words[1:]
     if verb == "stats":
         if args:
-            raise ValueError(f"stats takes no arguments, got {_shown(' '.join(args))}")
+            raise ValueError(f"stats argument {_shown(args[0])} not allowed: stats takes none")
         return Command(verb)
     if not args:
         raise ValueError(f"{verb} needs a port: one of {', '.join(ports)}")

@@ -28,6 +28,7 @@ import socket
 import sys
 import time
 from collections.abc import Sequence
+from dataclasses import asdict
 
 from uav_insar_planner.cli.parser import OneLineParser
 from uav_insar_planner.exit_codes import EXIT_BAD_INPUT, EXIT_CRASH, EXIT_OK
@@ -50,6 +51,10 @@ class Port:
         self.dirs = {d: Direction(seed, label, d) for d in ("in", "out")}
         self.stats = dict.fromkeys(("rx", "rx_multicast", "tx", "dropped_in",
                                     "dropped_out", "write_errors"), 0)
+
+    def report(self) -> dict[str, object]:
+        """The counters, and the impairment of each direction (for `stats`)."""
+        return {**self.stats, **{d: asdict(v.spec) for d, v in self.dirs.items()}}
 
     def write(self, frame: bytes) -> None:
         try:
@@ -136,7 +141,7 @@ class Switch:
         try:
             cmd = control.parse(line, list(self.ports))
             if cmd.verb == "stats":
-                return json.dumps({"ports": {k: p.stats for k, p in self.ports.items()},
+                return json.dumps({"ports": {k: p.report() for k, p in self.ports.items()},
                                    "queued": len(self.queue)})
             dirs = [self.ports[cmd.port].dirs[d] for d in cmd.directions]
             fields = {"set": cmd.fields, "cut": {"cut": True}, "restore": {"cut": False},
@@ -184,7 +189,10 @@ def _port_arg(text: str) -> tuple[str, str]:
     label, eq, ifname = text.partition("=")
     if not eq or not label:
         raise ValueError(f"--port {text!r} not allowed: LABEL=IFNAME")
-    return label, check_ifname(ifname)
+    try:
+        return label, check_ifname(ifname)
+    except ValueError as exc:
+        raise ValueError(f"--port {text!r}: {exc}") from None
 
 
 def main(argv: list[str] | None = None) -> int:
