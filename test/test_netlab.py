@@ -226,3 +226,28 @@ def test_nothing_is_discovered(lab, ros_domain, another_domain, case):
     if case != "other_domain":
         stats = json.loads(lab.switch("stats"))["ports"]
         assert stats["ground"]["rx_multicast"] == 0 and stats["uav0"]["rx_multicast"] == 0
+
+
+def test_the_lab_touches_nothing_outside_and_tears_down_after_an_exception():
+    dead = "nl999999x0-ground"  # a lab namespace of a process that no longer exists
+    subprocess.run(["ip", "netns", "add", dead], capture_output=True)
+    lab = NetLab(["ground", "uav0"])
+    try:
+        with pytest.raises(RuntimeError, match="a failing test"), lab:
+            names = subprocess.run(["ip", "netns", "list"], capture_output=True,
+                                   text=True).stdout
+            assert dead not in names and all(ns in names for ns in lab.namespaces.values())
+            root = subprocess.run(["ip", "-4", "addr"], capture_output=True, text=True).stdout
+            root += subprocess.run(["ip", "-4", "route", "show", "table", "all"],
+                                   capture_output=True, text=True).stdout
+            assert lab.subnet + "." not in root
+            sleeper = lab.start("uav0", ["sleep", "600"])
+            raise RuntimeError("a failing test")
+    except LabUnavailable as exc:
+        pytest.skip(str(exc))
+    finally:
+        subprocess.run(["ip", "netns", "del", dead], capture_output=True)
+    assert sleeper.poll() is not None
+    names = subprocess.run(["ip", "netns", "list"], capture_output=True, text=True).stdout
+    assert not any(ns in names for ns in lab.namespaces.values())
+    assert lab.switch_exit_code() is not None

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import itertools
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -36,6 +37,7 @@ MULTICAST_ROUTE = "224.0.0.0/4"
 READY_TIMEOUT_S = 10.0
 STOP_TIMEOUT_S = 5.0
 _runs = itertools.count()
+_RUN_NAMESPACE = re.compile(r"nl(\d+)x\d+-\S+")
 
 
 class LabUnavailable(Exception):
@@ -72,8 +74,10 @@ class NetLab:
     """Namespaces `names`, one switch port each; a context manager (module docstring)."""
 
     def __init__(self, names: Sequence[str], seed: int = 0) -> None:
-        if len(set(names)) != len(names) or not names:
-            raise ValueError(f"names {list(names)!r} not allowed: one or more, all different")
+        if len(set(names)) != len(names) or not names or not all(
+                re.fullmatch(r"[A-Za-z0-9_]{1,32}", n) for n in names):
+            raise ValueError(f"names {list(names)!r} not allowed: one or more, all different, "
+                             "each 1..32 of A-Z a-z 0-9 _")
         n = next(_runs)
         self.run_id = f"nl{os.getpid()}x{n}"
         net = (os.getpid() * 8 + n) % (250 * 256)  # the /24: 10.<a>.<b>.0, a in 1..250
@@ -142,6 +146,7 @@ class NetLab:
         return ""
 
     def _build(self) -> None:
+        _sweep_dead_runs()
         self._tmp = tempfile.TemporaryDirectory(prefix=f"{self.run_id}-")
         self.control_path = str(Path(self._tmp.name) / "switch.sock")
         taps = {name: f"{self.run_id}t{k}" for k, name in enumerate(self.names)}
@@ -196,6 +201,16 @@ class NetLab:
         if self._tmp is not None:
             self._tmp.cleanup()
             self._tmp = None
+
+
+def _sweep_dead_runs() -> None:
+    """Delete the namespaces of labs whose process is gone (killed before it could clean
+    up, e.g. SIGKILL by a test timeout); those of live processes are left alone."""
+    listing = subprocess.run(["ip", "netns", "list"], capture_output=True, text=True).stdout
+    for line in listing.splitlines():
+        match = _RUN_NAMESPACE.match(line.split(" ", 1)[0])
+        if match and not Path(f"/proc/{match.group(1)}").exists():
+            subprocess.run(["ip", "netns", "del", match.group(0)], capture_output=True)
 
 
 def _pythonpath() -> str:
