@@ -137,10 +137,12 @@ def test_the_agents_pose_is_the_autopilots(flown):
         autopilot = [_stamp(m) for m in w.mavlink_poses[k]]
         assert len(agent) > 5 * N, (k, len(agent))  # the bridge reports at ~10 Hz
         assert set(agent) <= set(autopilot), k  # nothing but the autopilot's positions
-        # and all of them, in order, once both were subscribed (the watcher's start aside)
-        first = autopilot.index(agent[0])
-        assert agent == autopilot[first:first + len(agent)], k
-        assert len(agent) >= len(autopilot) - first - 3, (k, len(agent), len(autopilot))
+        # in the autopilot's order, and (nearly) all of them once both were subscribed: the
+        # watcher's uavK/pose queue is DEPTH deep, so a busy host may cost it a few
+        order = {pose: i for i, pose in enumerate(autopilot)}
+        index = [order[pose] for pose in agent]
+        assert index == sorted(index), k
+        assert len(agent) >= 0.9 * (len(autopilot) - index[0]), (k, len(agent), len(autopilot))
 
 
 def test_the_bag_and_the_report_show_the_autopilots_geometry(flown, tmp_path):
