@@ -147,7 +147,8 @@ ORIGIN_LIMIT_M = 1e5
 # Vehicle k's default sysid and local UDP port: FIRST_SYSID + k, FIRST_PORT + PORT_STEP k.
 FIRST_SYSID = 2
 FIRST_PORT, PORT_STEP = 14552, 10
-AUTOPILOTS = ("ardupilot", "px4")  # the flavours mavlink/autopilots.py knows the modes of
+AUTOPILOTS = ("ardupilot", "px4")
+POSITION_SOURCES = ("agent", "autopilot")  # the flavours mavlink/autopilots.py knows the modes of
 
 AGENT_SPECS = (
     ParamSpec("uav_id", int, 0, "which UAV this agent flies: 0 master, 1, 2", 0, NUM_UAVS - 1),
@@ -178,6 +179,10 @@ AGENT_SPECS = (
               0.0, 30.0),
     ParamSpec("gust_tau_s", float, 2.0, "time constant of the wind gusts [s]", 0.0, 1000.0,
               True),
+    ParamSpec("position_source", str, "agent", "where the UAV is: agent = the agent's own "
+              "flight (or its embedded vehicle, mavlink_listen), autopilot = its autopilot's "
+              "uavK/mavlink/pose from mavlink_bridge (slots start where it crosses their lines; "
+              "not with mavlink_listen)", choices=POSITION_SOURCES),
 )
 MAVLINK_SPECS = (
     ParamSpec("mavlink_listen", str, "", "MAVLink mode: the embedded vehicle's connection "

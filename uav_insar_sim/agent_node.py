@@ -24,16 +24,25 @@ target_sysids) that `mavlink_bridge` flies; the agent then reads the vehicle's p
 (converted to the track frame with `track_bearing_deg` and `origin_ned_m`, which must match
 the bridge's; default N = y, E = x, D = -z) and slot n starts when the vehicle crosses
 y = n v_y delta_t. `time_scale`, the position noise and the wind do not apply then.
+With `position_source: autopilot` the agent simulates only the payload's link, on the UAV's own
+autopilot: it subscribes to `uav{K}/mavlink/pose` (what mavlink_bridge reads from that
+autopilot, already in the track frame), runs the slot schedule on those positions as in MAVLink
+mode, and republishes each of them, stamp and all, on `uav{K}/pose` when it arrives (and only
+then: an autopilot gone silent leaves uav{K}/pose silent, so the planner's lost-UAV watch
+sees it). A non-finite pose, or one in another frame than insar_track, is dropped, counted
+(`bad_autopilot_poses`) and logged at most once per guard.DROP_LOG_PERIOD_S.
+`position_source: autopilot` with `mavlink_listen` is refused.
 
 Parameters (param_specs.py, all read-only: a mission is set up once): uav_id, time_scale
 (mission seconds per wall second), position_noise_std_m, noise_seed, max_speed_mps,
-max_accel_mps2, offloading, the simulated link's shadowing_std_db, shadowing_corr_m,
-small_scale_fading, rician_k_db, fading_seed and the wind's wind_mps, gust_std_mps, gust_tau_s
-(AGENT_SPECS, all off by default, so the link is the paper's model), mavlink_listen,
-mavlink_sysid, track_bearing_deg, origin_ned_m (MAVLINK_SPECS) and the scenario parameters of
-AGENT_SCENARIO_SPECS from params.PARAM_SPECS (P_max and E_max included, for the closed loop),
-so one params file serves every node. Invalid values or unknown names log one line each and exit
-with code 2; an embedded vehicle whose loop dies makes the agent log why and exit with code 1.
+max_accel_mps2, offloading, position_source, the simulated link's shadowing_std_db,
+shadowing_corr_m, small_scale_fading, rician_k_db, fading_seed and the wind's wind_mps,
+gust_std_mps, gust_tau_s (AGENT_SPECS, all off by default, so the link is the paper's model),
+mavlink_listen, mavlink_sysid, track_bearing_deg, origin_ned_m (MAVLINK_SPECS) and the scenario
+parameters of AGENT_SCENARIO_SPECS from params.PARAM_SPECS (P_max and E_max included, for the
+closed loop), so one params file serves every node. Invalid values or unknown names log one
+line each and exit with code 2; an embedded vehicle whose loop dies makes the agent log why and
+exit with code 1.
 """
 from __future__ import annotations
 
@@ -45,6 +54,7 @@ from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension
 
 from uav_insar_planner.evaluate import rate_tolerance_bps
 from uav_insar_planner.exit_codes import EXIT_CRASH
+from uav_insar_planner.mavlink.guard import DropLog, finite
 from uav_insar_planner.param_specs import AGENT_SCENARIO_SPECS as SCENARIO_SPECS
 from uav_insar_planner.param_specs import AGENT_SPECS, MAVLINK_SPECS
 from uav_insar_planner.params import ParamError, params_from_mapping
@@ -69,12 +79,14 @@ TICK_PERIOD_S = 0.05  # wall clock; the mission clock advances time_scale times 
 class AgentNode(Node):
     """See the module docstring. `problems` is non-empty (nothing created) on bad parameters.
 
-    `vehicle` is the embedded MAVLink vehicle in MAVLink mode, else None."""
+    `vehicle` is the embedded MAVLink vehicle in MAVLink mode, else None;
+    `bad_autopilot_poses` counts the autopilot poses dropped (non-finite, other frame)."""
 
     def __init__(self, node_name: str = "agent", **kwargs):
         super().__init__(node_name, **kwargs)
         self.vehicle: SimVehicle | None = None
         self.flight = None
+        self._drops = DropLog()
         self.problems = declare_specs(self, AGENT_SPECS + MAVLINK_SPECS + SCENARIO_SPECS,
                                       read_only=True) + unknown_overrides(self)
         own = spec_values(self, AGENT_SPECS + MAVLINK_SPECS)
@@ -104,6 +116,10 @@ class AgentNode(Node):
             ns, topics.achieved_rate(self.k)), topics.RATE_DEPTH)
         self._offload_pub = self.create_publisher(Float64MultiArray, topics.resolve(
             ns, topics.offload(self.k)), topics.RATE_DEPTH)
+        if not self.flight.own_poses:
+            # RATE_DEPTH, reliable: a busy executor still sees every position, in order.
+            self.create_subscription(PoseStamped, topics.resolve(ns, topics.mavlink_pose(
+                self.k)), self._on_autopilot_pose, topics.RATE_DEPTH)
         self.gate = PlanGate(self, self._adopt_plan, f"{self.uav_name}: ",  # one plan at a time
                              topics.flown_plan(self.k), swarm_ns=ns)
         self.create_timer(TICK_PERIOD_S, self._tick)
@@ -111,6 +127,10 @@ class AgentNode(Node):
         if note:
             self.get_logger().info(f"{self.uav_name}: {note}")
         self.get_logger().info(f"{self.uav_name}: waiting for the formation")
+
+    @property
+    def bad_autopilot_poses(self) -> int:
+        return self._drops.counts.get("autopilot pose", 0)
 
     def destroy_node(self) -> None:
         if self.flight is not None:
@@ -145,13 +165,36 @@ class AgentNode(Node):
                                     f"{self.vehicle.failure}; exiting")
             raise SystemExit(EXIT_CRASH)  # never a zombie agent that flies nothing
         for sample in self.flight.tick():
-            self._publish_pose(sample.position)
+            if self.flight.own_poses:
+                self._publish_pose(sample.position)
             self._rate_pub.publish(Float64(data=sample.rate_bps))
             self._publish_offload(sample)
-        self._publish_pose(self.mission.actual_position())
+        if self.flight.own_poses:
+            self._publish_pose(self.mission.actual_position())
         if self.mission.phase != self._phase:
             self._phase = self.mission.phase
             self._log_phase()
+
+    def _on_autopilot_pose(self, msg: PoseStamped) -> None:
+        """position_source autopilot: validate, feed the schedule, republish as uav{K}/pose."""
+        p = msg.pose.position
+        position = (p.x, p.y, p.z)
+        frame = msg.header.frame_id
+        why = (None if frame == topics.FRAME_ID else f"frame_id {frame[:40]!r} (expected "
+               f"{topics.FRAME_ID})") or (None if finite(position) else
+                                          f"non-finite position {position}")
+        if why:
+            line = self._drops.drop("autopilot pose", f"{why} on {topics.mavlink_pose(self.k)}")
+            if line:
+                self.get_logger().warning(f"{self.uav_name}: {line}")
+            return
+        self.flight.feed(position)
+        out = PoseStamped()
+        out.header.stamp = msg.header.stamp  # when the autopilot's position was read
+        out.header.frame_id = topics.FRAME_ID
+        out.pose.position = msg.pose.position
+        out.pose.orientation.w = 1.0
+        self._pose_pub.publish(out)
 
     def _publish_pose(self, position: tuple[float, float, float]) -> None:
         msg = PoseStamped()

@@ -6,19 +6,26 @@
   bridge flies; the agent reads its position, converted to the track frame, and runs the
   schedule on it (`observed_mission.ObservedMission`). time_scale, the position noise and
   the wind do not apply then.
+- `AutopilotFlight` (`position_source: autopilot`): the UAV's own autopilot, flown by the
+  MAVLink bridge, whose positions the node feeds in (`feed`, from uavK/mavlink/pose, already
+  in the track frame) and the schedule runs on (`ObservedMission`); nothing is simulated but
+  the link. time_scale, the position noise and the wind do not apply then.
 
-In both, the simulated link fading (`fading.LinkFading`) and the offloading law (open loop:
+In all three, the simulated link fading (`fading.LinkFading`) and the offloading law (open loop:
 the plan's powers; closed: `offload.ClosedLoopOffload`) are the agent parameters' (`link_of`).
 
-Both offer the same calls: `start()` (returns a line to log, or ""), `stop()`,
-`set_plan(x, y, z, powers)`, `tick() -> started slots`, and `mission` (the slot schedule).
+All offer the same calls: `start()` (returns a line to log, or ""), `stop()`,
+`set_plan(x, y, z, powers)`, `tick() -> started slots`, and `mission` (the slot schedule);
+`own_poses` says whether the node publishes the mission's position on uavK/pose each tick and
+at each slot start (True), or republishes the autopilot's positions as they arrive (False:
+no fresh position, no pose, so a silent autopilot goes silent on uavK/pose too).
 """
 from __future__ import annotations
 
 import time
 from collections.abc import Sequence
 
-from uav_insar_planner.mavlink.frames import TrackFrame
+from uav_insar_planner.mavlink.frames import TrackFrame, Vec3
 from uav_insar_planner.param_specs import FIRST_SYSID
 from uav_insar_planner.params import Params
 from uav_insar_sim.fading import LinkFading
@@ -38,6 +45,7 @@ class SelfFlight:
 
     how = "flying"
     vehicle: SimVehicle | None = None
+    own_poses = True
 
     def __init__(self, mission: Mission, time_scale: float):
         self.mission = mission
@@ -69,6 +77,7 @@ class MavlinkFlight:
     """An embedded MAVLink vehicle, flown by the bridge, whose position the agent watches."""
 
     how = "the bridge flies it"
+    own_poses = True
 
     def __init__(self, mission: ObservedMission, vehicle: SimVehicle, frame: TrackFrame,
                  listen: str):
@@ -95,15 +104,57 @@ class MavlinkFlight:
         return f"slot 0 started at y = {self.mission.y_start:g} m"
 
 
-def choose_flight(own: dict, params: Params) -> SelfFlight | MavlinkFlight:
-    """The flight for the agent parameters `own`: MAVLink when `mavlink_listen` is set.
+class AutopilotFlight:
+    """The UAV's own autopilot, flown by the bridge: the node feeds in its positions."""
+
+    how = "its autopilot flies it"
+    vehicle: SimVehicle | None = None
+    own_poses = False
+
+    def __init__(self, mission: ObservedMission):
+        self.mission = mission
+        self._fed: list[Vec3] = []  # positions since the last tick, oldest first
+
+    def start(self) -> str:
+        return "position_source autopilot: slots run on the autopilot's uavK/mavlink/pose"
+
+    def stop(self) -> None:
+        pass
+
+    def feed(self, position: Vec3) -> None:
+        """One finite autopilot position (x, y, z) in the track frame, as it arrived."""
+        self._fed.append(position)
+
+    def set_plan(self, x: float, y: float, z: float, powers: Sequence[float]) -> None:
+        self.mission.set_plan((x, z), powers, y_start=y)
+
+    def tick(self) -> list[SlotSample]:
+        fed, self._fed = self._fed, []
+        return [sample for position in fed for sample in self.mission.observe(position)]
+
+    def track_started_text(self) -> str:
+        return f"slot 0 started at y = {self.mission.y_start:g} m (autopilot position)"
+
+
+Flight = SelfFlight | MavlinkFlight | AutopilotFlight
+
+
+def choose_flight(own: dict, params: Params) -> Flight:
+    """The flight for the agent parameters `own`: AutopilotFlight for `position_source:
+    autopilot`, MavlinkFlight when `mavlink_listen` is set, else SelfFlight.
 
     ValueError (one line) for a bad value, e.g. max_speed_mps below speed_mps (checked in
-    both modes) or a bad connection string."""
+    every mode), a bad connection string, or autopilot together with mavlink_listen."""
     k = own["uav_id"]
     wind = Wind(own["wind_mps"], own["gust_std_mps"], own["gust_tau_s"], own["fading_seed"], k)
     mission = Mission(k, params, own["max_speed_mps"], own["max_accel_mps2"],
                       own["position_noise_std_m"], own["noise_seed"], wind, *link_of(own, params))
+    if own["position_source"] == "autopilot":
+        if own["mavlink_listen"]:
+            raise ValueError(f"position_source: value 'autopilot' is not allowed with "
+                             f"mavlink_listen {own['mavlink_listen'][:80]!r} (an embedded "
+                             "vehicle); expected agent, or an empty mavlink_listen")
+        return AutopilotFlight(ObservedMission(k, params, *link_of(own, params)))
     if not own["mavlink_listen"]:
         return SelfFlight(mission, own["time_scale"])
     # The embedded vehicle's local NED relates to the track as the bridge's does.

@@ -2,13 +2,15 @@
 
 Starts one `agent` executable per UAV and the `planner` as separate processes, as `ros2 run`
 would, on a private ROS_DOMAIN_ID with discovery kept on this host; this process watches the
-topics like `ros2 topic echo` would. Unless `--no-mavlink`, it also closes the MAVLink loop:
-one `uav-insar-vehicle` process per UAV (SITL-style, sysid 2, 3, ..., airborne, on free
-loopback UDP ports) and the `mavlink_bridge` node wired to them, which flies the planned
-formation through real MAVLink bytes; the vehicles' positions come back on
-/uavK/mavlink/pose. The vehicles fly in wall-clock time (no time_scale): they gather at their
-start points, then fly a short pass of `--mavlink-pass-s` seconds along the track at
-speed_mps.
+topics like `ros2 topic echo` would. Unless `--no-mavlink`, the agents ride on MAVLink
+vehicles: one `uav-insar-vehicle` process per UAV (SITL-style, sysid 2, 3, ..., airborne
+behind the track start, on free loopback UDP ports) and the `mavlink_bridge` node wired to
+them fly the planned formation through real MAVLink bytes; the vehicles' positions come back
+on /uavK/mavlink/pose, and the agents (`position_source:=autopilot`) run their slots on them
+and republish them as /uavK/pose, so rates, offload, bag and report are the vehicles'. The
+vehicles fly in wall-clock time (no time_scale): they gather at their start points, then fly
+the pass, num_slots + 1 slots long (20 slots unless --num-slots), along the track at
+speed_mps. With `--no-mavlink` the agents fly themselves on the mission clock.
 
 Unless `--no-bag`, `uav-insar record` runs beside the nodes from before the agents start to
 after they stop, so the whole mission lands in a rosbag2 MCAP bag (`--bag PATH`, default

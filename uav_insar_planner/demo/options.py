@@ -15,6 +15,9 @@ REPO_CONFIG = Path(__file__).resolve().parents[1] / "config" / "params.yaml"
 # after uav_timeout_s (5 s: 20 slots at 4x); the planner's answer may take that long and more.
 KILL_TIME_SCALE = 4.0
 DEFAULT_TIME_SCALE = 20.0
+# The MAVLink path flies the whole mission in wall-clock time on the vehicles (1 slot a
+# second at Table I's delta_t): its default num_slots, unless --num-slots says otherwise.
+MAVLINK_NUM_SLOTS = 20
 # --mavlink-base-port: vehicle k listens on PORT + PORT_STEP * k, the last one within 65535.
 MAX_BASE_PORT = 65535 - PORT_STEP * (NUM_UAVS - 1)
 
@@ -28,25 +31,28 @@ def build_parser() -> OneLineParser:
     add("--params-file", type=Path, default=REPO_CONFIG if REPO_CONFIG.exists() else None,
         help="ROS 2 params file for every node (default: config/params.yaml)")
     add("--num-slots", type=int, default=0,
-        help="override num_slots (default: the params file's)")
+        help=f"override num_slots (default: {MAVLINK_NUM_SLOTS}; with --no-mavlink the "
+             "params file's)")
     add("--time-scale", type=float, default=None,
-        help="agents' mission seconds per wall second (default 20, 4 with --kill-uav)")
+        help="self-flown agents' mission seconds per wall second (default 20, 4 with "
+             "--kill-uav); --no-mavlink only: the vehicles fly in wall-clock time")
     add("--noise-std", type=float, default=0.0,
-        help="agents' position disturbance std per axis [m] (default 0)")
+        help="self-flown agents' position disturbance std per axis [m] (default 0); "
+             "--no-mavlink only")
     add("--offloading", choices=("open", "closed"), default="open",
         help="agents' power per slot: the plan's, or closed loop (default open)")
     add("--fading", action="store_true",
         help="simulated link: 4 dB shadowing over 20 m and Rician K 6 dB")
     add("--wind", type=float, nargs=3, metavar=("VX", "VY", "VZ"),
-        help="steady wind in the track frame [m/s] (each in [-50, 50])")
+        help="steady wind on the self-flown agents in the track frame [m/s] (each in "
+             "[-50, 50]); --no-mavlink only")
     add("--seed", type=int, default=0, help="seed of the fading and the gusts (default 0)")
     add("-p", "--param", action="append", default=[], metavar="NAME:=VALUE",
         help="a parameter for every node, e.g. -p solver:=paper-ao")
     add("--domain-id", type=int, default=None,
         help="ROS_DOMAIN_ID to use (default: a random one in 1..101)")
-    add("--no-mavlink", action="store_true", help="skip the MAVLink part (bridge and vehicles)")
-    add("--mavlink-pass-s", type=float, default=5.0,
-        help="how long the vehicles fly along the track, wall clock (default 5)")
+    add("--no-mavlink", action="store_true",
+        help="no bridge and vehicles: the agents fly themselves (position_source agent)")
     add("--mavlink-base-port", type=int, default=0,
         help=f"vehicle K listens on UDP PORT + {PORT_STEP} K (default: free ports chosen by "
              "the OS)")
@@ -72,6 +78,15 @@ def parse_options(argv: list[str] | None = None) -> argparse.Namespace:
         parser.error(f"--bag: {str(args.bag)[:200]!r} exists; expected a new folder")
     if args.uav_timeout is not None and not 0.1 <= args.uav_timeout <= 3600.0:
         parser.error("--uav-timeout must be in [0.1, 3600] s")
+    if not args.no_mavlink:
+        for given, option in ((args.time_scale is not None, "--time-scale"),
+                              (args.noise_std != 0.0, "--noise-std"),
+                              (args.wind is not None, "--wind")):
+            if given:
+                parser.error(f"{option}: applies to self-flown agents only; the MAVLink path "
+                             "flies the vehicles in wall-clock time; expected --no-mavlink "
+                             "with it")
+        args.num_slots = args.num_slots or MAVLINK_NUM_SLOTS
     if args.time_scale is None:
         args.time_scale = DEFAULT_TIME_SCALE if args.kill_uav is None else KILL_TIME_SCALE
     if args.at < 0:
@@ -84,7 +99,6 @@ def parse_options(argv: list[str] | None = None) -> argparse.Namespace:
         parser.error("--seed must be in 0..2147483647")
     if args.domain_id is not None and not 0 <= args.domain_id <= 232:
         parser.error("--domain-id must be in 0..232 (Fast DDS's range)")
-    if not args.mavlink_pass_s > 0 or not 0 <= args.mavlink_base_port <= MAX_BASE_PORT:
-        parser.error(f"--mavlink-pass-s must be > 0 and --mavlink-base-port in "
-                     f"0..{MAX_BASE_PORT}")
+    if not 0 <= args.mavlink_base_port <= MAX_BASE_PORT:
+        parser.error(f"--mavlink-base-port must be in 0..{MAX_BASE_PORT}")
     return args

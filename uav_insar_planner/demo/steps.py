@@ -33,7 +33,10 @@ if TYPE_CHECKING:
 # (tighter than the bridge's 1 m default, so the pass shows tracking, not the approach).
 CAPTURE_RADIUS_M = 0.2
 SETTLE_S = 3.0  # after the pass: the vehicles brake past its end and return; then the final error
-MAVLINK_TIMEOUT_S = 30.0  # for the approach and the pass, after the agents are done
+MAVLINK_TIMEOUT_S = 30.0  # for the approach (and the pass's end, after the agents are done)
+# Vehicle k starts airborne above agent k's home, (5 k, -30, 0) m in the track frame, so it
+# reaches the pass start (y = 0) from behind, moving forward: N = y, E = x, D = -z.
+VEHICLE_HOME_Y_M, VEHICLE_SPACING_M, VEHICLE_START_HEIGHT_M = -30.0, 5.0, 10.0
 AGENTS_UP_S = 20.0  # until the watcher (and the recorder) sees every agent
 PLAN_S = 40.0  # until the first plan, after the planner started
 TRANSIT_S = 60.0  # mission seconds beyond the slots: transit and run-up
@@ -56,12 +59,13 @@ def link_args(args: argparse.Namespace) -> list[str]:
 
 def start_mavlink(ports: Sequence[int], pass_s: float, common: Sequence[str],
                   env: dict[str, str]) -> list[subprocess.Popen]:
-    """One vehicle per port (sysid FIRST_SYSID + k, airborne 20 m up, listening on
-    127.0.0.1:ports[k]) and the bridge sending to them; the vehicles first, so the bridge's
-    first datagrams find them."""
+    """One vehicle per port (sysid FIRST_SYSID + k, airborne above agent k's home, listening
+    on 127.0.0.1:ports[k]) and the bridge sending to them, its pass `pass_s` long; the
+    vehicles first, so the bridge's first datagrams find them."""
     procs = [start_process([*executable("uav-insar-vehicle"), "--sysid",
                             str(FIRST_SYSID + k), "--listen", f"udpin:127.0.0.1:{port}",
-                            "--airborne", "--start-ned", "0", str(3 * k), "-20"],
+                            "--airborne", "--start-ned", str(VEHICLE_HOME_Y_M),
+                            str(VEHICLE_SPACING_M * k), str(-VEHICLE_START_HEIGHT_M)],
                            env, f"[vehicle{FIRST_SYSID + k}]")
              for k, port in enumerate(ports)]
     connections = ", ".join(f"'udpout:127.0.0.1:{port}'" for port in ports)
@@ -87,13 +91,15 @@ def set_by_the_demo(args: argparse.Namespace) -> dict[str, tuple[str, str]]:
     if args.uav_timeout is not None:
         own["uav_timeout_s"] = ("planner", "--uav-timeout")
     if not args.no_mavlink:
+        own["position_source"] = ("agent", "--no-mavlink for agent, else autopilot")
         wired = "nothing: the demo wires the bridge to its vehicles"
         own.update({"connections": ("mavlink_bridge", wired),
                     "target_sysids": ("mavlink_bridge", wired),
                     "velocity_feedforward": ("mavlink_bridge", "nothing: its pass uses true"),
                     "capture_radius_m": ("mavlink_bridge",
                                          f"nothing: its pass uses {CAPTURE_RADIUS_M:g}"),
-                    "track_duration_s": ("mavlink_bridge", "--mavlink-pass-s")})
+                    "track_duration_s": ("mavlink_bridge", "--num-slots (the pass is one "
+                                         "slot longer than the slots)")})
     return own
 
 
@@ -140,6 +146,9 @@ class Mission:
         self.mavlink_pass: MavlinkPass | None = None
         self.targets: dict[int, tuple[float, float, float]] = {}
         self.n_slots, self.plan_time, self.wall_timeout_s = 0, 0.0, 0.0
+        # the bridge's pass: the slots and one more, so every UAV crosses the line after its
+        # last slot (ObservedMission's end)
+        self.pass_s = (params.num_slots + 1) * params.slot_duration_s
         self.watcher = TopicWatcher(None, "demo_watcher", on_mavlink_pose=self._on_vehicle)
 
     def _on_vehicle(self, k: int, msg: Any) -> None:
@@ -154,11 +163,13 @@ class Mission:
         self.recorder = None if args.no_bag else start_recorder(args.bag, self.env)
         if self.recorder is not None:
             print(f"demo: recording the mission to {args.bag}", flush=True)
+        source = "agent" if args.no_mavlink else "autopilot"
         for k in UAVS:
             self.procs.append(start_node(
                 "agent", [*self.common, "-p", f"uav_id:={k}", "-p",
                           f"time_scale:={args.time_scale}", "-p",
                           f"position_noise_std_m:={args.noise_std}", *link_args(args),
+                          *([] if args.no_mavlink else ["-p", f"position_source:={source}"]),
                           "-r", f"__node:={agent_name(k)}"], self.env,
                                      f"[{agent_name(k)}]"))
         if not w.spin_until(lambda: w.agents_matched() and (
@@ -177,9 +188,10 @@ class Mission:
         self.ports = ([args.mavlink_base_port + PORT_STEP * k for k in UAVS]
                       if args.mavlink_base_port else free_udp_ports(NUM_UAVS))
         print(f"demo: MAVLink vehicles sysid {FIRST_SYSID}..{FIRST_SYSID + NUM_UAVS - 1} on "
-              f"UDP ports {', '.join(map(str, self.ports))}, pass of {args.mavlink_pass_s:g} s",
-              flush=True)
-        self.procs += start_mavlink(self.ports, args.mavlink_pass_s, self.common, self.env)
+              f"UDP ports {', '.join(map(str, self.ports))}, flown by the bridge for the whole "
+              f"mission (a pass of {self.pass_s:g} s); the agents take their positions from "
+              "them (position_source autopilot)", flush=True)
+        self.procs += start_mavlink(self.ports, self.pass_s, self.common, self.env)
 
     def wait_for_plan(self) -> bool:
         """Wait for the first plan and echo its /formation; False when none came (or the
@@ -193,8 +205,9 @@ class Mission:
             return False
         self.plan_time = time.monotonic()
         formation, self.n_slots = w.formations[0], w.powers[0].layout.dim[1].size
-        mission_s = self.n_slots * self.params.slot_duration_s + TRANSIT_S
-        self.wall_timeout_s = mission_s / self.args.time_scale + 10.0
+        slots_s = self.n_slots * self.params.slot_duration_s
+        self.wall_timeout_s = ((slots_s + TRANSIT_S) / self.args.time_scale + 10.0
+                               if self.args.no_mavlink else slots_s + MAVLINK_TIMEOUT_S + 10.0)
         with PRINT_LOCK:
             print("\n$ ros2 topic echo /formation  (first message)")
             print(message_to_yaml(formation) + "---", flush=True)
@@ -227,7 +240,7 @@ class Mission:
                                 else self.targets[k])
                             for k, p in enumerate(last.poses) if k in self.targets}
         flew_pass = self.mavlink_pass is None or MASTER in killed or w.spin_until(
-            lambda: self.mavlink_pass.done(time.monotonic(), args.mavlink_pass_s + SETTLE_S),
+            lambda: self.mavlink_pass.done(time.monotonic(), self.pass_s + SETTLE_S),
             MAVLINK_TIMEOUT_S, self.running)
         return complete, flew_pass, kill_lines
 
@@ -251,7 +264,7 @@ class Mission:
             energy = {k: w.offloads[k][-1][2] for k in self.targets if w.offloads[k]}
             print(summary(status.message if status else None, self.targets, w.rates,
                           self.n_slots, params.rate_min_bps, tol, self.mavlink_pass,
-                          self.plan_time, self.args.mavlink_pass_s * params.speed, energy,
+                          self.plan_time, self.pass_s * params.speed, energy,
                           params.e_max_j), flush=True)
             if kill_lines:
                 print("\n".join(kill_lines), flush=True)
