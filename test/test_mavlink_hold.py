@@ -60,7 +60,7 @@ def test_hold_order_is_resent_a_few_times_then_given_up():
     order = HoldOrder("ardupilot")
     v = WatchedVehicle(0, 2, link=None, linked=True, custom_mode=4)
     assert not order.due(v, 0.0)  # not engaged
-    order.engage()
+    order.engage([v.uav])
     sent = 0
     for t in range(20):
         if order.due(v, t * 0.5):
@@ -68,7 +68,7 @@ def test_hold_order_is_resent_a_few_times_then_given_up():
             sent += 1
     assert sent == ATTEMPTS
     v.custom_mode = 5
-    order.engage()
+    order.engage([v.uav])
     assert not order.due(v, 100.0)  # already in LOITER
     v.custom_mode, v.linked = 4, False
     assert not order.due(v, 100.0)  # not linked: when it comes back

@@ -207,6 +207,12 @@ AGENT_SCENARIO_SPECS = tuple(SPEC_BY_NAME[n] for n in (
     "num_slots", "slot_duration_s", "speed_mps", "ground_station_m", "comm_bandwidth_hz",
     "ref_snr_db", "rate_min_mbps", "p_com_max_db", "e_com_max_j"))
 
+#: The planner's gcs/heartbeat period [s] (ros/gcs_link.py): 2 Hz is ~100 bytes/s on the
+#: radio, and a timeout of a few seconds then spans several heartbeats.
+GCS_HEARTBEAT_PERIOD_S = 0.5
+#: The smallest non-zero gcs_timeout_s: two heartbeat periods (one lost never holds).
+GCS_TIMEOUT_MIN_S = 2 * GCS_HEARTBEAT_PERIOD_S
+
 # The bridge's parameters (ROS descriptors, README table, BridgeConfig.validate). Defaults
 # pair with `uav-insar-vehicle --sysid 2..4 --listen udpin:127.0.0.1:14552/14562/14572`.
 BRIDGE_SPECS = (
@@ -246,6 +252,11 @@ BRIDGE_SPECS = (
               "[m]", 0.0, 1e4),
     ParamSpec("signing_key_file", str, "", "MAVLink 2 signing key (32 raw bytes or 64 hex "
               "characters); sign everything, accept only signed frames; empty: no signing"),
+    ParamSpec("gcs_timeout_s", float, 0.0, "hold (LOITER / AUTO.LOITER) when nothing came "
+              "from the ground station (gcs/heartbeat, plan, start) for this long, counted "
+              "from when it was first heard; 0: off; else at least "
+              f"{GCS_TIMEOUT_MIN_S:g} [s]", 0.0, 3600.0,
+              why="0 turns it off; at most an hour, beyond any battery"),
 )
 
 #: Which parameters each executable of the suite declares (the agents, however renamed,

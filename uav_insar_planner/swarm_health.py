@@ -5,7 +5,9 @@ Lost: a UAV heard at least once (any of uavK/pose, uavK/achieved_rate, uavK/offl
 then stays silent for more than `timeout_s`, or that the MAVLink bridge reports lost on
 /diagnostics (`bridge_lost`). A UAV never heard is never lost, so a planner started before
 its agents waits for them. Lost is final for the mission: a UAV heard again later is reported
-(`back`), not taken back into the plan.
+(`back`, once through `take_back`), not taken back into the plan. Its own stack holds it: it
+timed out on the ground station's silence (mavlink/holding.py) and the survivors' plan gives
+it no target; only a new mission (a planner started again) flies it again.
 
 The slot the swarm has reached (`next_slot`): one past the latest slot any surviving UAV
 reported on uavK/offload, else from the furthest survivor's pose (0 before any). Energy
@@ -84,6 +86,7 @@ class SwarmMonitor:
         self.lost: dict[int, Lost] = {}
         self.plan_power_w: np.ndarray | None = None
         self._saturated: list[Saturated] = []
+        self._back: list[int] = []
         self._tol = rate_tolerance_bps(params.rate_min_bps)
 
     # --- what is heard -------------------------------------------------------------------
@@ -98,8 +101,9 @@ class SwarmMonitor:
     def _heard(self, k: int, now: float) -> UavState:
         u = self.uavs[k]
         u.last_heard = now
-        if k in self.lost:
+        if k in self.lost and not u.back:
             u.back = True
+            self._back.append(k)
         return u
 
     def heard_pose(self, k: int, now: float, position: tuple[float, float, float]) -> None:
@@ -160,6 +164,11 @@ class SwarmMonitor:
             return self.params.e_max_j
         used = float(self.plan_power_w[k, :first_slot].sum()) * self.params.slot_duration_s
         return self.params.e_max_j - used
+
+    def take_back(self) -> list[Lost]:
+        """The lost UAVs heard again since the last call, each once."""
+        out, self._back = [self.lost[k] for k in self._back], []
+        return out
 
     def take_saturated(self) -> list[Saturated]:
         """The saturation events since the last call."""

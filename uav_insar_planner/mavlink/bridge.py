@@ -21,6 +21,10 @@ Contract:
 - A formation with every pose NaN after one with targets (the planner's hold: the mission
   cannot continue) stops the setpoints and commands every vehicle into LOITER / PX4
   AUTO.LOITER (`hold.HoldOrder`).
+- Ground station silent for `gcs_timeout_s` (> 0; the clock starts when it is first heard,
+  `gcs_heard`): the setpoints stop and every vehicle is commanded into its hold mode; only a
+  new plan (`set_formation`) or start (`resume`) ends it, and a vehicle still in the hold
+  mode the bridge commanded is switched back to GUIDED / OFFBOARD (`holding`).
 - Two planned UAVs closer than `min_separation_m` are warned about (an event per new
   formation, and `separation` in their status).
 - TCP links connect and reconnect without blocking (`tcp.TcpClient`), so a dead vehicle is
@@ -35,7 +39,7 @@ Contract:
 
 All I/O runs in one background thread (`start()` / `stop()`); `set_formation`, `status`,
 `link_stats`, `drain_events`, `track_started` and `target` are thread-safe and are what the
-ROS node calls.
+ROS node calls, with `gcs_heard`, `gcs_state` and `resume`.
 """
 from __future__ import annotations
 
@@ -49,7 +53,7 @@ from dataclasses import replace
 from uav_insar_planner.mavlink.config import BridgeConfig
 from uav_insar_planner.mavlink.frames import TrackFrame, Vec3
 from uav_insar_planner.mavlink.guard import DropLog, fits_float32
-from uav_insar_planner.mavlink.hold import HoldOrder
+from uav_insar_planner.mavlink.holding import Holding
 from uav_insar_planner.mavlink.link import MAV, Link, LinkStats, Source
 from uav_insar_planner.mavlink.pass_start import captured
 from uav_insar_planner.mavlink.report import BridgeEvent, VehicleStatus, vehicle_status
@@ -92,7 +96,6 @@ class Bridge:
         self.failure: str | None = None
         self._events: deque[BridgeEvent] = deque(maxlen=1000)
         self._pass = PassTrajectory(config.speed_mps, config.track_duration_s)
-        self._hold = HoldOrder(config.autopilot)
         self._drops = DropLog(clock=clock)
         key = None
         if config.signing_key_file:
@@ -118,6 +121,8 @@ class Bridge:
                           in enumerate(zip(config.target_sysids, addresses, strict=True))]
         self._separation = [""] * len(self._vehicles)
         self._sequences: dict[int, ArmingSequence] = {}  # per UAV, once arm_and_takeoff ran
+        self._holding = Holding(config.autopilot, config.gcs_timeout_s,
+                                [v.uav for v in self._vehicles], self._event)
         self._by_link: dict[int, dict[int, WatchedVehicle]] = {}
         for v in self._vehicles:
             self._by_link.setdefault(id(v.link), {})[v.sysid] = v
@@ -156,12 +161,7 @@ class Bridge:
         clean = clean_formation(poses, len(self._vehicles))
         with self._lock:
             flown = self._pass.formation is not None and any(self._pass.formation)
-            if any(clean):
-                self._hold.release()
-            elif flown:
-                self._hold.engage()
-                self._event(-1, "warn", "every pose NaN: the mission stopped; commanding "
-                            f"{self._hold.mode_name} to every vehicle")
+            self._holding.on_plan(clean, self._vehicles, flown)
             if self._pass.set_formation(clean):
                 self._event(-1, "info", "new track start: approaching the formation again")
             self._separation, warnings = separation(clean, self.config.min_separation_m)
@@ -171,6 +171,22 @@ class Bridge:
                 for v in self._vehicles:
                     if clean[v.uav] is not None and v.uav not in self._sequences:
                         self._sequences[v.uav] = self._new_sequence(v)
+
+    def gcs_heard(self, what: str) -> None:
+        """Something came from the ground station (`what`: a heartbeat, plan or start)."""
+        with self._lock:
+            self._holding.gcs_heard(what, self._clock())
+
+    def gcs_state(self) -> str:
+        """The ground station's link as the bridge sees it (holding.GcsWatch.state)."""
+        with self._lock:
+            return self._holding.gcs.state(self._clock())
+
+    def resume(self) -> None:
+        """A new start from the ground: ends a ground-silence hold as a new plan does."""
+        with self._lock:
+            formation = list(self._pass.formation or [None] * len(self._vehicles))
+            self._holding.on_plan(formation, self._vehicles, any(formation))
 
     def status(self) -> list[VehicleStatus]:
         """One snapshot per UAV, in UAV order."""
@@ -229,6 +245,7 @@ class Bridge:
                     for msg, source in link.poll_sources():
                         self._handle(link, msg, source, now)
                 self._check_links(now)
+                self._holding.check(now)
                 for v in self._vehicles:
                     if (seq := self._running(v)) and v.linked:
                         seq.step(now)
@@ -351,13 +368,13 @@ class Bridge:
 
     def _send_setpoints(self, now: float) -> None:
         for v in self._vehicles:
-            if self._hold.due(v, now):
-                self._send_command(v, self._hold.command, self._hold.params)
-                self._hold.sent(v, now)
+            if order := self._holding.order_due(v, now):
+                self._send_command(v, order.command, order.params)
+                order.sent(v, now)
             target = self._pass.target(v.uav, now)
             ardupilot = self.config.autopilot == "ardupilot"
             holding = ardupilot and (self._running(v) or v.custom_mode != COPTER_MODE_GUIDED)
-            if target is None or holding:
+            if target is None or holding or self._holding.stopped():
                 v.stream_since = None
                 continue
             msg = setpoint_message(v.link.mav, self.frame, target, self._boot_ms(now),
@@ -371,5 +388,7 @@ class Bridge:
                 v.stream_since = now
 
     def _status(self, v: WatchedVehicle, now: float) -> VehicleStatus:
-        return vehicle_status(v, now, self._pass, self.frame, self.config.capture_radius_m,
-                              self._sequences.get(v.uav), self._separation[v.uav])
+        status = vehicle_status(v, now, self._pass, self.frame, self.config.capture_radius_m,
+                                self._sequences.get(v.uav), self._separation[v.uav])
+        held = self._holding.phase(v)
+        return replace(status, phase=held) if held else status

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 from uav_insar_planner.mavlink.frames import Vec3
 from uav_insar_planner.mavlink.link import parse_address
-from uav_insar_planner.param_specs import BRIDGE_SPECS, ORIGIN_LIMIT_M
+from uav_insar_planner.param_specs import BRIDGE_SPECS, GCS_TIMEOUT_MIN_S, ORIGIN_LIMIT_M
 from uav_insar_planner.params import check_value
 from uav_insar_planner.plan import SAFE_SEPARATION_M as DEFAULT_MIN_SEPARATION_M
 
@@ -28,6 +28,8 @@ class BridgeConfig:
     - min_separation_m: the bridge warns when two planned UAVs are closer (0: no check); see
       DEFAULT_MIN_SEPARATION_M for the figure.
     - signing_key_file: MAVLink 2 signing on every link with this key (`signing`); "" off.
+    - gcs_timeout_s: hold when the ground station is silent this long (`holding`); 0 off,
+      else at least GCS_TIMEOUT_MIN_S.
     """
 
     connections: tuple[str, ...]
@@ -46,6 +48,7 @@ class BridgeConfig:
     readiness_timeout_s: float = 120.0
     min_separation_m: float = DEFAULT_MIN_SEPARATION_M
     signing_key_file: str = ""
+    gcs_timeout_s: float = 0.0
 
     def validate(self) -> None:
         """Raise ValueError with one line naming the first bad value and what is allowed."""
@@ -74,6 +77,10 @@ class BridgeConfig:
                 problem = check_value(spec, getattr(self, spec.name))[1]
                 if problem:
                     raise ValueError(problem)
+        if 0.0 < self.gcs_timeout_s < GCS_TIMEOUT_MIN_S:
+            raise ValueError(f"gcs_timeout_s: value {self.gcs_timeout_s:g} is not allowed; "
+                             f"expected 0 (off) or at least {GCS_TIMEOUT_MIN_S:g} s (two "
+                             "gcs/heartbeat periods, so one lost heartbeat never holds)")
         length = self.speed_mps * self.track_duration_s
         if length > ORIGIN_LIMIT_M:
             raise ValueError(f"track_duration_s: {self.track_duration_s:g} s at speed_mps "

@@ -5,7 +5,8 @@ Parameters (param_specs.py BRIDGE_SPECS, all read-only: the links are opened onc
   connections (string[]), target_sysids (int[]), source_sysid, track_bearing_deg,
   origin_ned_m (double[3], N E D), setpoint_rate_hz, velocity_feedforward, arm_and_takeoff,
   autopilot (ardupilot|px4), speed_mps, track_duration_s, capture_radius_m,
-  heartbeat_timeout_s, readiness_timeout_s, min_separation_m, signing_key_file.
+  heartbeat_timeout_s, readiness_timeout_s, min_separation_m, signing_key_file,
+  gcs_timeout_s (> 0: hold when the ground station is silent, mavlink/holding.py).
 A bad value or unknown name logs one line and exits with code 2 before anything is published
 or opened.
 
@@ -16,7 +17,9 @@ Subscribes  formation (geometry_msgs/PoseArray, reliable + transient_local, dept
             and only while its planner is the sole publisher (ros/plan_gate.py), so with two
             planners on the domain it keeps the formation it flies. Both are validated at
             entry (ros/plan_msgs.py): a bad one is dropped with one rate-limited log line,
-            counted (`bad_plan_messages` on /diagnostics), and the formation flown stays.
+            counted (`bad_plan_messages` on /diagnostics), and the formation flown stays;
+            gcs/heartbeat (std_msgs/Header, best effort, ros/gcs_link.py): with the plan
+            messages, what tells the bridge the ground station is there (`gcs_timeout_s`).
 Publishes   uav{K}/mavlink/pose (geometry_msgs/PoseStamped, frame insar_track), the
             vehicle's LOCAL_POSITION_NED in the track frame, each time a new one arrives;
             /diagnostics (diagnostic_msgs/DiagnosticArray) once a second, one status per UAV:
@@ -24,8 +27,10 @@ Publishes   uav{K}/mavlink/pose (geometry_msgs/PoseStamped, frame insar_track), 
             armed / airborne / in formation / lost ...), link state, mode, arming sequence,
             PreArm reason, position error, separation warning, link counters. Level ERROR:
             I/O thread dead or sequence failed; WARN: not linked, or planned closer than
-            min_separation_m to another UAV; else OK. When the I/O thread dies the node
-            publishes that ERROR once, logs why and exits with code 1 (exit_codes.EXIT_CRASH).
+            min_separation_m to another UAV, or holding because the ground station fell
+            silent (phase `holding (LOITER): ...`; value `gcs`: the ground link); else
+            OK. When the I/O thread dies the node publishes that ERROR once, logs why and
+            exits with code 1 (exit_codes.EXIT_CRASH).
 """
 from __future__ import annotations
 
@@ -42,6 +47,7 @@ from uav_insar_planner.mavlink.bridge import Bridge, BridgeConfig, VehicleStatus
 from uav_insar_planner.param_specs import BRIDGE_SPECS
 from uav_insar_planner.report import planner_messages as report
 from uav_insar_planner.ros import topics
+from uav_insar_planner.ros.gcs_link import GcsLink
 from uav_insar_planner.ros.parameters import (
     declare_specs,
     guard_sets,
@@ -82,7 +88,9 @@ class MavlinkBridgeNode(Node):
             ns, topics.mavlink_pose(k)), topics.DEPTH) for k in range(n)]
         self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, topics.DEPTH)
         self._last_pose_age: list[float | None] = [None] * n
-        self._gate = PlanGate(self, self._on_plan, swarm_ns=ns)  # validated, one at a time
+        self.gcs = GcsLink(self, self.bridge.gcs_heard, ns)  # STACK: gcs.heard("start ...")
+        self._gate = PlanGate(self, self._on_plan, swarm_ns=ns,  # validated, one at a time
+                              on_message=self.gcs.heard)
         self.create_timer(POSE_PERIOD_S, self._publish_poses)
         self.create_timer(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)
         guard_sets(self)
@@ -127,6 +135,7 @@ class MavlinkBridgeNode(Node):
 
     def _publish_diagnostics(self) -> None:
         stats = self.bridge.link_stats()
+        self._gcs_state = self.bridge.gcs_state()
         msg = DiagnosticArray()
         msg.header.stamp = self.get_clock().now().to_msg()
         msg.status = [self._vehicle_status(s, stats[s.connection])
@@ -152,6 +161,8 @@ class MavlinkBridgeNode(Node):
         if s.separation:
             level = max(level, DiagnosticStatus.WARN)
             text += f"; planned too close: {s.separation}"
+        if s.phase.startswith("holding") and level == DiagnosticStatus.OK:
+            level = DiagnosticStatus.WARN
         error = (math.dist(s.position_track, s.target_track)
                  if s.position_track is not None and s.target_track is not None else None)
 
@@ -172,7 +183,7 @@ class MavlinkBridgeNode(Node):
                   ("rx_messages", link.rx_messages), ("bad_data", link.bad_data),
                   ("truncated", link.truncated), ("unknown_msgid", link.unknown_msgid),
                   ("foreign", link.foreign), ("io_errors", link.io_errors),
-                  ("bad_plan_messages", self._gate.dropped),
+                  ("bad_plan_messages", self._gate.dropped), ("gcs", self._gcs_state),
                   ("bad_signature", link.bad_signature), ("spoofed", link.spoofed),
                   ("bad_value", link.bad_value), ("unsendable", link.unsendable)]
         return DiagnosticStatus(level=level, name=report.bridge_status_name(s.uav),

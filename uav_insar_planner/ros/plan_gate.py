@@ -19,7 +19,8 @@ the sole publisher of both topics in the ROS graph:
 With `flown_topic` (an agent's `uav{K}/plan`), the plan in use is published there
 (std_msgs/String, latched) as its identity label, for the planner to report which plan each
 agent flies. `prefix` starts every log line (e.g. "uav1: "). The topics are those of
-`swarm_ns` (topics.swarm_namespace; default the node's namespace).
+`swarm_ns` (topics.swarm_namespace; default the node's namespace). `on_message(what)`, when
+given, hears of every valid message (the bridge's ground-station link, ros/gcs_link.py).
 """
 from __future__ import annotations
 
@@ -117,8 +118,10 @@ class PlanGate:
 
     def __init__(self, node: Node, on_plan: Callable[[Formation, PowerSchedule], None],
                  prefix: str = "", flown_topic: str | None = None,
-                 swarm_ns: str | None = None) -> None:
+                 swarm_ns: str | None = None,
+                 on_message: Callable[[str], None] | None = None) -> None:
         self._node, self._on_plan, self._prefix = node, on_plan, prefix
+        self._on_message = on_message
         self._pairing = PlanPairing()
         log = node.get_logger()
         self._drops = DropLog(log.warning, time.monotonic)
@@ -144,19 +147,27 @@ class PlanGate:
 
     def _on_formation(self, msg: PoseArray) -> None:
         try:
-            self._pairing.add_formation(decode_formation(msg))
+            formation = decode_formation(msg)
         except PlanMessageError as exc:
             self._drops.drop(exc, self._prefix)
             return
+        self._heard("formation", formation.stamp)
+        self._pairing.add_formation(formation)
         self._check()
 
     def _on_power(self, msg: Float64MultiArray) -> None:
         try:
-            self._pairing.add_power(decode_power(msg))
+            power = decode_power(msg)
         except PlanMessageError as exc:
             self._drops.drop(exc, self._prefix)
             return
+        self._heard("formation/power", power.plan_id.stamp)
+        self._pairing.add_power(power)
         self._check()
+
+    def _heard(self, topic: str, stamp: tuple[int, int]) -> None:
+        if self._on_message is not None:
+            self._on_message(f"{topic} {stamp[0]}.{stamp[1]:09d}")
 
     def _check(self) -> None:
         log = self._node.get_logger()

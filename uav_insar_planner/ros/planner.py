@@ -11,6 +11,8 @@ Publishes (names relative to the node's namespace, except /diagnostics):
                     carry the plan's identity (ros/plan_msgs.py)
   formation/markers        visualization_msgs/MarkerArray, latched: the plan (ros/markers.py)
   formation/markers/flown  visualization_msgs/MarkerArray: the agents' positions and paths
+  gcs/heartbeat     std_msgs/Header, best effort, every 0.5 s (ros/gcs_link.py): the ground
+                    station is alive; a bridge with gcs_timeout_s holds without it
   /diagnostics      diagnostic_msgs/DiagnosticArray: the plan (OK / ERROR), other planners on
                     `formation` (ERROR, ros/plan_watch.py), the swarm (`planner: swarm`,
                     ros/swarm_watch.py) and, once a second, each UAV's rate margin, position
@@ -51,6 +53,7 @@ from uav_insar_planner.params import (
 from uav_insar_planner.plan import Plan
 from uav_insar_planner.report import planner_messages as report
 from uav_insar_planner.ros import plan_msgs, topics
+from uav_insar_planner.ros.gcs_link import GcsHeartbeat
 from uav_insar_planner.ros.markers import PlannerMarkers
 from uav_insar_planner.ros.parameters import (
     declare_specs,
@@ -99,6 +102,7 @@ class PlannerNode(Node):
         self._plan_id: PlanId | None = None  # the identity _plan was published under
         self._plans = PlanWatch(self)  # other planners, the plan each agent flies
         self._markers = PlannerMarkers(self)
+        self._heartbeat = GcsHeartbeat(self)
         for k in UAVS:
             self.create_subscription(PoseStamped, topics.pose(k),
                                      lambda msg, k=k: self._on_pose(k, msg), topics.DEPTH)

@@ -21,6 +21,8 @@ and checks the swarm every CHECK_PERIOD_S against the planner parameter `uav_tim
   they are, the bridge commands LOITER.
 - Saturated closed loop (`swarm_health.Saturated`): WARN on the `planner: swarm` status,
   then the power re-plan of `replan.power_replan` for that UAV, formation unchanged.
+- A lost UAV heard again: one warning line, and `heard again since, not re-planned` in its
+  value of the swarm status; it stays out of the plan (swarm_health).
 - `status()`: the `planner: swarm` status, one value per UAV (heard / not heard / lost).
 """
 from __future__ import annotations
@@ -136,8 +138,13 @@ class SwarmWatch:
         with self._lock:
             lost = self.monitor.check(time.monotonic(), timeout)
             saturated = self.monitor.take_saturated()
+            back = self.monitor.take_back()
         for item in lost:
             self._react(item)
+        for item in back:
+            self._node.get_logger().warning(
+                f"{UAV_NAMES[item.uav]} heard again after it was lost at slot {item.slot}: "
+                "not taken back into the plan (lost is final for the mission)")
         for event in saturated:
             self._power_replan(event)
 

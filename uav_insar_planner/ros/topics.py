@@ -26,12 +26,21 @@ MARKERS = "formation/markers"  # visualization_msgs/MarkerArray, LATCHED: the pl
 FLOWN_MARKERS = "formation/markers/flown"  # visualization_msgs/MarkerArray, depth 10: agents
 DIAGNOSTICS = "/diagnostics"  # diagnostic_msgs/DiagnosticArray, depth 10
 REPLAN = "~/replan"  # std_srvs/Trigger
+# std_msgs/Header, GCS_HEARTBEAT_QOS, every param_specs.GCS_HEARTBEAT_PERIOD_S from the
+# planner: stamp = its wall clock, frame_id = its fully qualified name (ros/gcs_link.py).
+GCS_HEARTBEAT = "gcs/heartbeat"
 
 # /formation, /formation/power and uavK/plan: a late joiner (an agent started after the
 # planner, or a planner restarted) still gets the last plan, and which plan each agent flies.
 LATCHED = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
                      reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
+# gcs/heartbeat over a lossy radio: best effort (a lost heartbeat is not worth resending,
+# and one resent late would hide a silence), volatile (a late joiner must not take an old
+# heartbeat for a live ground station), depth 1 (only the newest matters).
+GCS_HEARTBEAT_QOS = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
+                               reliability=ReliabilityPolicy.BEST_EFFORT,
+                               durability=DurabilityPolicy.VOLATILE)
 # One rate per slot, each one counts: a history deep enough that a subscriber stalled for a
 # few seconds (a busy 2-core host, a planner restarting) still gets them all.
 RATE_DEPTH = 100

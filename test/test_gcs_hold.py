@@ -1,0 +1,159 @@
+"""The bridge core's ground-station hold (mavlink/holding.py) through real MAVLink bytes on
+loopback UDP to simulated vehicles (no ROS): the test plays the ground station by calling
+`Bridge.gcs_heard` as the ROS side does for each gcs/heartbeat, and falls silent."""
+from __future__ import annotations
+
+import threading
+import time
+
+import pytest
+from mavlink_fakes import MAV, wait_until
+from pymavlink import mavutil
+
+from uav_insar_planner.mavlink.bridge import Bridge, BridgeConfig
+from uav_insar_planner.mavlink.holding import GcsWatch
+from uav_insar_planner.param_specs import GCS_HEARTBEAT_PERIOD_S
+from uav_insar_sim.vehicle.simulator import SimVehicle
+
+pytestmark = pytest.mark.timeout(60)
+TIMEOUT_S = 1.0
+FORMATION = [(0.0, 0.0, 12.0)]
+
+
+class GroundStation:
+    """Calls bridge.gcs_heard every heartbeat period while `on` (the planner's heartbeat)."""
+
+    def __init__(self, bridge: Bridge):
+        self.bridge, self.on, self._stop = bridge, True, threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        while not self._stop.wait(GCS_HEARTBEAT_PERIOD_S):
+            if self.on:
+                self.bridge.gcs_heard("gcs/heartbeat from /test")
+
+    def close(self) -> None:
+        self._stop.set()
+        self._thread.join(2.0)
+
+
+def fly(autopilot: str, **config):
+    vehicle = SimVehicle(2, "udpin:127.0.0.1:0", autopilot, start_ned=(0.0, 0.0, -12.0),
+                         max_speed=10.0, max_accel=10.0, airborne=True)
+    vehicle.start()
+    bridge = Bridge(BridgeConfig(connections=(f"udpout:127.0.0.1:{vehicle.port}",),
+                                 target_sysids=(2,), autopilot=autopilot, speed_mps=2.0,
+                                 gcs_timeout_s=TIMEOUT_S, **config))
+    bridge.start()
+    return vehicle, bridge
+
+
+@pytest.mark.parametrize("autopilot,flying,holding", [("ardupilot", "GUIDED", "LOITER"),
+                                                      ("px4", "OFFBOARD", "HOLD")])
+def test_silence_holds_the_return_keeps_holding_a_new_plan_resumes(autopilot, flying, holding):
+    vehicle, bridge = fly(autopilot)
+    ground = GroundStation(bridge)
+    try:
+        bridge.set_formation(FORMATION)
+        assert wait_until(bridge.track_started, 10.0)
+        assert wait_until(lambda: bridge.gcs_state().startswith("heard "), 2.0)
+        assert vehicle.mode == flying
+        ground.on = False
+        silent_at = time.monotonic()
+        assert wait_until(lambda: vehicle.mode == holding, TIMEOUT_S + 1.0), vehicle.mode
+        latency = time.monotonic() - silent_at
+        assert latency > TIMEOUT_S - GCS_HEARTBEAT_PERIOD_S  # not before the timeout
+        mode_name = "LOITER" if autopilot == "ardupilot" else "AUTO.LOITER"
+        assert bridge.status()[0].phase == f"holding ({mode_name}): ground station silent"
+        # the link returns: it keeps holding, and nothing is streamed
+        ground.on = True
+        time.sleep(0.3)
+        sent = bridge.status()[0].setpoints_sent
+        time.sleep(1.5)
+        assert vehicle.mode == holding
+        assert bridge.status()[0].setpoints_sent == sent
+        assert "waiting for a new plan" in bridge.status()[0].phase
+        # a new plan (same formation, new identity): back to the flying mode, setpoints again
+        bridge.set_formation(FORMATION)
+        assert wait_until(lambda: vehicle.mode == flying, 5.0), vehicle.mode
+        assert wait_until(lambda: bridge.status()[0].setpoints_sent > sent + 5, 3.0)
+        events = [e.text for e in bridge.drain_events()]
+    finally:
+        ground.close()
+        bridge.stop()
+        vehicle.stop()
+    silent = [e for e in events if e.startswith("ground station silent for ")]
+    assert len(silent) == 1 and "last heard: gcs/heartbeat from /test" in silent[0], events
+    assert sum(e.startswith("ground station heard again") for e in events) == 1, events
+    assert any("new plan after the ground-station hold" in e for e in events), events
+    print(f"{autopilot}: {holding} {latency:.2f} s after the ground fell silent "
+          f"(gcs_timeout_s {TIMEOUT_S:g})")
+
+
+def test_a_mode_a_pilot_chose_during_the_hold_is_not_taken_back():
+    vehicle, bridge = fly("ardupilot")
+    pilot = mavutil.mavlink_connection(f"udpout:127.0.0.1:{vehicle.port}", source_system=255,
+                                       source_component=MAV.MAV_COMP_ID_MISSIONPLANNER)
+    ground = GroundStation(bridge)
+    try:
+        bridge.set_formation(FORMATION)
+        assert wait_until(lambda: bridge.gcs_state().startswith("heard "), 2.0)
+        ground.on = False
+        assert wait_until(lambda: vehicle.mode == "LOITER", TIMEOUT_S + 1.0), vehicle.mode
+        assert wait_until(lambda: bridge.status()[0].mode == "LOITER", 2.0)  # seen by it
+        pilot.mav.command_long_send(2, 1, MAV.MAV_CMD_DO_SET_MODE, 0,
+                                    MAV.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 2, 0, 0, 0, 0, 0)
+        assert wait_until(lambda: vehicle.mode == "ALT_HOLD", 3.0), vehicle.mode
+        time.sleep(1.5)  # the bridge does not fight the pilot: the hold was reached once
+        assert vehicle.mode == "ALT_HOLD"
+        assert wait_until(lambda: bridge.status()[0].mode == "ALT_HOLD", 2.0)
+        ground.on = True
+        time.sleep(2 * GCS_HEARTBEAT_PERIOD_S)
+        bridge.set_formation(FORMATION)
+        time.sleep(1.5)
+        assert vehicle.mode == "ALT_HOLD"
+        events = [e.text for e in bridge.drain_events()]
+    finally:
+        ground.close()
+        pilot.close()
+        bridge.stop()
+        vehicle.stop()
+    assert any("a pilot switched it): not taken back to GUIDED" in e for e in events), events
+
+
+def test_never_heard_is_waiting_not_silent():
+    vehicle, bridge = fly("ardupilot")
+    try:
+        bridge.set_formation(FORMATION)
+        assert wait_until(bridge.track_started, 10.0)
+        time.sleep(TIMEOUT_S + 0.5)
+        assert vehicle.mode == "GUIDED"
+        assert bridge.gcs_state() == "waiting (never heard)"
+        assert bridge.status()[0].phase != "" and not bridge.status()[0].phase.startswith(
+            "holding")
+    finally:
+        bridge.stop()
+        vehicle.stop()
+
+
+def test_gcs_watch_times_out_once_per_silence():
+    watch = GcsWatch(2.0)
+    assert watch.check(100.0) is None and watch.state(100.0) == "waiting (never heard)"
+    assert watch.heard("a", 0.0) is None
+    assert watch.check(2.0) is None  # exactly the timeout: not yet
+    why = watch.check(2.5)
+    assert why == "ground station silent for 2.5 s (gcs_timeout_s 2; last heard: a)"
+    assert watch.check(9.0) is None
+    assert watch.state(3.0) == "silent 3.0 s (a)"
+    assert watch.heard("b", 4.0) == "ground station heard again (b) after 4.0 s silent"
+    assert watch.state(4.5) == "heard 0.5 s ago (b)"
+    assert GcsWatch(0.0).check(1e9) is None and GcsWatch(0.0).state(0.0) == "off"
+
+
+def test_gcs_timeout_below_two_heartbeats_is_refused_with_one_line():
+    with pytest.raises(ValueError) as err:
+        BridgeConfig(connections=("udpout:127.0.0.1:30001",), target_sysids=(2,),
+                     gcs_timeout_s=0.4).validate()
+    assert str(err.value).startswith("gcs_timeout_s: value 0.4 is not allowed; expected 0 "
+                                     "(off) or at least 1 s")

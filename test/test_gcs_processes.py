@@ -1,0 +1,83 @@
+"""Radio loss, UAV side, with real processes: the planner (the ground station) and a bridge
+with gcs_timeout_s on a private domain, MAVLink over loopback UDP to a simulated vehicle in
+this process. The fault: the planner's process group is frozen (SIGSTOP), so nothing comes
+from the ground, then thawed (SIGCONT); a new plan comes from its ~/replan service."""
+from __future__ import annotations
+
+import os
+import signal
+import time
+
+import pytest
+from diagnostic_msgs.msg import DiagnosticStatus
+from std_srvs.srv import Trigger
+
+from uav_insar_planner.demo.processes import stop_nodes
+from uav_insar_sim.vehicle.simulator import SimVehicle
+
+pytestmark = pytest.mark.timeout(90)
+GCS_TIMEOUT_S = 1.5
+STATUS = "mavlink_bridge: uav0"
+
+
+def bridge_status(w):
+    found = [s for m in w.diagnostics for s in m.status if s.name == STATUS]
+    return (found[-1], {kv.key: kv.value for kv in found[-1].values}) if found else (None, {})
+
+
+def test_a_frozen_planner_holds_the_vehicle_until_a_new_plan(watcher, procs):
+    w = watcher
+    vehicle = SimVehicle(2, "udpin:127.0.0.1:0", "ardupilot", start_ned=(0.0, 0.0, -40.0),
+                         max_speed=20.0, max_accel=10.0, airborne=True)
+    vehicle.start()
+    planner = procs("planner")
+    bridge = procs("mavlink_bridge", "-p", f"connections:=['udpout:127.0.0.1:{vehicle.port}']",
+                   "-p", "target_sysids:=[2]", "-p", "speed_mps:=2.0",
+                   "-p", f"gcs_timeout_s:={GCS_TIMEOUT_S}")
+    everyone = [planner, bridge]
+    try:
+        def flying():
+            status, values = bridge_status(w)
+            return (status is not None and status.level == DiagnosticStatus.OK
+                    and values["gcs"].startswith("heard ") and vehicle.mode == "GUIDED"
+                    and vehicle.setpoints_accepted > 20)
+
+        assert w.spin_until(flying, 40.0, everyone), (bridge_status(w), vehicle.mode)
+        os.killpg(planner.pid, signal.SIGSTOP)
+        frozen_at = time.monotonic()
+        assert w.spin_until(lambda: vehicle.mode == "LOITER", GCS_TIMEOUT_S + 1.0, [bridge]), \
+            vehicle.mode
+        latency = time.monotonic() - frozen_at
+        assert w.spin_until(lambda: bridge_status(w)[0].level == DiagnosticStatus.WARN, 2.0)
+        status, values = bridge_status(w)
+        assert "holding (LOITER): ground station silent" in status.message, status.message
+        assert values["gcs"].startswith("silent "), values["gcs"]
+
+        os.killpg(planner.pid, signal.SIGCONT)
+        assert w.spin_until(lambda: "heard again" in bridge_status(w)[0].message, 3.0,
+                            everyone), bridge_status(w)[0].message
+        accepted = vehicle.setpoints_accepted
+        w.spin_until(lambda: False, 2.0)
+        assert vehicle.mode == "LOITER" and vehicle.setpoints_accepted == accepted
+        assert bridge_status(w)[0].level == DiagnosticStatus.WARN
+
+        answer = w.call(Trigger, "/planner/replan", Trigger.Request(), timeout=10.0)
+        assert answer is not None and answer.success
+        asked_at = time.monotonic()
+        assert w.spin_until(lambda: vehicle.mode == "GUIDED", 10.0, everyone), vehicle.mode
+        resumed = time.monotonic() - asked_at
+        assert w.spin_until(lambda: vehicle.setpoints_accepted > accepted + 10, 3.0)
+        assert w.spin_until(lambda: bridge_status(w)[0].level == DiagnosticStatus.OK, 3.0)
+    finally:
+        os.killpg(planner.pid, signal.SIGCONT)
+        codes = stop_nodes(everyone)
+        vehicle.stop()
+    assert codes == [0, 0]
+    out = bridge.stdout.read()
+    silent = [line for line in out.splitlines() if "ground station silent for" in line]
+    assert len(silent) == 1 and "last heard: " in silent[0], out
+    assert "stopping the setpoints and commanding LOITER to every vehicle" in silent[0]
+    assert "holding until a new plan or start" in out
+    assert "new plan after the ground-station hold: LOITER -> GUIDED" in out
+    print(f"LOITER {latency:.2f} s after SIGSTOP (gcs_timeout_s {GCS_TIMEOUT_S:g}); GUIDED "
+          f"{resumed:.2f} s after ~/replan")

@@ -1,0 +1,55 @@
+"""The ground station's heartbeat, both ends: the planner sends it, a bridge listens.
+
+`GcsHeartbeat(node)` (the planner): std_msgs/Header on `gcs/heartbeat` (topics.GCS_HEARTBEAT,
+best effort, volatile: topics.GCS_HEARTBEAT_QOS) every param_specs.GCS_HEARTBEAT_PERIOD_S;
+stamp = the node's clock (wall clock unless use_sim_time), frame_id = its fully qualified
+name. The stamp is for people and logs: the bridge times the silence on its own monotonic
+clock from when it received something, so the two clocks need not agree.
+
+`GcsLink(node, on_heard, swarm_ns)` (the bridge): subscribes gcs/heartbeat and calls
+`on_heard(what)` for each one; `heard(what)` is the same door for the other messages from the
+ground (the plan, through PlanGate's `on_message`; a pass start), so that anything the ground
+sends counts as proof of a live radio link (mavlink/holding.py).
+"""
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from rclpy.node import Node
+from std_msgs.msg import Header
+
+from uav_insar_planner.param_specs import GCS_HEARTBEAT_PERIOD_S
+from uav_insar_planner.ros import topics
+
+MAX_NAME = 100  # characters of the sender's name kept for the log
+
+
+class GcsHeartbeat:
+    """See the module doc."""
+
+    def __init__(self, node: Node) -> None:
+        self._node = node
+        self._name = node.get_fully_qualified_name()
+        self._pub = node.create_publisher(Header, topics.GCS_HEARTBEAT, topics.GCS_HEARTBEAT_QOS)
+        node.create_timer(GCS_HEARTBEAT_PERIOD_S, self.beat)
+
+    def beat(self) -> None:
+        self._pub.publish(Header(stamp=self._node.get_clock().now().to_msg(),
+                                 frame_id=self._name))
+
+
+class GcsLink:
+    """See the module doc."""
+
+    def __init__(self, node: Node, on_heard: Callable[[str], None], swarm_ns: str) -> None:
+        self._on_heard = on_heard
+        node.create_subscription(Header, topics.resolve(swarm_ns, topics.GCS_HEARTBEAT),
+                                 self._on_heartbeat, topics.GCS_HEARTBEAT_QOS)
+
+    def heard(self, what: str) -> None:
+        """Something came from the ground station (`what` names it for the log)."""
+        self._on_heard(what)
+
+    def _on_heartbeat(self, msg: Header) -> None:
+        name = msg.frame_id[:MAX_NAME] or "an unnamed sender"  # a name, not a payload
+        self.heard(f"gcs/heartbeat from {name}")
