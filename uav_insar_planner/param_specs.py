@@ -148,6 +148,7 @@ ORIGIN_LIMIT_M = 1e5
 FIRST_SYSID = 2
 FIRST_PORT, PORT_STEP = 14552, 10
 AUTOPILOTS = ("ardupilot", "px4")  # the flavours mavlink/autopilots.py knows the modes of
+PASS_STARTS = ("auto", "capture", "planner")  # who starts the bridge's pass
 
 AGENT_SPECS = (
     ParamSpec("uav_id", int, 0, "which UAV this agent flies: 0 master, 1, 2", 0, NUM_UAVS - 1),
@@ -196,6 +197,12 @@ PLANNER_SPECS = (
     ParamSpec("uav_timeout_s", float, 5.0, "a UAV heard once and then silent (no pose, rate "
               "or offload) this long [s] is lost: the swarm is re-planned without it", 0.1,
               3600.0),
+    ParamSpec("capture_radius_m", float, 1.0, "publish the pass start (formation/start) once "
+              "every flown UAV's uavK/mavlink/pose is this close to its start point, as the "
+              "bridge's [m]", 0.0, 1e4),
+    ParamSpec("start_delay_s", float, 2.0, "the pass starts this long after every UAV was "
+              "seen captured, on the wall clock: time for the start to reach every bridge [s]",
+              0.1, 600.0),
 )
 #: The scenario parameters an agent needs (P_max and E_max for the closed loop).
 AGENT_SCENARIO_SPECS = tuple(SPEC_BY_NAME[n] for n in (
@@ -205,6 +212,12 @@ AGENT_SCENARIO_SPECS = tuple(SPEC_BY_NAME[n] for n in (
 # The bridge's parameters (ROS descriptors, README table, BridgeConfig.validate). Defaults
 # pair with `uav-insar-vehicle --sysid 2..4 --listen udpin:127.0.0.1:14552/14562/14572`.
 BRIDGE_SPECS = (
+    ParamSpec("uav_id", int, -1, "fly this UAV only (0..2: one stack per UAV, one connection "
+              "and one sysid, default that UAV's); -1: every UAV (one ground radio)", -1,
+              NUM_UAVS - 1),
+    ParamSpec("pass_start", str, "auto", "who starts the pass: capture = this bridge once "
+              "every UAV it flies is captured, planner = at the planner's formation/start; "
+              "auto = planner with uav_id, else capture", choices=PASS_STARTS),
     ParamSpec("connections", list,
               [f"udpout:127.0.0.1:{FIRST_PORT + PORT_STEP * k}" for k in UAVS],
               "pymavlink connection string per UAV (or one shared): udpout:HOST:PORT, "

@@ -4,9 +4,10 @@ Contract:
 - One MAVLink link per distinct connection string; several UAVs may share one (a router),
   each addressed by its own sysid and the component its heartbeat came from (default 1).
 - Setpoints in MAV_FRAME_LOCAL_NED at `setpoint_rate_hz` (`setpoints`), following the pass
-  (`trajectory`): the track starts once every linked UAV with a target is within
-  `capture_radius_m` of its start point; UAVs that are lost or whose arming failed do not
-  hold the others back.
+  (`trajectory`). pass_start "capture": the track starts once every linked UAV with a target
+  is within `capture_radius_m` of its start point; UAVs that are lost or whose arming failed
+  do not hold the others back. "planner": at the wall-clock instant given to `set_start`.
+- `uav_id` >= 0: one vehicle, UAV `uav_id`, flying formation.points[uav_id] (a stack per UAV).
 - Our HEARTBEAT at 1 Hz as (source_sysid, 191), MAV_TYPE_ONBOARD_CONTROLLER. Lost and found
   vehicles are reported (`supervision`); setpoints to the others never stop, nor to the lost
   one (PX4 needs the stream on return).
@@ -51,7 +52,7 @@ from uav_insar_planner.mavlink.frames import TrackFrame, Vec3
 from uav_insar_planner.mavlink.guard import DropLog, fits_float32
 from uav_insar_planner.mavlink.hold import HoldOrder
 from uav_insar_planner.mavlink.link import MAV, Link, LinkStats, Source
-from uav_insar_planner.mavlink.pass_start import captured
+from uav_insar_planner.mavlink.pass_start import captured, planner_start
 from uav_insar_planner.mavlink.report import BridgeEvent, VehicleStatus, vehicle_status
 from uav_insar_planner.mavlink.sequencer import (
     COPTER_MODE_GUIDED,
@@ -63,6 +64,7 @@ from uav_insar_planner.mavlink.setpoints import setpoint_message
 from uav_insar_planner.mavlink.signing import read_key_file, signing_state
 from uav_insar_planner.mavlink.supervision import WatchedVehicle, is_vehicle_heartbeat
 from uav_insar_planner.mavlink.trajectory import PassTrajectory, clean_formation, separation
+from uav_insar_planner.swarm import NUM_UAVS
 
 __all__ = ["Bridge", "BridgeConfig", "BridgeEvent", "VehicleStatus"]
 
@@ -112,11 +114,13 @@ class Bridge:
         except ValueError as exc:
             self.close()
             raise ValueError(f"connections: {exc}") from None
+        self.uavs = config.uavs()  # the UAV index of each vehicle
         self._vehicles = [WatchedVehicle(k, sysid, self._links[address],
                                          expected_source=self._links[address].peer_address)
-                          for k, (sysid, address)
-                          in enumerate(zip(config.target_sysids, addresses, strict=True))]
-        self._separation = [""] * len(self._vehicles)
+                          for k, sysid, address
+                          in zip(self.uavs, config.target_sysids, addresses, strict=True)]
+        self._count = max(self.uavs) + 1 if config.uav_id < 0 else NUM_UAVS  # poses read
+        self._separation = [""] * self._count
         self._sequences: dict[int, ArmingSequence] = {}  # per UAV, once arm_and_takeoff ran
         self._by_link: dict[int, dict[int, WatchedVehicle]] = {}
         for v in self._vehicles:
@@ -153,7 +157,7 @@ class Bridge:
         """New formation: poses[k] = (x_k, y_start, z_k) in the track frame, None (or a
         non-finite pose) for a UAV that is not flown. A formation with a different y_start
         restarts the approach; one with the same y_start keeps the track clock running."""
-        clean = clean_formation(poses, len(self._vehicles))
+        clean = clean_formation(poses, self._count)
         with self._lock:
             flown = self._pass.formation is not None and any(self._pass.formation)
             if any(clean):
@@ -192,7 +196,18 @@ class Bridge:
 
     def track_started(self) -> bool:
         with self._lock:
-            return self._pass.t_start is not None
+            return self._pass.t_start is not None and self._clock() >= self._pass.t_start
+
+    def set_start(self, wall_time_s: float, label: str) -> None:
+        """pass_start "planner": start the pass at `wall_time_s` (time.time() seconds; may be
+        in the future or, for a bridge joining a running pass, the past) of the plan named
+        `label`; ignored under "capture" (see pass_start.planner_start)."""
+        if self.config.pass_start != "planner":
+            return
+        with self._lock:
+            text = planner_start(self._pass, wall_time_s, self._clock(), time.time(), label)
+            if text:
+                self._event(-1, "info", text)
 
     def target(self, uav: int, now: float) -> tuple[Vec3, Vec3] | None:
         """(position, velocity) of UAV `uav` in the track frame at `now`, or None."""
@@ -338,7 +353,8 @@ class Bridge:
         return int((now - self._t0) * 1000.0) & 0xFFFFFFFF
 
     def _maybe_start_track(self, now: float) -> None:
-        if self._pass.t_start is not None or self._pass.formation is None:
+        if (self._pass.t_start is not None or self._pass.formation is None
+                or self.config.pass_start == "planner"):
             return
         gate = [v for v in self._vehicles
                 if self._pass.start_pose(v.uav) is not None and v.linked

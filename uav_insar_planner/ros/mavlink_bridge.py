@@ -37,11 +37,13 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PoseStamped
 from rclpy.node import Node
 
-from uav_insar_planner.exit_codes import EXIT_CRASH
-from uav_insar_planner.mavlink.bridge import Bridge, BridgeConfig, VehicleStatus
+from uav_insar_planner.exit_codes import EXIT_BAD_INPUT, EXIT_CRASH
+from uav_insar_planner.mavlink.bridge import Bridge, VehicleStatus
+from uav_insar_planner.mavlink.config import from_parameters
 from uav_insar_planner.param_specs import BRIDGE_SPECS
 from uav_insar_planner.report import planner_messages as report
 from uav_insar_planner.ros import topics
+from uav_insar_planner.ros.claims import DISCOVERY_WINDOW_S, UavClaims
 from uav_insar_planner.ros.parameters import (
     declare_specs,
     guard_sets,
@@ -51,6 +53,7 @@ from uav_insar_planner.ros.parameters import (
 from uav_insar_planner.ros.plan_gate import PlanGate
 from uav_insar_planner.ros.plan_msgs import Formation, PowerSchedule
 from uav_insar_planner.ros.run import run_node
+from uav_insar_planner.ros.start_msgs import StartFollower
 from uav_insar_planner.swarm import uav_name
 
 POSE_PERIOD_S = 0.05  # poll the bridge at 20 Hz: vehicles report at ~10 Hz
@@ -70,23 +73,39 @@ class MavlinkBridgeNode(Node):
             return
         values = spec_values(self, BRIDGE_SPECS)
         try:
-            ns = topics.swarm_namespace(self.get_namespace(), None)
-            config = BridgeConfig(**{name: tuple(v) if isinstance(v, list) else v
-                                     for name, v in values.items()})
+            config = from_parameters(values)
+            config.validate()
+            k = config.uav_id
+            ns = topics.swarm_namespace(self.get_namespace(), k if k >= 0 else None)
             self.bridge = Bridge(config)
         except (TypeError, ValueError) as exc:
             self.problems.append(str(exc))
             return
-        n = len(config.target_sysids)
-        self._pose_pubs = [self.create_publisher(PoseStamped, topics.resolve(
-            ns, topics.mavlink_pose(k)), topics.DEPTH) for k in range(n)]
+        uavs = self.bridge.uavs
+        self._pose_pubs = {k: self.create_publisher(PoseStamped, topics.resolve(
+            ns, topics.mavlink_pose(k)), topics.DEPTH) for k in uavs}
         self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, topics.DEPTH)
-        self._last_pose_age: list[float | None] = [None] * n
+        self._last_pose_age: dict[int, float | None] = dict.fromkeys(uavs)
         self._gate = PlanGate(self, self._on_plan, swarm_ns=ns)  # validated, one at a time
+        self._starts = (StartFollower(self, ns, lambda: self._gate.current,
+                                      self.bridge.set_start)
+                        if config.pass_start == "planner" else None)
         self.create_timer(POSE_PERIOD_S, self._publish_poses)
         self.create_timer(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)
         guard_sets(self)
+        # No MAVLink byte before no other bridge on the graph flies these UAVs (claims.py).
+        self._claims = UavClaims(self, ns, uavs, on_granted=self._granted,
+                                 on_refused=self._refused)
+
+    def _granted(self) -> None:
+        self.get_logger().info(f"{', '.join(uav_name(k) for k in self.bridge.uavs)}: no other "
+                               f"bridge claims it ({DISCOVERY_WINDOW_S:g} s discovery window); "
+                               "flying")
         self.bridge.start()
+
+    def _refused(self, line: str) -> None:
+        self.get_logger().error(line)
+        raise SystemExit(EXIT_BAD_INPUT)
 
     def stop(self) -> None:
         if self.bridge is not None:
@@ -95,6 +114,8 @@ class MavlinkBridgeNode(Node):
     def _on_plan(self, formation: Formation, power: PowerSchedule) -> None:
         poses = list(formation.points)
         self.bridge.set_formation(poses)
+        if self._starts is not None:
+            self._starts.plan_adopted()
         flown = sum(p is not None for p in poses)
         self.get_logger().info(f"formation received: {flown} UAV(s) with a target "
                                f"({power.plan_id})")
@@ -126,6 +147,8 @@ class MavlinkBridgeNode(Node):
             self._pose_pubs[s.uav].publish(msg)
 
     def _publish_diagnostics(self) -> None:
+        if not self._claims.granted:
+            return  # not flying (yet): UAV K's status is the bridge's that flies it
         stats = self.bridge.link_stats()
         msg = DiagnosticArray()
         msg.header.stamp = self.get_clock().now().to_msg()
@@ -173,6 +196,8 @@ class MavlinkBridgeNode(Node):
                   ("truncated", link.truncated), ("unknown_msgid", link.unknown_msgid),
                   ("foreign", link.foreign), ("io_errors", link.io_errors),
                   ("bad_plan_messages", self._gate.dropped),
+                  ("bad_start_messages", self._starts.dropped if self._starts else 0),
+                  ("bad_claim_messages", self._claims.dropped),
                   ("bad_signature", link.bad_signature), ("spoofed", link.spoofed),
                   ("bad_value", link.bad_value), ("unsendable", link.unsendable)]
         return DiagnosticStatus(level=level, name=report.bridge_status_name(s.uav),
