@@ -52,7 +52,7 @@ from uav_insar_planner.mavlink.frames import TrackFrame, Vec3
 from uav_insar_planner.mavlink.guard import DropLog, fits_float32
 from uav_insar_planner.mavlink.hold import HoldOrder
 from uav_insar_planner.mavlink.link import MAV, Link, LinkStats, Source
-from uav_insar_planner.mavlink.pass_start import captured, planner_start
+from uav_insar_planner.mavlink.pass_start import capture_start, planner_start
 from uav_insar_planner.mavlink.report import BridgeEvent, VehicleStatus, vehicle_status
 from uav_insar_planner.mavlink.sequencer import (
     COPTER_MODE_GUIDED,
@@ -199,9 +199,8 @@ class Bridge:
             return self._pass.t_start is not None and self._clock() >= self._pass.t_start
 
     def set_start(self, wall_time_s: float, label: str) -> None:
-        """pass_start "planner": start the pass at `wall_time_s` (time.time() seconds; may be
-        in the future or, for a bridge joining a running pass, the past) of the plan named
-        `label`; ignored under "capture" (see pass_start.planner_start)."""
+        """pass_start "planner": the pass of plan `label` starts at `wall_time_s` (time.time()
+        seconds, see pass_start.planner_start); ignored under "capture"."""
         if self.config.pass_start != "planner":
             return
         with self._lock:
@@ -353,15 +352,8 @@ class Bridge:
         return int((now - self._t0) * 1000.0) & 0xFFFFFFFF
 
     def _maybe_start_track(self, now: float) -> None:
-        if (self._pass.t_start is not None or self._pass.formation is None
-                or self.config.pass_start == "planner"):
-            return
-        gate = [v for v in self._vehicles
-                if self._pass.start_pose(v.uav) is not None and v.linked
-                and not (v.uav in self._sequences and self._sequences[v.uav].failed)]
-        if captured(gate, self._pass, self.frame, now, self.config.capture_radius_m,
-                    self.config.heartbeat_timeout_s):
-            self._pass.t_start = now
+        if capture_start(self._vehicles, self._sequences, self._pass, self.frame, now,
+                         self.config):
             self._event(-1, "info", f"formation established; flying the track at "
                                     f"{self.config.speed_mps:g} m/s")
 

@@ -13,9 +13,11 @@ UAV v_y dt along track).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
+from uav_insar_planner.mavlink.config import BridgeConfig
 from uav_insar_planner.mavlink.frames import TrackFrame
+from uav_insar_planner.mavlink.sequencer import ArmingSequence
 from uav_insar_planner.mavlink.supervision import WatchedVehicle
 from uav_insar_planner.mavlink.trajectory import PassTrajectory
 
@@ -38,6 +40,23 @@ def captured(gate: Sequence[WatchedVehicle], pass_: PassTrajectory, frame: Track
         start = frame.to_ned(*pass_.start_pose(v.uav))
         if not math.dist(start, v.position_ned) <= capture_radius_m:
             return False  # (written so that a NaN distance never counts as inside)
+    return True
+
+
+def capture_start(vehicles: Sequence[WatchedVehicle], sequences: Mapping[int, ArmingSequence],
+                  pass_: PassTrajectory, frame: TrackFrame, now: float,
+                  config: BridgeConfig) -> bool:
+    """pass_start "capture": start the track of `pass_` at `now` (True) when the gate, every
+    linked vehicle with a target whose arming (`sequences`) did not fail, is `captured`."""
+    if (pass_.t_start is not None or pass_.formation is None
+            or config.pass_start == "planner"):
+        return False
+    gate = [v for v in vehicles if pass_.start_pose(v.uav) is not None and v.linked
+            and not (v.uav in sequences and sequences[v.uav].failed)]
+    if not captured(gate, pass_, frame, now, config.capture_radius_m,
+                    config.heartbeat_timeout_s):
+        return False
+    pass_.t_start = now
     return True
 
 
