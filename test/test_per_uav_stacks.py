@@ -16,6 +16,7 @@ import time
 import numpy as np
 import pytest
 from std_msgs.msg import Header
+from std_srvs.srv import Trigger
 
 from uav_insar_planner.demo.processes import executable, start_process
 from uav_insar_planner.params import params_from_mapping
@@ -98,6 +99,11 @@ def test_three_stacks_fly_the_formation_and_start_the_pass_together(watcher):
         assert 0.5 < t0 - time.time() < 2.5  # a little in the future: start_delay_s 2
         assert watcher.spin_until(lambda: time.time() > t0 + 4.0, 10.0, everyone)
         tracked()
+        # a re-plan during the pass (same y_start): the same instant under the new identity
+        assert watcher.call(Trigger, "/planner/replan", Trigger.Request()).success
+        replanned = watcher.spin_until(lambda: len(starts) >= 2, 20.0, everyone)
+        watcher.spin_until(lambda: time.time() > t0 + 6.0, 10.0, everyone)
+        replanned_y = [watcher.mavlink_poses[k][-1].pose.position.y for k in UAVS]
         names = set(watcher.node.get_node_names_and_namespaces())
         flown = list(watcher.flown_plans[1])
         formations = list(watcher.formations)
@@ -105,16 +111,22 @@ def test_three_stacks_fly_the_formation_and_start_the_pass_together(watcher):
     finally:
         outs = [stop(p) for p in everyone]
     bridge_outs = outs[len(vehicles):len(vehicles) + len(bridges)]
+    assert replanned, f"no second start after the re-plan: {outs[-1][-3000:]}"
     # the documented names, whichever way the nodes were started
     assert {("mavlink_bridge", f"/uav{k}") for k in UAVS} | {("agent", "/uav1"),
                                                              ("planner", "/")} <= names
     assert formations and watcher.poses[1], "no /formation or no /uav1/pose"
-    assert flown and flown[-1] == plan_id.label, (flown, plan_id)  # the agent flies /formation
     assert {s.name for s in diagnostics if s.name.startswith("mavlink_bridge")} == {
         f"mavlink_bridge: uav{k}" for k in UAVS}
-    for out in bridge_outs:
+    again, t_again = decode_start(starts[1], time.time())
+    assert t_again == t0 and again != plan_id and again.planner == plan_id.planner
+    assert flown[-2:] == [plan_id.label, again.label], flown  # the agent flies /formation
+    for k, out in enumerate(bridge_outs):
         assert f"pass start from the planner ({plan_id.label})" in out, out
         assert "formation established" not in out  # no capture gate of its own
+        assert "new track start" not in out  # the pass went on
+        assert f"pass start from the planner ({again.label})" not in out
+        assert replanned_y[k] > track[k][-1][1] + 4.0, (replanned_y, track[k][-1])
     lags = []
     for k in UAVS:
         before = [y for t, y in track[k] if t < t0 - 0.2]
