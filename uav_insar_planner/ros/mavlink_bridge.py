@@ -2,12 +2,15 @@
 over `uav_insar_planner.mavlink.bridge.Bridge`, which does all MAVLink work in its own thread.
 
 Parameters (param_specs.py BRIDGE_SPECS, all read-only: the links are opened once):
+  uav_id (-1: every UAV; 0..2: this UAV only, a stack per UAV, in namespace /uavK or the
+  swarm's; another UAV's namespace is refused), pass_start (auto|capture|planner),
   connections (string[]), target_sysids (int[]), source_sysid, track_bearing_deg,
   origin_ned_m (double[3], N E D), setpoint_rate_hz, velocity_feedforward, arm_and_takeoff,
   autopilot (ardupilot|px4), speed_mps, track_duration_s, capture_radius_m,
   heartbeat_timeout_s, readiness_timeout_s, min_separation_m, signing_key_file.
 A bad value or unknown name logs one line and exits with code 2 before anything is published
-or opened.
+or opened. Claims (ros/claims.py): no MAVLink byte for DISCOVERY_WINDOW_S; a UAV another bridge
+on the graph claimed first is refused with one line, exit 2.
 
 Subscribes  formation (geometry_msgs/PoseArray, reliable + transient_local, depth 1):
             poses[k] = (x_k, y_start, z_k) in the track frame; NaN for a UAV not flown;
@@ -17,7 +20,10 @@ Subscribes  formation (geometry_msgs/PoseArray, reliable + transient_local, dept
             planners on the domain it keeps the formation it flies. Both are validated at
             entry (ros/plan_msgs.py): a bad one is dropped with one rate-limited log line,
             counted (`bad_plan_messages` on /diagnostics), and the formation flown stays.
-Publishes   uav{K}/mavlink/pose (geometry_msgs/PoseStamped, frame insar_track), the
+            formation/start (std_msgs/Header, latched) with pass_start planner: the wall-clock
+            start of the flown plan's pass (ros/start_msgs.py, validated, `bad_start_messages`).
+Publishes   uav{K}/mavlink/claim (std_msgs/String, latched) per UAV flown (ros/claims.py);
+            uav{K}/mavlink/pose (geometry_msgs/PoseStamped, frame insar_track), the
             vehicle's LOCAL_POSITION_NED in the track frame, each time a new one arrives;
             /diagnostics (diagnostic_msgs/DiagnosticArray) once a second, one status per UAV:
             its `phase` (waiting for heartbeat / waiting for position / prearm: <reason> /
