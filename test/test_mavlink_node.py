@@ -11,6 +11,7 @@ import sys
 import pytest
 from diagnostic_msgs.msg import DiagnosticStatus
 
+from uav_insar_planner.ros.claims import DISCOVERY_WINDOW_S
 from uav_insar_sim.vehicle.simulator import SimVehicle
 
 pytestmark = pytest.mark.timeout(90)
@@ -113,13 +114,15 @@ def test_planner_bridge_vehicles_end_to_end(watcher):
 
 def test_a_dead_mavlink_thread_turns_the_bridge_error_and_exits_1(watcher):
     """FAULT INJECTION (test/fault_injection.py): the bridge's links start raising 4 s after
-    start, which kills its I/O thread the way a bug would. The node must then report every
-    UAV ERROR, never "linked" again, and exit with code 1 instead of living on as a zombie."""
+    its claim window (ros/claims.py: no I/O before it), which kills its I/O thread the way a
+    bug would. The node must then report every UAV ERROR, never "linked" again, and exit with
+    code 1 instead of living on as a zombie."""
     vehicle = SimVehicle(2, "udpin:127.0.0.1:0", "ardupilot", start_ned=(0.0, 0.0, -10.0),
                          max_speed=20.0, max_accel=10.0, airborne=True)
     vehicle.start()
     fault = os.path.join(os.path.dirname(__file__), "fault_injection.py")
-    cmd = [PY, fault, "4.0", "uav_insar_planner.ros.mavlink_bridge", "--ros-args",
+    cmd = [PY, fault, str(4.0 + DISCOVERY_WINDOW_S), "uav_insar_planner.ros.mavlink_bridge",
+           "--ros-args",
            "-p", f"connections:=['udpout:127.0.0.1:{vehicle.port}']", "-p", "target_sysids:=[2]"]
     bridge = subprocess.Popen(cmd, env=ros_env(), stdout=subprocess.PIPE,
                               stderr=subprocess.STDOUT, text=True, start_new_session=True)

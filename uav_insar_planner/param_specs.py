@@ -147,8 +147,9 @@ ORIGIN_LIMIT_M = 1e5
 # Vehicle k's default sysid and local UDP port: FIRST_SYSID + k, FIRST_PORT + PORT_STEP k.
 FIRST_SYSID = 2
 FIRST_PORT, PORT_STEP = 14552, 10
-AUTOPILOTS = ("ardupilot", "px4")
-POSITION_SOURCES = ("agent", "autopilot")  # the flavours mavlink/autopilots.py knows the modes of
+AUTOPILOTS = ("ardupilot", "px4")  # the flavours mavlink/autopilots.py knows the modes of
+PASS_STARTS = ("auto", "capture", "planner")  # who starts the bridge's pass
+POSITION_SOURCES = ("agent", "autopilot")  # where an agent takes its UAV's position from
 
 AGENT_SPECS = (
     ParamSpec("uav_id", int, 0, "which UAV this agent flies: 0 master, 1, 2", 0, NUM_UAVS - 1),
@@ -201,6 +202,12 @@ PLANNER_SPECS = (
     ParamSpec("uav_timeout_s", float, 5.0, "a UAV heard once and then silent (no pose, rate "
               "or offload) this long [s] is lost: the swarm is re-planned without it", 0.1,
               3600.0),
+    ParamSpec("capture_radius_m", float, 1.0, "publish the pass start (formation/start) once "
+              "every flown UAV's uavK/mavlink/pose is this close to its start point, as the "
+              "bridge's [m]", 0.0, 1e4),
+    ParamSpec("start_delay_s", float, 2.0, "the pass starts this long after every UAV was "
+              "seen captured, on the wall clock: time for the start to reach every bridge [s]",
+              0.1, 600.0),
 )
 #: The scenario parameters an agent needs (P_max and E_max for the closed loop).
 AGENT_SCENARIO_SPECS = tuple(SPEC_BY_NAME[n] for n in (
@@ -212,10 +219,20 @@ AGENT_SCENARIO_SPECS = tuple(SPEC_BY_NAME[n] for n in (
 GCS_HEARTBEAT_PERIOD_S = 0.5
 #: The smallest non-zero gcs_timeout_s: two heartbeat periods (one lost never holds).
 GCS_TIMEOUT_MIN_S = 2 * GCS_HEARTBEAT_PERIOD_S
+#: gcs_timeout_s's default, "auto": GCS_TIMEOUT_DEFAULT_S on a per-UAV bridge (ArduPilot's
+#: FS_GCS_TIMEOUT default), off on the all-in-one bridge, which sits with the ground station.
+GCS_TIMEOUT_AUTO = -1.0
+GCS_TIMEOUT_DEFAULT_S = 5.0
 
 # The bridge's parameters (ROS descriptors, README table, BridgeConfig.validate). Defaults
 # pair with `uav-insar-vehicle --sysid 2..4 --listen udpin:127.0.0.1:14552/14562/14572`.
 BRIDGE_SPECS = (
+    ParamSpec("uav_id", int, -1, "fly this UAV only (0..2: one stack per UAV, one connection "
+              "and one sysid, default that UAV's); -1: every UAV (one ground radio)", -1,
+              NUM_UAVS - 1),
+    ParamSpec("pass_start", str, "auto", "who starts the pass: capture = this bridge once "
+              "every UAV it flies is captured, planner = at the planner's formation/start; "
+              "auto = planner with uav_id, else capture", choices=PASS_STARTS),
     ParamSpec("connections", list,
               [f"udpout:127.0.0.1:{FIRST_PORT + PORT_STEP * k}" for k in UAVS],
               "pymavlink connection string per UAV (or one shared): udpout:HOST:PORT, "
@@ -252,11 +269,13 @@ BRIDGE_SPECS = (
               "[m]", 0.0, 1e4),
     ParamSpec("signing_key_file", str, "", "MAVLink 2 signing key (32 raw bytes or 64 hex "
               "characters); sign everything, accept only signed frames; empty: no signing"),
-    ParamSpec("gcs_timeout_s", float, 0.0, "hold (LOITER / AUTO.LOITER) when nothing came "
-              "from the ground station (gcs/heartbeat, plan, start) for this long, counted "
-              "from when it was first heard; 0: off; else at least "
-              f"{GCS_TIMEOUT_MIN_S:g} [s]", 0.0, 3600.0,
-              why="0 turns it off; at most an hour, beyond any battery"),
+    ParamSpec("gcs_timeout_s", float, GCS_TIMEOUT_AUTO, "hold (LOITER / AUTO.LOITER) when "
+              "nothing came from the ground station (gcs/heartbeat, plan, start) for this "
+              f"long, counted from when it was first heard; {GCS_TIMEOUT_AUTO:g}: auto = "
+              f"{GCS_TIMEOUT_DEFAULT_S:g} s with uav_id (a stack on the UAV), off for the "
+              f"all-in-one bridge; 0: off; else at least {GCS_TIMEOUT_MIN_S:g} [s]",
+              GCS_TIMEOUT_AUTO, 3600.0,
+              why="at most an hour, beyond any battery"),
 )
 
 #: Which parameters each executable of the suite declares (the agents, however renamed,

@@ -4,9 +4,10 @@ Contract:
 - One MAVLink link per distinct connection string; several UAVs may share one (a router),
   each addressed by its own sysid and the component its heartbeat came from (default 1).
 - Setpoints in MAV_FRAME_LOCAL_NED at `setpoint_rate_hz` (`setpoints`), following the pass
-  (`trajectory`): the track starts once every linked UAV with a target is within
-  `capture_radius_m` of its start point; UAVs that are lost or whose arming failed do not
-  hold the others back.
+  (`trajectory`). pass_start "capture": the track starts once every linked UAV with a target
+  is within `capture_radius_m` of its start point; UAVs that are lost or whose arming failed
+  do not hold the others back. "planner": at the wall-clock instant given to `set_start`.
+- `uav_id` >= 0: one vehicle, UAV `uav_id`, flying formation.points[uav_id] (a stack per UAV).
 - Our HEARTBEAT at 1 Hz as (source_sysid, 191), MAV_TYPE_ONBOARD_CONTROLLER. Lost and found
   vehicles are reported (`supervision`); setpoints to the others never stop, nor to the lost
   one (PX4 needs the stream on return).
@@ -55,7 +56,7 @@ from uav_insar_planner.mavlink.frames import TrackFrame, Vec3
 from uav_insar_planner.mavlink.guard import DropLog, fits_float32
 from uav_insar_planner.mavlink.holding import Holding
 from uav_insar_planner.mavlink.link import MAV, Link, LinkStats, Source
-from uav_insar_planner.mavlink.pass_start import captured
+from uav_insar_planner.mavlink.pass_start import capture_start, planner_start
 from uav_insar_planner.mavlink.report import BridgeEvent, VehicleStatus, vehicle_status
 from uav_insar_planner.mavlink.sequencer import (
     COPTER_MODE_GUIDED,
@@ -67,6 +68,7 @@ from uav_insar_planner.mavlink.setpoints import setpoint_message
 from uav_insar_planner.mavlink.signing import read_key_file, signing_state
 from uav_insar_planner.mavlink.supervision import WatchedVehicle, is_vehicle_heartbeat
 from uav_insar_planner.mavlink.trajectory import PassTrajectory, clean_formation, separation
+from uav_insar_planner.swarm import NUM_UAVS
 
 __all__ = ["Bridge", "BridgeConfig", "BridgeEvent", "VehicleStatus"]
 
@@ -115,11 +117,13 @@ class Bridge:
         except ValueError as exc:
             self.close()
             raise ValueError(f"connections: {exc}") from None
+        self.uavs = config.uavs()  # the UAV index of each vehicle
         self._vehicles = [WatchedVehicle(k, sysid, self._links[address],
                                          expected_source=self._links[address].peer_address)
-                          for k, (sysid, address)
-                          in enumerate(zip(config.target_sysids, addresses, strict=True))]
-        self._separation = [""] * len(self._vehicles)
+                          for k, sysid, address
+                          in zip(self.uavs, config.target_sysids, addresses, strict=True)]
+        self._count = max(self.uavs) + 1 if config.uav_id < 0 else NUM_UAVS  # poses read
+        self._separation = [""] * self._count
         self._sequences: dict[int, ArmingSequence] = {}  # per UAV, once arm_and_takeoff ran
         self._holding = Holding(config.autopilot, config.gcs_timeout_s,
                                 [v.uav for v in self._vehicles], self._event)
@@ -158,7 +162,7 @@ class Bridge:
         """New formation: poses[k] = (x_k, y_start, z_k) in the track frame, None (or a
         non-finite pose) for a UAV that is not flown. A formation with a different y_start
         restarts the approach; one with the same y_start keeps the track clock running."""
-        clean = clean_formation(poses, len(self._vehicles))
+        clean = clean_formation(poses, self._count)
         with self._lock:
             flown = self._pass.formation is not None and any(self._pass.formation)
             self._holding.on_plan(clean, self._vehicles, flown)
@@ -182,12 +186,6 @@ class Bridge:
         with self._lock:
             return self._holding.gcs.state(self._clock())
 
-    def resume(self) -> None:
-        """A new start from the ground: ends a ground-silence hold as a new plan does."""
-        with self._lock:
-            formation = list(self._pass.formation or [None] * len(self._vehicles))
-            self._holding.on_plan(formation, self._vehicles, any(formation))
-
     def status(self) -> list[VehicleStatus]:
         """One snapshot per UAV, in UAV order."""
         now = self._clock()
@@ -208,7 +206,20 @@ class Bridge:
 
     def track_started(self) -> bool:
         with self._lock:
-            return self._pass.t_start is not None
+            return self._pass.t_start is not None and self._clock() >= self._pass.t_start
+
+    def set_start(self, wall_time_s: float, label: str) -> None:
+        """pass_start "planner": the pass of plan `label` starts at `wall_time_s` (time.time()
+        seconds, see pass_start.planner_start); ignored under "capture". A start that changes
+        the track clock also ends a ground-silence hold."""
+        if self.config.pass_start != "planner":
+            return
+        with self._lock:
+            text = planner_start(self._pass, wall_time_s, self._clock(), time.time(), label)
+            if text:  # a new start: it ends a ground-silence hold as a new plan does
+                self._event(-1, "info", text)
+                formation = list(self._pass.formation or [None] * len(self._vehicles))
+                self._holding.on_plan(formation, self._vehicles, any(formation))
 
     def target(self, uav: int, now: float) -> tuple[Vec3, Vec3] | None:
         """(position, velocity) of UAV `uav` in the track frame at `now`, or None."""
@@ -355,14 +366,8 @@ class Bridge:
         return int((now - self._t0) * 1000.0) & 0xFFFFFFFF
 
     def _maybe_start_track(self, now: float) -> None:
-        if self._pass.t_start is not None or self._pass.formation is None:
-            return
-        gate = [v for v in self._vehicles
-                if self._pass.start_pose(v.uav) is not None and v.linked
-                and not (v.uav in self._sequences and self._sequences[v.uav].failed)]
-        if captured(gate, self._pass, self.frame, now, self.config.capture_radius_m,
-                    self.config.heartbeat_timeout_s):
-            self._pass.t_start = now
+        if capture_start(self._vehicles, self._sequences, self._pass, self.frame, now,
+                         self.config):
             self._event(-1, "info", f"formation established; flying the track at "
                                     f"{self.config.speed_mps:g} m/s")
 

@@ -3,12 +3,22 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 from uav_insar_planner.mavlink.frames import Vec3
 from uav_insar_planner.mavlink.link import parse_address
-from uav_insar_planner.param_specs import BRIDGE_SPECS, GCS_TIMEOUT_MIN_S, ORIGIN_LIMIT_M
+from uav_insar_planner.param_specs import (
+    BRIDGE_SPECS,
+    GCS_TIMEOUT_AUTO,
+    GCS_TIMEOUT_DEFAULT_S,
+    GCS_TIMEOUT_MIN_S,
+    ORIGIN_LIMIT_M,
+)
 from uav_insar_planner.params import check_value
 from uav_insar_planner.plan import SAFE_SEPARATION_M as DEFAULT_MIN_SEPARATION_M
+from uav_insar_planner.swarm import NUM_UAVS
+
+_DEFAULTS = {spec.name: spec.default for spec in BRIDGE_SPECS}
 
 
 @dataclass(frozen=True)
@@ -30,6 +40,10 @@ class BridgeConfig:
     - signing_key_file: MAVLink 2 signing on every link with this key (`signing`); "" off.
     - gcs_timeout_s: hold when the ground station is silent this long (`holding`); 0 off,
       else at least GCS_TIMEOUT_MIN_S.
+    - uav_id: -1 flies UAV k = 0.. of `target_sysids` each; 0..NUM_UAVS-1 flies that UAV
+      alone (one sysid, one connection: a stack per UAV).
+    - pass_start: "capture" (the bridge's own capture gate) or "planner" (`Bridge.set_start`,
+      the planner's formation/start).
     """
 
     connections: tuple[str, ...]
@@ -49,12 +63,28 @@ class BridgeConfig:
     min_separation_m: float = DEFAULT_MIN_SEPARATION_M
     signing_key_file: str = ""
     gcs_timeout_s: float = 0.0
+    uav_id: int = -1
+    pass_start: str = "capture"
 
     def validate(self) -> None:
         """Raise ValueError with one line naming the first bad value and what is allowed."""
         n = len(self.target_sysids)
         if n == 0:
             raise ValueError("target_sysids: empty; expected one sysid (1..255) per UAV")
+        if self.pass_start == "auto":
+            raise ValueError("pass_start: 'auto' is resolved by from_parameters; expected "
+                             "capture or planner")
+        for spec in BRIDGE_SPECS:  # uav_id first: the lengths below depend on it
+            if spec.kind in (int, float, str):
+                problem = check_value(spec, getattr(self, spec.name))[1]
+                if problem:
+                    raise ValueError(problem)
+        if self.uav_id >= 0:
+            for name, given in (("target_sysids", self.target_sysids),
+                                ("connections", self.connections)):
+                if len(given) != 1:
+                    raise ValueError(f"{name}: {len(given)} given with uav_id "
+                                     f"{self.uav_id}; expected exactly one, this UAV's")
         if len(self.connections) not in (1, n):
             raise ValueError(f"connections: {len(self.connections)} given for {n} UAVs; "
                              "expected one per UAV in target_sysids, or one shared")
@@ -72,12 +102,7 @@ class BridgeConfig:
         if self.source_sysid in self.target_sysids:
             raise ValueError(f"source_sysid: {self.source_sysid} is also a target sysid; "
                              "expected the bridge's own id (e.g. 255, the SYSID_MYGCS default)")
-        for spec in BRIDGE_SPECS:
-            if spec.kind in (int, float, str):
-                problem = check_value(spec, getattr(self, spec.name))[1]
-                if problem:
-                    raise ValueError(problem)
-        if 0.0 < self.gcs_timeout_s < GCS_TIMEOUT_MIN_S:
+        if 0.0 < self.gcs_timeout_s < GCS_TIMEOUT_MIN_S or self.gcs_timeout_s < 0.0:
             raise ValueError(f"gcs_timeout_s: value {self.gcs_timeout_s:g} is not allowed; "
                              f"expected 0 (off) or at least {GCS_TIMEOUT_MIN_S:g} s (two "
                              "gcs/heartbeat periods, so one lost heartbeat never holds)")
@@ -87,8 +112,34 @@ class BridgeConfig:
                              f"{self.speed_mps:g} is a {length:.3g} m pass; expected at most "
                              f"{ORIGIN_LIMIT_M:g} m, where MAVLink's float32 resolves 8 mm")
 
+    def uavs(self) -> tuple[int, ...]:
+        """The UAV index of each entry of `target_sysids`, in order."""
+        if self.uav_id >= 0:
+            return (self.uav_id,)
+        return tuple(range(len(self.target_sysids)))
+
     def addresses(self) -> tuple[str, ...]:
         """The connection string of each UAV, in UAV order."""
         if len(self.connections) == 1:
             return self.connections * len(self.target_sysids)
         return self.connections
+
+
+def from_parameters(values: dict[str, Any]) -> BridgeConfig:
+    """The config of the node's parameter values (lists as given). With `uav_id` >= 0,
+    `connections` and `target_sysids` left at their defaults (every UAV's) mean that UAV's
+    entry; "auto" `pass_start` is planner with a uav_id, else capture, and "auto" (-1)
+    `gcs_timeout_s` GCS_TIMEOUT_DEFAULT_S with a uav_id, else off. TypeError or ValueError
+    (one line) when a value is bad."""
+    values = {name: tuple(v) if isinstance(v, list) else v for name, v in values.items()}
+    k = values.get("uav_id", -1)
+    if isinstance(k, int) and 0 <= k < NUM_UAVS:
+        for name in ("connections", "target_sysids"):
+            if values.get(name) == tuple(_DEFAULTS[name]):
+                values[name] = (_DEFAULTS[name][k],)
+    if values.get("gcs_timeout_s", GCS_TIMEOUT_AUTO) == GCS_TIMEOUT_AUTO:
+        values["gcs_timeout_s"] = (GCS_TIMEOUT_DEFAULT_S if isinstance(k, int) and k >= 0
+                                   else 0.0)
+    if values.get("pass_start", "auto") == "auto":
+        values["pass_start"] = "planner" if isinstance(k, int) and k >= 0 else "capture"
+    return BridgeConfig(**values)

@@ -1,17 +1,29 @@
-"""When the pass may start: every UAV of the gate captured at its start point.
+"""When the pass starts: every UAV of the gate captured at its start point, or the planner's
+instant.
 
-A bridge that sees every vehicle starts the pass itself once each linked UAV with a target
-(whose arming did not fail) reports a fresh position within `capture_radius_m` of its start
-point; radius 0 starts at once.
+pass_start "capture": a bridge that sees every vehicle starts the pass itself once each
+linked UAV with a target (whose arming did not fail) reports a fresh position within
+`capture_radius_m` of its start point; radius 0 starts at once.
+pass_start "planner" (a stack per UAV: no bridge sees the others): the planner sees every UAV
+captured and publishes one wall-clock start a little in the future (ros/pass_start.py);
+`planner_start` turns it into the bridge's monotonic track clock, so every bridge starts at
+the same instant as far as the hosts' clocks agree (GNSS time / chrony: an offset dt puts a
+UAV v_y dt along track).
 """
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
+from uav_insar_planner.mavlink.config import BridgeConfig
 from uav_insar_planner.mavlink.frames import TrackFrame
+from uav_insar_planner.mavlink.sequencer import ArmingSequence
 from uav_insar_planner.mavlink.supervision import WatchedVehicle
 from uav_insar_planner.mavlink.trajectory import PassTrajectory
+
+# The same start re-published under a re-plan's identity converts to a clock a few
+# microseconds off: below this the running track clock is kept, not nudged.
+SAME_START_S = 1e-3
 
 
 def captured(gate: Sequence[WatchedVehicle], pass_: PassTrajectory, frame: TrackFrame,
@@ -29,3 +41,36 @@ def captured(gate: Sequence[WatchedVehicle], pass_: PassTrajectory, frame: Track
         if not math.dist(start, v.position_ned) <= capture_radius_m:
             return False  # (written so that a NaN distance never counts as inside)
     return True
+
+
+def capture_start(vehicles: Sequence[WatchedVehicle], sequences: Mapping[int, ArmingSequence],
+                  pass_: PassTrajectory, frame: TrackFrame, now: float,
+                  config: BridgeConfig) -> bool:
+    """pass_start "capture": start the track of `pass_` at `now` (True) when the gate, every
+    linked vehicle with a target whose arming (`sequences`) did not fail, is `captured`."""
+    if (pass_.t_start is not None or pass_.formation is None
+            or config.pass_start == "planner"):
+        return False
+    gate = [v for v in vehicles if pass_.start_pose(v.uav) is not None and v.linked
+            and not (v.uav in sequences and sequences[v.uav].failed)]
+    if not captured(gate, pass_, frame, now, config.capture_radius_m,
+                    config.heartbeat_timeout_s):
+        return False
+    pass_.t_start = now
+    return True
+
+
+def planner_start(pass_: PassTrajectory, wall_time_s: float, mono_now: float,
+                  wall_now: float, label: str) -> str:
+    """Set the track clock of `pass_` to the wall-clock instant `wall_time_s` (read against
+    `wall_now`, time.time(), at monotonic `mono_now`); the event text, "" when nothing
+    changed (no formation yet, or the same start again)."""
+    if pass_.formation is None:
+        return ""
+    t_start = mono_now + (wall_time_s - wall_now)
+    if pass_.t_start is not None and abs(pass_.t_start - t_start) < SAME_START_S:
+        return ""
+    pass_.t_start = t_start
+    ahead = t_start - mono_now
+    when = f"in {ahead:.2f} s" if ahead >= 0 else f"{-ahead:.2f} s ago (joining the pass)"
+    return f"pass start from the planner ({label}): {when}, wall clock {wall_time_s:.3f}"

@@ -80,7 +80,7 @@ class PassTrajectory:
         if start is None:
             return None
         x, y, z = start
-        if self.t_start is None:
+        if self.t_start is None or now < self.t_start:  # (a planner's start may lie ahead)
             return (x, y, z), (0.0, 0.0, 0.0)
         offset, speed = braked_pass(now - self.t_start, self.speed_mps, self.track_duration_s)
         return (x, y + offset, z), (0.0, speed, 0.0)

@@ -2,13 +2,17 @@
 over `uav_insar_planner.mavlink.bridge.Bridge`, which does all MAVLink work in its own thread.
 
 Parameters (param_specs.py BRIDGE_SPECS, all read-only: the links are opened once):
+  uav_id (-1: every UAV; 0..2: this UAV only, a stack per UAV, in namespace /uavK or the
+  swarm's; another UAV's namespace is refused), pass_start (auto|capture|planner),
   connections (string[]), target_sysids (int[]), source_sysid, track_bearing_deg,
   origin_ned_m (double[3], N E D), setpoint_rate_hz, velocity_feedforward, arm_and_takeoff,
   autopilot (ardupilot|px4), speed_mps, track_duration_s, capture_radius_m,
   heartbeat_timeout_s, readiness_timeout_s, min_separation_m, signing_key_file,
-  gcs_timeout_s (> 0: hold when the ground station is silent, mavlink/holding.py).
+  gcs_timeout_s (hold when the ground station is silent, mavlink/holding.py; auto: 5 s
+  with uav_id, else off).
 A bad value or unknown name logs one line and exits with code 2 before anything is published
-or opened.
+or opened. Claims (ros/claims.py): no MAVLink byte for DISCOVERY_WINDOW_S; a UAV another bridge
+on the graph claimed first is refused with one line, exit 2.
 
 Subscribes  formation (geometry_msgs/PoseArray, reliable + transient_local, depth 1):
             poses[k] = (x_k, y_start, z_k) in the track frame; NaN for a UAV not flown;
@@ -19,8 +23,12 @@ Subscribes  formation (geometry_msgs/PoseArray, reliable + transient_local, dept
             entry (ros/plan_msgs.py): a bad one is dropped with one rate-limited log line,
             counted (`bad_plan_messages` on /diagnostics), and the formation flown stays;
             gcs/heartbeat (std_msgs/Header, best effort, ros/gcs_link.py): with the plan
-            messages, what tells the bridge the ground station is there (`gcs_timeout_s`).
-Publishes   uav{K}/mavlink/pose (geometry_msgs/PoseStamped, frame insar_track), the
+            and start messages, what tells the bridge the ground station is there
+            (`gcs_timeout_s`);
+            formation/start (std_msgs/Header, latched) with pass_start planner: the wall-clock
+            start of the flown plan's pass (ros/start_msgs.py, validated, `bad_start_messages`).
+Publishes   uav{K}/mavlink/claim (std_msgs/String, latched) per UAV flown (ros/claims.py);
+            uav{K}/mavlink/pose (geometry_msgs/PoseStamped, frame insar_track), the
             vehicle's LOCAL_POSITION_NED in the track frame, each time a new one arrives;
             /diagnostics (diagnostic_msgs/DiagnosticArray) once a second, one status per UAV:
             its `phase` (waiting for heartbeat / waiting for position / prearm: <reason> /
@@ -42,11 +50,13 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PoseStamped
 from rclpy.node import Node
 
-from uav_insar_planner.exit_codes import EXIT_CRASH
-from uav_insar_planner.mavlink.bridge import Bridge, BridgeConfig, VehicleStatus
+from uav_insar_planner.exit_codes import EXIT_BAD_INPUT, EXIT_CRASH
+from uav_insar_planner.mavlink.bridge import Bridge, VehicleStatus
+from uav_insar_planner.mavlink.config import from_parameters
 from uav_insar_planner.param_specs import BRIDGE_SPECS
 from uav_insar_planner.report import planner_messages as report
 from uav_insar_planner.ros import topics
+from uav_insar_planner.ros.claims import DISCOVERY_WINDOW_S, UavClaims
 from uav_insar_planner.ros.gcs_link import GcsLink
 from uav_insar_planner.ros.parameters import (
     declare_specs,
@@ -57,6 +67,7 @@ from uav_insar_planner.ros.parameters import (
 from uav_insar_planner.ros.plan_gate import PlanGate
 from uav_insar_planner.ros.plan_msgs import Formation, PowerSchedule
 from uav_insar_planner.ros.run import run_node
+from uav_insar_planner.ros.start_msgs import StartFollower
 from uav_insar_planner.swarm import uav_name
 
 POSE_PERIOD_S = 0.05  # poll the bridge at 20 Hz: vehicles report at ~10 Hz
@@ -76,25 +87,41 @@ class MavlinkBridgeNode(Node):
             return
         values = spec_values(self, BRIDGE_SPECS)
         try:
-            ns = topics.swarm_namespace(self.get_namespace(), None)
-            config = BridgeConfig(**{name: tuple(v) if isinstance(v, list) else v
-                                     for name, v in values.items()})
+            config = from_parameters(values)
+            config.validate()
+            k = config.uav_id
+            ns = topics.swarm_namespace(self.get_namespace(), k if k >= 0 else None)
             self.bridge = Bridge(config)
         except (TypeError, ValueError) as exc:
             self.problems.append(str(exc))
             return
-        n = len(config.target_sysids)
-        self._pose_pubs = [self.create_publisher(PoseStamped, topics.resolve(
-            ns, topics.mavlink_pose(k)), topics.DEPTH) for k in range(n)]
+        uavs = self.bridge.uavs
+        self._pose_pubs = {k: self.create_publisher(PoseStamped, topics.resolve(
+            ns, topics.mavlink_pose(k)), topics.DEPTH) for k in uavs}
         self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, topics.DEPTH)
-        self._last_pose_age: list[float | None] = [None] * n
-        self.gcs = GcsLink(self, self.bridge.gcs_heard, ns)  # STACK: gcs.heard("start ...")
+        self._last_pose_age: dict[int, float | None] = dict.fromkeys(uavs)
+        self.gcs = GcsLink(self, self.bridge.gcs_heard, ns)
         self._gate = PlanGate(self, self._on_plan, swarm_ns=ns,  # validated, one at a time
                               on_message=self.gcs.heard)
+        self._starts = (StartFollower(self, ns, lambda: self._gate.current,
+                                      self.bridge.set_start, on_message=self.gcs.heard)
+                        if config.pass_start == "planner" else None)
         self.create_timer(POSE_PERIOD_S, self._publish_poses)
         self.create_timer(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)
         guard_sets(self)
+        # No MAVLink byte before no other bridge on the graph flies these UAVs (claims.py).
+        self._claims = UavClaims(self, ns, uavs, on_granted=self._granted,
+                                 on_refused=self._refused)
+
+    def _granted(self) -> None:
+        self.get_logger().info(f"{', '.join(uav_name(k) for k in self.bridge.uavs)}: no other "
+                               f"bridge claims it ({DISCOVERY_WINDOW_S:g} s discovery window); "
+                               "flying")
         self.bridge.start()
+
+    def _refused(self, line: str) -> None:
+        self.get_logger().error(line)
+        raise SystemExit(EXIT_BAD_INPUT)
 
     def stop(self) -> None:
         if self.bridge is not None:
@@ -103,6 +130,8 @@ class MavlinkBridgeNode(Node):
     def _on_plan(self, formation: Formation, power: PowerSchedule) -> None:
         poses = list(formation.points)
         self.bridge.set_formation(poses)
+        if self._starts is not None:
+            self._starts.plan_adopted()
         flown = sum(p is not None for p in poses)
         self.get_logger().info(f"formation received: {flown} UAV(s) with a target "
                                f"({power.plan_id})")
@@ -134,6 +163,8 @@ class MavlinkBridgeNode(Node):
             self._pose_pubs[s.uav].publish(msg)
 
     def _publish_diagnostics(self) -> None:
+        if not self._claims.granted:
+            return  # not flying (yet): UAV K's status is the bridge's that flies it
         stats = self.bridge.link_stats()
         self._gcs_state = self.bridge.gcs_state()
         msg = DiagnosticArray()
@@ -184,6 +215,8 @@ class MavlinkBridgeNode(Node):
                   ("truncated", link.truncated), ("unknown_msgid", link.unknown_msgid),
                   ("foreign", link.foreign), ("io_errors", link.io_errors),
                   ("bad_plan_messages", self._gate.dropped), ("gcs", self._gcs_state),
+                  ("bad_start_messages", self._starts.dropped if self._starts else 0),
+                  ("bad_claim_messages", self._claims.dropped),
                   ("bad_signature", link.bad_signature), ("spoofed", link.spoofed),
                   ("bad_value", link.bad_value), ("unsendable", link.unsendable)]
         return DiagnosticStatus(level=level, name=report.bridge_status_name(s.uav),

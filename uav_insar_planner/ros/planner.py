@@ -20,8 +20,10 @@ Publishes (names relative to the node's namespace, except /diagnostics):
                     plan), with or without a plan of this planner's
 Subscribes uav{K}/pose (PoseStamped), uav{K}/achieved_rate (Float64, bit/s), uav{K}/plan; the
 swarm watch (swarm_watch.py: lost UAVs, saturated closed loops, the re-plans they call for)
-also uav{K}/offload and /diagnostics. Planner-only parameter: uav_timeout_s
-(param_specs.PLANNER_SPECS).
+also uav{K}/offload and /diagnostics; the pass start (pass_start.py) uav{K}/mavlink/pose, and
+publishes formation/start (std_msgs/Header, latched: the wall-clock start of the pass and the
+plan it starts) once every flown UAV is captured. Planner-only parameters: uav_timeout_s,
+capture_radius_m, start_delay_s (param_specs.PLANNER_SPECS).
 Service ~/replan (std_srvs/Trigger): solve again with the current parameters.
 Solves run on a worker thread (solve_worker), so the node keeps serving while one runs; a
 worker that dies turns the plan status ERROR ("solve worker died: ...") and the node exits
@@ -62,6 +64,7 @@ from uav_insar_planner.ros.parameters import (
     spec_values,
     unknown_overrides,
 )
+from uav_insar_planner.ros.pass_start import PassStart
 from uav_insar_planner.ros.plan_msgs import PlanId
 from uav_insar_planner.ros.plan_watch import PlanWatch
 from uav_insar_planner.ros.run import run_node
@@ -116,6 +119,7 @@ class PlannerNode(Node):
         self.create_timer(DIAGNOSTICS_PERIOD_S, self._on_diagnostics_timer)
         self._worker = SolveWorker(solve, self._on_solved)
         self._swarm = SwarmWatch(self, params)
+        self._pass_start = PassStart(self, self._swarm.lost_uavs)
         self._worker.request(params, "start")
 
     def stop(self) -> None:
@@ -218,6 +222,7 @@ class PlannerNode(Node):
         self._formation_pub.publish(msg)
         self._power_pub.publish(power)
         self._markers.publish_plan(scenario, plan)
+        self._pass_start.on_plan(plan_id, report.formation_points(plan))
 
     def _on_diagnostics_timer(self) -> None:
         self._publish_diagnostics()

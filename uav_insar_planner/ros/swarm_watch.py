@@ -122,6 +122,11 @@ class SwarmWatch:
         with self._lock:
             return bool(self.monitor.lost)
 
+    def lost_uavs(self) -> set[int]:
+        """The UAVs declared lost so far."""
+        with self._lock:
+            return set(self.monitor.lost)
+
     def on_plan(self, plan: Plan, params: Params) -> None:
         """A full plan was published: the swarm flies it now (a UAV already lost is taken
         out of it again at once)."""

@@ -22,6 +22,9 @@ FRAME_ID = "insar_track"
 # planner's name in the power message's third layout dimension, "plan /planner <sec>.<ns>".
 FORMATION = "formation"  # geometry_msgs/PoseArray, LATCHED; header.stamp = the plan's stamp
 POWER = "formation/power"  # std_msgs/Float64MultiArray [uav, slot, plan id], LATCHED
+# std_msgs/Header, LATCHED: stamp = the pass's wall-clock start (time.time(); not ROS time),
+# frame_id = the identity label of the plan it starts (ros/start_msgs.py)
+FORMATION_START = "formation/start"
 MARKERS = "formation/markers"  # visualization_msgs/MarkerArray, LATCHED: the plan (markers.py)
 FLOWN_MARKERS = "formation/markers/flown"  # visualization_msgs/MarkerArray, depth 10: agents
 DIAGNOSTICS = "/diagnostics"  # diagnostic_msgs/DiagnosticArray, depth 10
@@ -77,6 +80,12 @@ def flown_plan(k: int) -> str:
 def mavlink_pose(k: int) -> str:
     """geometry_msgs/PoseStamped: vehicle k's LOCAL_POSITION_NED in the track frame (bridge)."""
     return f"{uav_name(k)}/mavlink/pose"
+
+
+def mavlink_claim(k: int) -> str:
+    """std_msgs/String, LATCHED: "claim <bridge node> <sec>.<nanosec>", the bridge that flies
+    vehicle k and its wall-clock start (ros/claims.py: the oldest claim flies)."""
+    return f"{uav_name(k)}/mavlink/claim"
 
 
 def swarm_namespace(node_namespace: str, k: int | None) -> str:

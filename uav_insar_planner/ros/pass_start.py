@@ -1,0 +1,110 @@
+"""The planner's one pass start for bridges that each fly one UAV (`formation/start`).
+
+No per-UAV bridge sees the other vehicles, so none can tell when the formation is complete.
+The planner can: it watches uav{K}/mavlink/pose of every UAV the current plan flies and the
+swarm watch has not declared lost, and once each is fresh (younger than POSE_FRESH_S) and
+within `capture_radius_m` (planner parameter, as the bridge's) of its start point
+(x_k, y_start, z_k), it publishes ONE start, latched (ros/start_msgs.py): wall clock now +
+`start_delay_s`, labelled with the plan's identity. Every bridge with pass_start "planner"
+starts its pass at that instant; the hosts' clocks must agree (GNSS time, chrony), as an
+offset dt puts a UAV v_y dt along track.
+
+A plan with the same y_start as the started one (a re-plan during the pass) gets the same
+instant again under its own identity, so the pass continues; one with another y_start (or the
+hold plan, nothing flown) waits for a new capture. Radius 0 starts at the first check.
+"""
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections.abc import Callable, Sequence
+
+from geometry_msgs.msg import PoseStamped
+from rclpy.node import Node
+from std_msgs.msg import Header
+
+from uav_insar_planner.ros import topics
+from uav_insar_planner.ros.plan_msgs import PlanId
+from uav_insar_planner.ros.start_msgs import encode_start
+from uav_insar_planner.swarm import UAVS, uav_name
+
+CHECK_PERIOD_S = 0.1
+# Bridges publish a pose per LOCAL_POSITION_NED, ~10 Hz: older than this is a silent UAV.
+POSE_FRESH_S = 1.0
+SAME_Y_START_M = 1e-3  # as trajectory.PassTrajectory: the same track start
+
+
+Point = tuple[float, float, float]
+
+
+def all_captured(starts: dict[int, Point], poses: dict[int, tuple[float, Point]],
+                 now: float, radius_m: float) -> bool:
+    """Whether every UAV of `starts` has a pose (monotonic time, position) fresher than
+    POSE_FRESH_S at `now` within `radius_m` of its start; False with nothing to start."""
+    if not starts:
+        return False
+    for k, start in starts.items():
+        seen = poses.get(k)
+        if seen is None or now - seen[0] > POSE_FRESH_S:
+            return False
+        if not (radius_m <= 0.0 or math.dist(seen[1], start) <= radius_m):
+            return False  # (written so that a NaN distance never counts as inside)
+    return True
+
+
+class PassStart:
+    """See the module docstring. `lost()` is the set of UAVs the swarm watch declared lost;
+    `node` has the parameters capture_radius_m and start_delay_s."""
+
+    def __init__(self, node: Node, lost: Callable[[], set[int]]) -> None:
+        self._node, self._lost = node, lost
+        self._lock = threading.Lock()
+        self._poses: dict[int, tuple[float, Point]] = {}
+        self._plan: PlanId | None = None
+        self._starts: dict[int, Point] = {}  # flown UAV -> its start point
+        self._y_start: float | None = None
+        self._start_ns: int | None = None  # the published instant, while this pass lasts
+        self._pub = node.create_publisher(Header, topics.FORMATION_START, topics.LATCHED)
+        for k in UAVS:
+            node.create_subscription(PoseStamped, topics.mavlink_pose(k),
+                                     lambda msg, k=k: self._on_pose(k, msg), topics.DEPTH)
+        node.create_timer(CHECK_PERIOD_S, self._check)
+
+    def on_plan(self, plan_id: PlanId, points: Sequence[Point]) -> None:
+        """The planner published plan `plan_id` with start points `points` (NaN: not flown)."""
+        starts = {k: tuple(p) for k, p in enumerate(points) if all(map(math.isfinite, p))}
+        y_start = next(iter(starts.values()))[1] if starts else None
+        with self._lock:
+            same = (self._start_ns is not None and y_start is not None
+                    and abs(y_start - self._y_start) < SAME_Y_START_M)
+            self._plan, self._starts, self._y_start = plan_id, starts, y_start
+            if not same:
+                self._start_ns = None
+                return
+            start_ns = self._start_ns
+        self._pub.publish(encode_start(start_ns, plan_id))
+        self._node.get_logger().info(f"pass continues: the same start again for {plan_id}")
+
+    def _on_pose(self, k: int, msg: PoseStamped) -> None:
+        p = msg.pose.position
+        with self._lock:
+            self._poses[k] = (time.monotonic(), (p.x, p.y, p.z))
+
+    def _check(self) -> None:
+        radius = float(self._node.get_parameter("capture_radius_m").value)
+        delay = float(self._node.get_parameter("start_delay_s").value)
+        lost = self._lost()
+        with self._lock:
+            if self._plan is None or self._start_ns is not None:
+                return
+            starts = {k: p for k, p in self._starts.items() if k not in lost}
+            if not all_captured(starts, self._poses, time.monotonic(), radius):
+                return
+            self._start_ns = time.time_ns() + round(delay * 1e9)
+            start_ns, plan_id = self._start_ns, self._plan
+        self._pub.publish(encode_start(start_ns, plan_id))
+        self._node.get_logger().info(
+            f"every flown UAV ({', '.join(uav_name(k) for k in sorted(starts))}) within "
+            f"{radius:g} m of its start: the pass starts in {delay:g} s, wall clock "
+            f"{start_ns * 1e-9:.3f} ({plan_id})")

@@ -1,0 +1,98 @@
+"""The pass start on the wire (`formation/start`, std_msgs/Header, latched) and the bridge's
+side of it.
+
+  header.stamp     the instant the pass starts, WALL clock (time.time(), seconds and
+                   nanoseconds since the epoch; not ROS time, which may be simulated)
+  header.frame_id  the identity label of the plan it starts ("plan /planner <sec>.<ns>",
+                   plan_msgs.PlanId)
+
+The planner publishes it (ros/pass_start.py); a re-plan during the pass (same y_start)
+publishes the same instant again under the new plan's label. Validated where it enters
+(`decode_start`): a label that is no plan identity, nanoseconds >= 1e9, or an instant more than
+PLAUSIBLE_S away from this host's clock (an unset clock, 1970) is dropped, counted and logged
+rate-limited; nothing changes.
+
+`StartFollower` (a bridge with pass_start "planner") keeps the latest KEPT starts by plan and
+hands the flown plan's start to the bridge: a start for a plan not (yet) flown waits until
+that plan is adopted (the latched start may overtake the formation, or follow it).
+"""
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+from rclpy.node import Node
+from std_msgs.msg import Header
+
+from uav_insar_planner.ros import topics
+from uav_insar_planner.ros.plan_msgs import DropLog, PlanId, PlanMessageError
+
+# A day: far beyond any pass and clock offset worth flying with, close enough to catch a host
+# whose clock was never set.
+PLAUSIBLE_S = 86400.0
+KEPT = 8
+
+
+def encode_start(wall_time_ns: int, plan_id: PlanId) -> Header:
+    """The start message of `plan_id` at `wall_time_ns` (time.time_ns())."""
+    msg = Header(frame_id=plan_id.label)
+    msg.stamp.sec, msg.stamp.nanosec = divmod(int(wall_time_ns), 1_000_000_000)
+    return msg
+
+
+def decode_start(msg: Header, wall_now: float) -> tuple[PlanId, float]:
+    """(plan identity, start in wall-clock seconds), or PlanMessageError (one line)."""
+    plan_id = PlanId.from_label(msg.frame_id)
+    if plan_id is None:
+        raise PlanMessageError(topics.FORMATION_START, "frame_id", msg.frame_id,
+                               "a plan identity 'plan <planner> <sec>.<nanosec>'")
+    sec, nanosec = int(msg.stamp.sec), int(msg.stamp.nanosec)
+    if not 0 <= nanosec < 1_000_000_000:
+        raise PlanMessageError(topics.FORMATION_START, "stamp.nanosec", nanosec,
+                               "0..999999999")
+    start = sec + nanosec * 1e-9
+    if abs(start - wall_now) > PLAUSIBLE_S:
+        raise PlanMessageError(topics.FORMATION_START, "stamp", f"{sec}.{nanosec:09d}",
+                               f"within {PLAUSIBLE_S:g} s of this host's clock "
+                               f"({wall_now:.0f}); is it synchronised?")
+    return plan_id, start
+
+
+class StartFollower:
+    """Subscribes `formation/start` of `swarm_ns` and calls `set_start(wall_time_s, label)`
+    for the start of the plan flown (`flown()`, the PlanGate's current), on arrival and on
+    `plan_adopted()`. `dropped` counts the messages refused by validation; `on_message(what)`
+    hears every valid one (the ground station is there: ros/gcs_link.py)."""
+
+    def __init__(self, node: Node, swarm_ns: str, flown: Callable[[], PlanId | None],
+                 set_start: Callable[[float, str], None], prefix: str = "",
+                 on_message: Callable[[str], None] | None = None) -> None:
+        self._flown, self._set_start, self._prefix = flown, set_start, prefix
+        self._on_message = on_message
+        self._starts: dict[PlanId, float] = {}
+        self._drops = DropLog(node.get_logger().warning, time.monotonic)
+        node.create_subscription(Header, topics.resolve(swarm_ns, topics.FORMATION_START),
+                                 self._on_start, topics.LATCHED)
+
+    @property
+    def dropped(self) -> int:
+        return self._drops.count
+
+    def _on_start(self, msg: Header) -> None:
+        try:
+            plan_id, start = decode_start(msg, time.time())
+        except PlanMessageError as exc:
+            self._drops.drop(exc, self._prefix)
+            return
+        if self._on_message is not None:
+            self._on_message(f"{topics.FORMATION_START} of {plan_id.label}")
+        self._starts[plan_id] = start
+        while len(self._starts) > KEPT:
+            del self._starts[next(iter(self._starts))]  # the oldest arrival
+        self.plan_adopted()
+
+    def plan_adopted(self) -> None:
+        """The flown plan may have changed: apply its start if one came."""
+        plan_id = self._flown()
+        if plan_id is not None and plan_id in self._starts:
+            self._set_start(self._starts[plan_id], plan_id.label)
