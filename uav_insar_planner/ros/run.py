@@ -67,22 +67,37 @@ def _terminate(signum: int, frame: Any) -> None:
 SHUTDOWN_GRACE_S = 0.5
 
 
-def _spin(node: Node) -> None:
-    """rclpy.spin, where a failure after the context was shut down counts as the shutdown.
+def _raise_unless_shut_down(context: Any) -> None:
+    """Re-raise the exception being handled unless a stop signal shut `context` down.
 
-    rclpy's SIGINT/SIGTERM handler shuts the context down under the running executor, which
-    can then fail to take a message that was ready (a RuntimeError from take_message, seen
-    about once in 10 two-planner stops): that is Ctrl-C, not a bug. A failure while the context
-    is still up is a bug, and propagates (exit 1 with its traceback)."""
-    try:
-        rclpy.spin(node)
-    except Exception:
-        # The handler may still be shutting the context down: give it a moment to show.
-        end = time.monotonic() + SHUTDOWN_GRACE_S
-        while rclpy.ok(context=node.context) and time.monotonic() < end:
-            time.sleep(0.02)
-        if rclpy.ok(context=node.context):
-            raise
+    rclpy's SIGINT/SIGTERM handler shuts the context down under whatever the node is doing:
+    the executor can then fail to take a message that was ready (a RuntimeError from
+    take_message, seen about once in 10 two-planner stops), and a node still being built fails
+    to create its next publisher (RCLError "context is invalid", seen once in CI when the
+    signal came between the node's appearance on the graph and the end of its constructor).
+    That is Ctrl-C, not a bug. A failure while the context is still up is a bug, and
+    propagates (exit 1 with its traceback)."""
+    # The handler may still be shutting the context down: give it a moment to show.
+    end = time.monotonic() + SHUTDOWN_GRACE_S
+    while rclpy.ok(context=context) and time.monotonic() < end:
+        time.sleep(0.02)
+    if rclpy.ok(context=context):
+        raise
+
+
+def _ignore_stop_signals() -> None:
+    """From here on Ctrl-C / SIGTERM are ignored, so that clean-up is not cut short.
+
+    rclpy passes the signal that shut the context down on to Python's handler, whose
+    KeyboardInterrupt arrives at the interpreter's next check, which may be inside this very
+    call: it is the signal already being handled, so it is swallowed and the call repeated."""
+    while True:
+        try:
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+            signal.signal(signal.SIGTERM, signal.SIG_IGN)
+            return
+        except KeyboardInterrupt:
+            continue
 
 
 def run_node(make_node: Callable[[], Node], default_name: str,
@@ -109,23 +124,26 @@ def run_node(make_node: Callable[[], Node], default_name: str,
         _report(default_name, [" ".join(str(exc).split(", at ")[0].split())])
         return EXIT_BAD_INPUT
     rclpy.logging.set_logger_level("rcl", rclpy.logging.LoggingSeverity.UNSET)
+    context = rclpy.get_default_context()
     node = None
     code = 0
     try:
-        node = make_node()
-        if node.problems:
-            for line in node.problems:
-                node.get_logger().error(line)
-            code = EXIT_BAD_INPUT
-        else:
-            _spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
+        try:
+            node = make_node()
+            if node.problems:
+                for line in node.problems:
+                    node.get_logger().error(line)
+                code = EXIT_BAD_INPUT
+            else:
+                rclpy.spin(node)
+        except (KeyboardInterrupt, ExternalShutdownException):
+            pass
+        except Exception:
+            _raise_unless_shut_down(context)
+    except KeyboardInterrupt:
+        pass  # the stop signal's own KeyboardInterrupt, arriving while its failure was handled
     finally:
-        # A second Ctrl-C / SIGTERM (or rclpy passing its signal on to Python's handler) must
-        # not cut the clean-up short: the exit code stays what it was.
-        signal.signal(signal.SIGINT, signal.SIG_IGN)
-        signal.signal(signal.SIGTERM, signal.SIG_IGN)
+        _ignore_stop_signals()
         if node is not None:
             stop = getattr(node, "stop", None)
             if stop is not None:
