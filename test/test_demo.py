@@ -1,9 +1,12 @@
 """`make demo` end to end: the demo module as a user runs it (a subprocess that starts the
 planner, three agents, three MAVLink vehicles and the bridge as processes of their own; the
-agents on position_source:=autopilot take their positions from the bridge-flown vehicles)."""
+agents on position_source:=autopilot take their positions from the bridge-flown vehicles), and
+the same brought up as one stack per UAV (`--per-uav-stacks`)."""
 from __future__ import annotations
 
+import os
 import re
+import signal
 import subprocess
 import sys
 
@@ -91,3 +94,58 @@ def test_bad_wind_exits_2(repo):
     proc = subprocess.run([sys.executable, "-m", "uav_insar_planner.demo", "--wind", "99", "0",
                            "0"], cwd=repo, capture_output=True, text=True, timeout=30)
     assert proc.returncode == 2 and "--wind" in proc.stderr
+
+
+def test_demo_flies_one_stack_per_uav(ros_domain, repo, tmp_path):
+    """--per-uav-stacks: a bridge per UAV in /uavK flying its own vehicle, the agents in
+    /uavK, and the planner's one start for every pass; the mission still completes."""
+    bag = tmp_path / "stacks_bag"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "uav_insar_planner.demo", "--per-uav-stacks", "--num-slots",
+         "6", "--domain-id", str(ros_domain), "--bag", str(bag)],
+        cwd=repo, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+        start_new_session=True)
+    try:
+        out, _ = proc.communicate(timeout=80)
+    finally:
+        if proc.poll() is None:  # the demo and every node it started, by their group
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.communicate()
+    assert proc.returncode == 0, out[-4000:]
+    starts = re.findall(r"\[uav(\d)\.mavlink_bridge\]: swarm: pass start from the planner "
+                        r"\(plan (\S+ \S+)\): in [\d.]+ s, wall clock ([\d.]+)", out)
+    assert sorted(int(k) for k, _, _ in starts) == [0, 1, 2], out[-4000:]
+    assert len({(plan, t) for _, plan, t in starts}) == 1, starts  # one plan, one instant
+    assert "swarm: formation established" not in out  # no bridge started a pass of its own
+    summary = out[out.index("\nsummary"):]
+    assert len(re.findall(r"6/6 slots", summary)) == 3, summary
+    vehicles = {int(m[1]): m for m in MAVLINK_LINE.finditer(summary)}
+    assert sorted(vehicles) == [0, 1, 2], summary
+    for m in vehicles.values():
+        assert float(m[2]) < 0.5, m[0]
+        assert float(m[4]) == pytest.approx(float(m[5]), abs=0.5), m[0]
+    assert re.search(r"demo: stopped planner, agents, vehicles, bridges \(exit codes "
+                     r"\[(0, ){9}0\]\)", out), out[-500:]
+    from test_bag_record import assert_both_readers_decode
+
+    assert_both_readers_decode(bag, mavlink=True, slots=6)
+
+
+def test_per_uav_stacks_need_the_mavlink_path(repo):
+    proc = subprocess.run([sys.executable, "-m", "uav_insar_planner.demo", "--per-uav-stacks",
+                           "--no-mavlink"], cwd=repo, capture_output=True, text=True,
+                          timeout=30)
+    assert proc.returncode == 2, proc.stderr
+    (line,) = proc.stderr.strip().splitlines()[-1:]
+    assert "--per-uav-stacks" in line and "without --no-mavlink" in line, proc.stderr
+
+
+def test_a_uav_id_in_a_params_file_is_refused_for_the_stacks_bridges(repo, tmp_path):
+    params = tmp_path / "params.yaml"
+    params.write_text("/uav1/mavlink_bridge:\n  ros__parameters:\n    uav_id: 2\n")
+    proc = subprocess.run([sys.executable, "-m", "uav_insar_planner.demo", "--per-uav-stacks",
+                           "--params-file", str(params)], cwd=repo, capture_output=True,
+                          text=True, timeout=30)
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    assert "uav_id: value 2 is not allowed in the demo" in proc.stderr, proc.stderr
+    assert "/uavK's stack flies UAV K" in proc.stderr

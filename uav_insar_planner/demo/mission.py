@@ -10,7 +10,10 @@ on /uavK/mavlink/pose, and the agents (`position_source:=autopilot`) run their s
 and republish them as /uavK/pose, so rates, offload, bag and report are the vehicles'. The
 vehicles fly in wall-clock time (no time_scale): they gather at their start points, then fly
 the pass, num_slots + 1 slots long (20 slots unless --num-slots), along the track at
-speed_mps. With `--no-mavlink` the agents fly themselves on the mission clock.
+speed_mps. With `--per-uav-stacks` each UAV gets a stack of its own, as on its computer: a bridge
+/uavK/mavlink_bridge (uav_id K) for its vehicle and the agent /uavK/agent; the planner then
+starts every pass at one wall-clock instant (formation/start). With `--no-mavlink` the agents
+fly themselves on the mission clock.
 
 Unless `--no-bag`, `uav-insar record` runs beside the nodes from before the agents start to
 after they stop, so the whole mission lands in a rosbag2 MCAP bag (`--bag PATH`, default

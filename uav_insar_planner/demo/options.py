@@ -53,6 +53,10 @@ def build_parser() -> OneLineParser:
         help="ROS_DOMAIN_ID to use (default: a random one in 1..101)")
     add("--no-mavlink", action="store_true",
         help="no bridge and vehicles: the agents fly themselves (position_source agent)")
+    add("--per-uav-stacks", action="store_true",
+        help="one stack per UAV, as on each UAV's computer: bridge /uavK/mavlink_bridge "
+             "(uav_id K) flying its own vehicle and agent /uavK/agent; the planner starts "
+             "every pass at one wall-clock instant (formation/start)")
     add("--mavlink-base-port", type=int, default=0,
         help=f"vehicle K listens on UDP PORT + {PORT_STEP} K (default: free ports chosen by "
              "the OS)")
@@ -78,6 +82,9 @@ def parse_options(argv: list[str] | None = None) -> argparse.Namespace:
         parser.error(f"--bag: {str(args.bag)[:200]!r} exists; expected a new folder")
     if args.uav_timeout is not None and not 0.1 <= args.uav_timeout <= 3600.0:
         parser.error("--uav-timeout must be in [0.1, 3600] s")
+    if args.per_uav_stacks and args.no_mavlink:
+        parser.error("--per-uav-stacks: a stack per UAV is its bridge, vehicle and agent; "
+                     "expected it without --no-mavlink")
     if not args.no_mavlink:
         for given, option in ((args.time_scale is not None, "--time-scale"),
                               (args.noise_std != 0.0, "--noise-std"),

@@ -24,7 +24,7 @@ from uav_insar_planner.demo.processes import (
 from uav_insar_planner.demo.recorder import recorder_ready, start_recorder, stop_recorder
 from uav_insar_planner.param_specs import FIRST_SYSID, PORT_STEP
 from uav_insar_planner.report.flown import MavlinkPass, mavlink_table, rate_table, summary
-from uav_insar_planner.swarm import MASTER, NUM_UAVS, UAVS, agent_name
+from uav_insar_planner.swarm import MASTER, NUM_UAVS, UAVS, agent_name, uav_name
 
 if TYPE_CHECKING:
     from uav_insar_planner.params import Params
@@ -57,49 +57,76 @@ def link_args(args: argparse.Namespace) -> list[str]:
     return [a for v in values for a in ("-p", v)]
 
 
+def bridge_args(ports: Sequence[int], per_uav_stacks: bool) -> list[list[str]]:
+    """The ROS arguments of the bridge(s) wired to the vehicles on `ports`: one bridge for
+    the swarm, or (`per_uav_stacks`) one per UAV in /uavK flying UAV K's vehicle only."""
+    def wired(uavs: Sequence[int]) -> list[str]:
+        connections = ", ".join(f"'udpout:127.0.0.1:{ports[k]}'" for k in uavs)
+        sysids = ", ".join(str(FIRST_SYSID + k) for k in uavs)
+        return ["-p", f"connections:=[{connections}]", "-p", f"target_sysids:=[{sysids}]"]
+
+    if not per_uav_stacks:
+        return [wired(range(len(ports)))]
+    return [["-r", f"__ns:=/{uav_name(k)}", "-p", f"uav_id:={k}", *wired([k])]
+            for k in range(len(ports))]
+
+
 def start_mavlink(ports: Sequence[int], pass_s: float, common: Sequence[str],
-                  env: dict[str, str]) -> list[subprocess.Popen]:
+                  env: dict[str, str], per_uav_stacks: bool = False) -> list[subprocess.Popen]:
     """One vehicle per port (sysid FIRST_SYSID + k, airborne above agent k's home, listening
-    on 127.0.0.1:ports[k]) and the bridge sending to them, its pass `pass_s` long; the
-    vehicles first, so the bridge's first datagrams find them."""
+    on 127.0.0.1:ports[k]) and the bridge(s) sending to them (`bridge_args`), the pass
+    `pass_s` long; the vehicles first, so the bridges' first datagrams find them."""
     procs = [start_process([*executable("uav-insar-vehicle"), "--sysid",
                             str(FIRST_SYSID + k), "--listen", f"udpin:127.0.0.1:{port}",
                             "--airborne", "--start-ned", str(VEHICLE_HOME_Y_M),
                             str(VEHICLE_SPACING_M * k), str(-VEHICLE_START_HEIGHT_M)],
                            env, f"[vehicle{FIRST_SYSID + k}]")
              for k, port in enumerate(ports)]
-    connections = ", ".join(f"'udpout:127.0.0.1:{port}'" for port in ports)
-    sysids = ", ".join(str(FIRST_SYSID + k) for k in range(len(ports)))
-    procs.append(start_node("mavlink_bridge", [
-        *common, "-p", f"connections:=[{connections}]", "-p", f"target_sysids:=[{sysids}]",
-        "-p", "velocity_feedforward:=true", "-p", f"capture_radius_m:={CAPTURE_RADIUS_M}",
-        "-p", f"track_duration_s:={float(pass_s)}"], env, "[bridge]"))
+    for k, wiring in enumerate(bridge_args(ports, per_uav_stacks)):
+        procs.append(start_node("mavlink_bridge", [
+            *common, *wiring, "-p", "velocity_feedforward:=true",
+            "-p", f"capture_radius_m:={CAPTURE_RADIUS_M}",
+            "-p", f"track_duration_s:={float(pass_s)}"], env,
+            f"[{uav_name(k)}/bridge]" if per_uav_stacks else "[bridge]"))
     return procs
 
 
-def set_by_the_demo(args: argparse.Namespace) -> dict[str, tuple[str, str]]:
+def node_names(node: str, args: argparse.Namespace) -> list[str]:
+    """The full names the demo gives `node`'s processes (params-file sections match these)."""
+    stacks = getattr(args, "per_uav_stacks", False)
+    if node == "agent":
+        return [f"/{uav_name(k)}/agent" if stacks else agent_name(k) for k in UAVS]
+    if node == "mavlink_bridge" and stacks:
+        return [f"/{uav_name(k)}/mavlink_bridge" for k in UAVS]
+    return [node]
+
+
+def set_by_the_demo(args: argparse.Namespace) -> dict[str, tuple[tuple[str, ...], str]]:
     """The parameters this run passes with -p itself, after the params file and the user's
-    -p (so rcl would take the demo's): name -> (the node it sets it on, the option to use)."""
-    own = {"uav_id": ("agent", "nothing: agentK flies UAV K"),
-           "time_scale": ("agent", "--time-scale"),
-           "position_noise_std_m": ("agent", "--noise-std"),
-           "offloading": ("agent", "--offloading"), "fading_seed": ("agent", "--seed")}
+    -p (so rcl would take the demo's): name -> (the nodes it sets it on, the option to use)."""
+    agent, bridge = ("agent",), ("mavlink_bridge",)
+    own = {"uav_id": (agent, "nothing: agentK flies UAV K"),
+           "time_scale": (agent, "--time-scale"),
+           "position_noise_std_m": (agent, "--noise-std"),
+           "offloading": (agent, "--offloading"), "fading_seed": (agent, "--seed")}
     if args.fading:
-        own.update({text.split(":=")[0]: ("agent", "--fading") for text in FADING})
+        own.update({text.split(":=")[0]: (agent, "--fading") for text in FADING})
     if args.wind:
-        own["wind_mps"] = ("agent", "--wind")
+        own["wind_mps"] = (agent, "--wind")
     if args.uav_timeout is not None:
-        own["uav_timeout_s"] = ("planner", "--uav-timeout")
+        own["uav_timeout_s"] = (("planner",), "--uav-timeout")
     if not args.no_mavlink:
-        own["position_source"] = ("agent", "--no-mavlink for agent, else autopilot")
+        own["position_source"] = (agent, "--no-mavlink for agent, else autopilot")
         wired = "nothing: the demo wires the bridge to its vehicles"
-        own.update({"connections": ("mavlink_bridge", wired),
-                    "target_sysids": ("mavlink_bridge", wired),
-                    "velocity_feedforward": ("mavlink_bridge", "nothing: its pass uses true"),
-                    "capture_radius_m": ("mavlink_bridge",
-                                         f"nothing: its pass uses {CAPTURE_RADIUS_M:g}"),
-                    "track_duration_s": ("mavlink_bridge", "--num-slots (the pass is one "
-                                         "slot longer than the slots)")})
+        radius = f"nothing: its pass uses {CAPTURE_RADIUS_M:g}"
+        own.update({"connections": (bridge, wired), "target_sysids": (bridge, wired),
+                    "velocity_feedforward": (bridge, "nothing: its pass uses true"),
+                    "capture_radius_m": (bridge, radius),
+                    "track_duration_s": (bridge, "--num-slots (the pass is one slot longer "
+                                         "than the slots)")})
+        if args.per_uav_stacks:
+            own["uav_id"] = (agent + bridge, "nothing: /uavK's stack flies UAV K")
+            own["capture_radius_m"] = (("planner",) + bridge, radius)
     return own
 
 
@@ -114,15 +141,15 @@ def overridden_problems(args: argparse.Namespace, overrides: dict[str, Any]) -> 
     if args.params_file:
         file = parse_params_file(args.params_file)
         where = f"params file {str(args.params_file)[:200]!r}: "
-        for name, (node, _) in own.items():
-            for fqn in [agent_name(k) for k in UAVS] if node == "agent" else [node]:
+        for name, (nodes, _) in own.items():
+            for fqn in (fqn for node in nodes for fqn in node_names(node, args)):
                 if name in (values := file.values_for(fqn)):
                     given.append((where, name, values[name]))
                     break
-    who = {"agent": "the agents", "planner": "the planner", "mavlink_bridge": "the bridge"}
+    who = {"agent": "the agents", "planner": "the planner", "mavlink_bridge": "the bridges"}
     return [f"{where}{name}: value {shown(value)} is not allowed in the demo, which sets it "
-            f"on {who[own[name][0]]} itself; expected {own[name][1]}"
-            for where, name, value in given]
+            f"on {' and '.join(who[node] for node in own[name][0])} itself; expected "
+            f"{own[name][1]}" for where, name, value in given]
 
 
 class Mission:
@@ -170,28 +197,38 @@ class Mission:
                           f"time_scale:={args.time_scale}", "-p",
                           f"position_noise_std_m:={args.noise_std}", *link_args(args),
                           *([] if args.no_mavlink else ["-p", f"position_source:={source}"]),
-                          "-r", f"__node:={agent_name(k)}"], self.env,
-                                     f"[{agent_name(k)}]"))
+                          *self._agent_name_args(k)], self.env, f"[{agent_name(k)}]"))
         if not w.spin_until(lambda: w.agents_matched() and (
                 self.recorder is None or recorder_ready(w.node)), AGENTS_UP_S, self.procs):
             print("demo: the agents did not come up (see their log above)", flush=True)
             return False
         return True
 
+    def _agent_name_args(self, k: int) -> list[str]:
+        """Agent k as /uavK/agent (its UAV's stack) or as agentK beside the others."""
+        if self.args.per_uav_stacks:
+            return ["-r", f"__ns:=/{uav_name(k)}"]
+        return ["-r", f"__node:={agent_name(k)}"]
+
     def start_planner_and_mavlink(self) -> None:
         """Start the planner and, unless --no-mavlink, one vehicle per UAV and the bridge."""
         args = self.args
-        timeout = [] if args.uav_timeout is None else ["-p", f"uav_timeout_s:={args.uav_timeout}"]
-        self.procs.append(start_node("planner", [*self.common, *timeout], self.env, "[planner]"))
+        own = [] if args.uav_timeout is None else ["-p", f"uav_timeout_s:={args.uav_timeout}"]
+        if args.per_uav_stacks:  # the planner starts the pass once every UAV is this close
+            own += ["-p", f"capture_radius_m:={CAPTURE_RADIUS_M}"]
+        self.procs.append(start_node("planner", [*self.common, *own], self.env, "[planner]"))
         if args.no_mavlink:
             return
         self.ports = ([args.mavlink_base_port + PORT_STEP * k for k in UAVS]
                       if args.mavlink_base_port else free_udp_ports(NUM_UAVS))
+        flown_by = ("one bridge per UAV (/uavK/mavlink_bridge, uav_id K; the planner starts "
+                    "every pass at one instant)" if args.per_uav_stacks else "the bridge")
         print(f"demo: MAVLink vehicles sysid {FIRST_SYSID}..{FIRST_SYSID + NUM_UAVS - 1} on "
-              f"UDP ports {', '.join(map(str, self.ports))}, flown by the bridge for the whole "
+              f"UDP ports {', '.join(map(str, self.ports))}, flown by {flown_by} for the whole "
               f"mission (a pass of {self.pass_s:g} s); the agents take their positions from "
               "them (position_source autopilot)", flush=True)
-        self.procs += start_mavlink(self.ports, self.pass_s, self.common, self.env)
+        self.procs += start_mavlink(self.ports, self.pass_s, self.common, self.env,
+                                    args.per_uav_stacks)
 
     def wait_for_plan(self) -> bool:
         """Wait for the first plan and echo its /formation; False when none came (or the
@@ -275,6 +312,7 @@ class Mission:
         codes = stop_nodes(self.procs)
         self.watcher.destroy()
         what = ("planner and agents" if self.args.no_mavlink
+                else "planner, agents, vehicles, bridges" if self.args.per_uav_stacks
                 else "planner, agents, vehicles, bridge")
         print(f"demo: stopped {what} (exit codes {codes})", flush=True)
         if self.recorder is not None:
