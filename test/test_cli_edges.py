@@ -177,3 +177,14 @@ def test_bad_ros_arguments_are_one_line_before_rcl_starts(tmp_path: Path, verb: 
     assert_refused(proc, f"uav-insar {verb[0]}: error: bad ROS arguments: Failed to parse ROS "
                    "arguments: Couldn't parse log level")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_reader_that_stops_early_gets_no_traceback() -> None:
+    # `uav-insar solve --json | head -1`: the pipe closes after the first line
+    proc = subprocess.Popen([*CLI, "solve", "--json"], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    assert proc.stdout.readline().strip() == "{"
+    proc.stdout.close()
+    err = proc.stderr.read()
+    assert proc.wait(timeout=60) == 0, err
+    assert "Traceback" not in err and "BrokenPipe" not in err, err

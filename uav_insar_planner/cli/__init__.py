@@ -11,12 +11,13 @@ exit_codes.py's for every verb; errors are one line on stderr: a ParamError line
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Sequence
 from types import ModuleType
 
 from uav_insar_planner.cli.parser import OneLineParser, one_line, split_ros_args
-from uav_insar_planner.exit_codes import EXIT_BAD_INPUT, EXIT_CRASH, CommandFailed
+from uav_insar_planner.exit_codes import EXIT_BAD_INPUT, EXIT_CRASH, EXIT_OK, CommandFailed
 from uav_insar_planner.params import ParamError
 from uav_insar_planner.solver import SolverFailure
 
@@ -80,3 +81,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SolverFailure as exc:
         print(one_line(f"{PROG}: error: {exc}"), file=sys.stderr)
         return EXIT_CRASH
+    except BrokenPipeError:
+        # The reader of our output stopped (`uav-insar solve --json | head`): nothing is
+        # wrong, as for any Unix filter. Point stdout at /dev/null so that the interpreter's
+        # final flush does not raise again.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_OK
