@@ -40,6 +40,8 @@ setup(
                  "hypothesis>=6",
                  # independent readers of the recorded bags (test/test_bag_record.py)
                  "mcap>=1.1", "mcap-ros2-support>=0.5"],
+        # the documentation site (mkdocs.yml); its strict build is part of the tests
+        "docs": ["mkdocs>=1.6,<2", "mkdocs-material>=9.5,<10"],
     },
     zip_safe=True,
     maintainer="uav_insar_planner developers",

@@ -4,17 +4,13 @@ ends without an exception or a numpy RuntimeWarning; values that make the model 
 are refused by the parameter ranges, with the reason in the line."""
 from __future__ import annotations
 
-import re
 import warnings
-from pathlib import Path
 
 import pytest
 
 from uav_insar_planner.params import PARAM_SPECS, ParamError, default_params
 from uav_insar_planner.params_file import load_params
 from uav_insar_planner.solver import solve
-
-README = (Path(__file__).resolve().parent.parent / "README.md").read_text()
 
 
 def strict_solve(overrides: dict, **kw):
@@ -46,15 +42,6 @@ def test_meaningless_values_are_refused_with_a_reason(overrides: dict, says: str
         load_params(None, overrides)
     problems = err.value.problems
     assert problems and all(says in line for line in problems), problems
-
-
-def test_readme_table_states_the_ranges_and_reasons() -> None:
-    for spec in PARAM_SPECS:
-        row = re.search(rf"^\| `{re.escape(spec.name)}` \| [^|]+ \| ([^|]+) \| ([^|]+) \|$",
-                        README, re.M)
-        assert row, spec.name
-        assert (row.group(1).strip(), row.group(2).strip()) == (spec.allowed(),
-                                                                spec.description), spec.name
 
 
 TABLE_ONE = {scheme: solve(default_params(), scheme=scheme)

@@ -1,4 +1,4 @@
-"""Track frame <-> NED, against hand-worked cases (README, MAVLink, section "Frames")."""
+"""Track frame <-> NED, against hand-worked cases (docs/mavlink/bridge.md, "Frames")."""
 import math
 
 import pytest

@@ -130,7 +130,7 @@ def free_udp_port():
 def test_on_udpin_the_first_address_heard_is_the_vehicle_until_it_is_lost():
     """udpin: the vehicle's address is not configured, so the first one heard is pinned;
     after a loss the pin is released (a restarted vehicle may use a new port), which is
-    where signing is needed (README, "Bad values, strangers and signing")."""
+    where signing is needed (docs/mavlink/bridge.md, "Bad values, strangers and signing")."""
     port = free_udp_port()
     bridge = Bridge(BridgeConfig(connections=(f"udpin:127.0.0.1:{port}",), target_sysids=(2,),
                                  capture_radius_m=0.0, speed_mps=0.0, heartbeat_timeout_s=1.0))

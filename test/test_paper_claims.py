@@ -2,7 +2,7 @@
 
 gain = 1 - sigma_h(proposed) / sigma_h(benchmark), over the sweep points where both are
 feasible, with the certified global solver (exact objective) unless stated. Where a claim does
-not reproduce, the test pins what we measure instead, and README "Reproducing the paper" says so
+not reproduce, the test pins what we measure instead, and docs/science/paper.md says so
 plainly.
 """
 import math

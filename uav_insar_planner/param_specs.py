@@ -224,8 +224,8 @@ GCS_TIMEOUT_MIN_S = 2 * GCS_HEARTBEAT_PERIOD_S
 GCS_TIMEOUT_AUTO = -1.0
 GCS_TIMEOUT_DEFAULT_S = 5.0
 
-# The bridge's parameters (ROS descriptors, README table, BridgeConfig.validate). Defaults
-# pair with `uav-insar-vehicle --sysid 2..4 --listen udpin:127.0.0.1:14552/14562/14572`.
+# The bridge's parameters (ROS descriptors, the parameter reference, BridgeConfig.validate).
+# Defaults pair with `uav-insar-vehicle --sysid 2..4 --listen udpin:127.0.0.1:14552/14562/14572`.
 BRIDGE_SPECS = (
     ParamSpec("uav_id", int, -1, "fly this UAV only (0..2: one stack per UAV, one connection "
               "and one sysid, default that UAV's); -1: every UAV (one ground radio)", -1,

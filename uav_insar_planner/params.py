@@ -201,7 +201,7 @@ def unknown_parameter(name: str) -> str:
     label = _cut(name) if name.isidentifier() else shown(name)  # one line, always
     nodes = list(NODE_SPECS)
     return (f"{label}: unknown parameter{hint}; expected a parameter of "
-            f"{', '.join(nodes[:-1])} or {nodes[-1]} (the README's tables)")
+            f"{', '.join(nodes[:-1])} or {nodes[-1]} (the documentation's parameter reference)")
 
 
 def validate(values: Mapping[str, Any]) -> tuple[dict[str, Any], list[str]]:

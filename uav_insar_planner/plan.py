@@ -1,7 +1,7 @@
 """The planner's answer: formation, power schedules, metrics and the constraint report.
 
 A Plan is plain data (numpy arrays and floats, SI units). `to_dict()` gives the JSON shape the
-CLI prints and the README documents.
+CLI prints and docs/cli.md documents.
 """
 from __future__ import annotations
 
@@ -72,7 +72,7 @@ class Plan:
         return [k for k in UAVS if np.all(np.isfinite(self.formation[k]))]
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready dictionary (see README, 'uav-insar solve --json')."""
+        """JSON-ready dictionary (docs/cli.md, 'uav-insar solve --json')."""
 
         def num(v: float) -> float | None:
             return None if v is None or not np.isfinite(v) else float(v)

@@ -23,7 +23,7 @@ MAX_BASE_PORT = 65535 - PORT_STEP * (NUM_UAVS - 1)
 
 
 def build_parser() -> OneLineParser:
-    """Every option of `python -m uav_insar_planner.demo` (README: `make demo`)."""
+    """Every option of `python -m uav_insar_planner.demo` (docs/demo.md)."""
     parser = OneLineParser(prog="python -m uav_insar_planner.demo",
                            description="Fly one mission: the planner and one agent per UAV, "
                                        "and the MAVLink bridge and one vehicle per UAV.")

@@ -1,5 +1,6 @@
 """The bridge's configuration and its validation (one line per problem); its parameters are
-`param_specs.BRIDGE_SPECS` (the ROS descriptors, the README table and `validate` use them)."""
+`param_specs.BRIDGE_SPECS` (the ROS descriptors, the generated parameter reference and
+`validate` use them)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
