@@ -4,6 +4,9 @@ from glob import glob
 from setuptools import find_packages, setup
 
 package_name = "uav_insar_planner"
+# The Foxglove layout for the default swarm (report/foxglove_layout.py writes it): beside its
+# module for pip users, and in share/ for colcon's.
+FOXGLOVE_LAYOUT = "report/foxglove_layout.json"
 
 setup(
     name=package_name,
@@ -13,7 +16,9 @@ setup(
         ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
         ("share/" + package_name, ["package.xml"]),
         ("share/" + package_name + "/config", glob("config/*.yaml")),
+        ("share/" + package_name + "/foxglove", [package_name + "/" + FOXGLOVE_LAYOUT]),
     ],
+    package_data={package_name: [FOXGLOVE_LAYOUT]},
     python_requires=">=3.10",
     install_requires=[
         "numpy>=1.24",

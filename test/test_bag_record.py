@@ -8,64 +8,18 @@ import subprocess
 import sys
 from collections import Counter
 from pathlib import Path
-from types import SimpleNamespace
 
 import pytest
 import yaml
-from conftest import REPO, _next_domain
+from conftest import MISSION_SLOTS as SLOTS
+from conftest import REPO
 
+# the `mission` fixture (conftest.py) records the mission these tests read
 pytestmark = pytest.mark.timeout(120)
-SLOTS = 4
 UAV_TOPICS = ("pose", "achieved_rate", "offload")
 EXPECTED = ({"/formation", "/formation/power", "/formation/markers", "/formation/markers/flown",
              "/diagnostics"} | {f"/uav{k}/{t}" for k in range(3) for t in UAV_TOPICS})
 LATCHED = {"/formation", "/formation/power", "/formation/markers"}
-
-
-@pytest.fixture(scope="module")
-def mission(tmp_path_factory):
-    """A recorded mission of SLOTS slots at time_scale 40, and what a watcher saw of it."""
-    import rclpy
-    from visualization_msgs.msg import MarkerArray
-
-    from uav_insar_planner.demo.processes import ros_env, start_node, start_process, stop_nodes
-    from uav_insar_planner.demo.recorder import recorder_ready, stop_recorder
-    from uav_insar_planner.ros.tools.topic_watcher import TopicWatcher
-
-    domain = _next_domain()
-    env = dict(ros_env(domain), PYTHONPATH=str(REPO))
-    env.pop("ROS_STATIC_PEERS", None)
-    ctx = rclpy.Context()
-    rclpy.init(args=["test"], context=ctx, domain_id=domain)
-    w = TopicWatcher(ctx)
-    bag = tmp_path_factory.mktemp("bags") / "mission"
-    recorder = start_process([sys.executable, "-m", "uav_insar_planner.ros.tools.record", str(bag)],
-                             env)
-    nodes = [start_node("agent", ["-p", f"uav_id:={k}", "-p", "time_scale:=40.0", "-p",
-                                  f"num_slots:={SLOTS}", "-r", f"__node:=agent{k}"], env)
-             for k in range(3)]
-    try:
-        assert w.spin_until(lambda: w.agents_matched() and recorder_ready(w.node), 30.0,
-                            [*nodes, recorder]), "agents or recorder did not come up"
-        nodes.append(start_node("planner", ["-p", f"num_slots:={SLOTS}"], env))
-        # the latched plan reaches the watcher whenever its discovery of the planner ends,
-        # which may be after the agents flew their slots
-        assert w.spin_until(lambda: w.formations and all(len(w.rates[k]) >= SLOTS
-                                                         for k in range(3)), 60.0,
-                            nodes), "the mission did not complete"
-        # the planner draws the agents' poses once its discovery of them ends (seconds on a
-        # busy host): wait for its first flown markers, then a last second of them
-        flown = []
-        w.node.create_subscription(MarkerArray, "/formation/markers/flown", flown.append, 10)
-        assert w.spin_until(lambda: flown, 30.0, nodes), "no flown markers from the planner"
-        w.spin_until(lambda: False, 1.0)
-        code, line = stop_recorder(recorder)
-    finally:
-        stop_nodes(nodes + [recorder])
-    yield SimpleNamespace(bag=bag, code=code, line=line, formation=w.formations[0],
-                          rates={k: list(w.rates[k]) for k in range(3)})
-    w.destroy()
-    ctx.try_shutdown()
 
 
 def _mcap_file(bag: Path) -> Path:

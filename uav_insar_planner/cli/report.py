@@ -6,7 +6,8 @@ BAG is a rosbag2 folder (`uav-insar record`, `make demo`, `ros2 bag record`). Th
 (R_min, E_max, the radar, for sigma_h) is the one the mission flew with: Table I, or --params
 and --set as for `uav-insar solve`; num_slots is taken from the recorded plan. Prints
 report.recorded.report_table, writes report.recorded_plots.FILES into DIR (default BAG_report
-beside the bag) and names them. The parameters, DIR and the bag folder are checked first; then
+beside the bag) and names them, then the Foxglove layout to open the bag with
+(report/foxglove_layout.py). The parameters, DIR and the bag folder are checked first; then
 a progress bar on stderr follows the read. Exit codes (exit_codes.py): EXIT_OK written;
 EXIT_BAD_INPUT, one line on stderr and nothing written, for bad parameters, a DIR that cannot
 be written, no such bag, not a bag, a bag that cannot be read or holds no plan.
@@ -61,9 +62,14 @@ def main(args: argparse.Namespace) -> int:
         figures = mission_figures(record, params)
     except (BagError, ReportError) as exc:
         raise CommandFailed(str(exc), EXIT_BAD_INPUT) from None
+    from uav_insar_planner.report.foxglove_layout import SHIPPED
     from uav_insar_planner.report.recorded_plots import plot_report
 
     print(report_table(figures, params))
     for path in plot_report(figures, params, out):
         print(f"wrote {path}")
+    # the recorded plan has a row per UAV of swarm.py (mission_figures checks), so the
+    # shipped layout always fits it
+    storage = sorted(args.bag.glob("*.mcap")) or [args.bag]
+    print(f"Foxglove: open {storage[0]}, then import the layout {SHIPPED}")
     return EXIT_OK

@@ -32,6 +32,12 @@ def bridge_status_uav(name: str) -> int | None:
     rest = name[len(BRIDGE_STATUS_PREFIX):] if name.startswith(BRIDGE_STATUS_PREFIX) else ""
     return UAV_NAMES.index(rest) if rest in UAV_NAMES else None
 PLAN_STATUS_NAME = "planner: plan"
+POSITION_ERROR_KEY = "position_error_m"  # a uav_status value: |(x, z) - (x_k, z_k)| [m]
+
+
+def uav_status_name(k: int) -> str:
+    """The planner's status of UAV k on /diagnostics, e.g. `planner: uav1` (`uav_status`)."""
+    return f"planner: {uav_name(k)}"
 
 
 @dataclass
@@ -131,7 +137,7 @@ def uav_status(k: int, target_xz: tuple[float, float], rate_min_bps: tuple[float
     WARN when the last achieved rate misses R_min,k by more than the checker's tolerance;
     STALE until the agent has reported both a pose and a rate.
     """
-    name = f"planner: {UAV_NAMES[k]}"
+    name = uav_status_name(k)
     values = [("rate_min_bps", fmt(rate_min_bps[k])),
               ("target_x_m", fmt(target_xz[0])), ("target_z_m", fmt(target_xz[1]))]
     if report.position is None or report.rate_bps is None:
@@ -144,7 +150,7 @@ def uav_status(k: int, target_xz: tuple[float, float], rate_min_bps: tuple[float
         ("rate_margin_bps", fmt(margin)),
         ("min_rate_margin_bps", fmt(report.min_margin_bps)),
         ("slots_reported", str(report.rate_count)),
-        ("position_error_m", fmt(error)),
+        (POSITION_ERROR_KEY, fmt(error)),
         ("y_m", fmt(y)),
     ]
     text = (f"rate margin {margin / 1e6:+.4g} Mbit/s, position error {error:.3g} m")
