@@ -1,13 +1,5 @@
-"""The exit codes every command and node of the suite returns, in one table.
-
-    0  done (solved, recorded, stopped by SIGINT / SIGTERM)
-    1  failed: a crash or a dead worker thread (a bug, one line naming it, never a zombie
-       that looks alive), or a run that did not finish what it set out to do (the demo's
-       mission; for `uav-insar echo`, as for `ros2 topic echo`, nothing to echo: no publisher
-       or message within --timeout, a type it cannot import)
-    2  bad input: one line per problem, on stderr, before any work and with nothing written
-    3  infeasible: the scenario has no plan (the blocking constraints are named)
-"""
+"""The exit codes every command and node of the suite returns, in one table (`EXIT_CODE_TABLE`,
+which the documentation's exit-codes page is generated from)."""
 from __future__ import annotations
 
 EXIT_OK = 0
@@ -15,6 +7,20 @@ EXIT_CRASH = 1
 EXIT_BAD_INPUT = 2
 EXIT_INFEASIBLE = 3
 
+#: (name, code, meaning) of every exit code.
+EXIT_CODE_TABLE: tuple[tuple[str, int, str], ...] = (
+    ("EXIT_OK", EXIT_OK, "done: solved, written, recorded, or stopped by SIGINT / SIGTERM"),
+    ("EXIT_CRASH", EXIT_CRASH,
+     "failed: a crash or a dead worker thread (a bug, one line naming it, never a zombie that "
+     "looks alive), or a run that did not finish what it set out to do (the demo's mission; "
+     "for `uav-insar echo`, as for `ros2 topic echo`, nothing to echo: no publisher or "
+     "message within --timeout, a type it cannot import)"),
+    ("EXIT_BAD_INPUT", EXIT_BAD_INPUT,
+     "bad input: one line per problem, on stderr, before any work and with nothing written"),
+    ("EXIT_INFEASIBLE", EXIT_INFEASIBLE,
+     "infeasible: the scenario has no plan (the blocking constraints are named)"),
+)
+#: A few words per code, for one-line summaries.
 EXIT_CODES = {EXIT_OK: "done", EXIT_CRASH: "failed (crash, dead worker, not finished)",
               EXIT_BAD_INPUT: "bad input", EXIT_INFEASIBLE: "infeasible"}
 

@@ -42,17 +42,24 @@ class ParamSpec:
     why: str = ""  # why the range stops where it does (shown with a value outside it)
 
     def allowed(self) -> str:
+        """What the parameter allows, in words (node descriptors, errors, the docs)."""
         if self.choices:
             return "one of " + ", ".join(self.choices)
+        if self.kind is bool:
+            return "true or false"
+        if self.kind is list:
+            return "a list of " + ("strings" if isinstance(self.default[0], str) else "integers")
         what = {int: "an integer", float: "a finite number", str: "a string"}[self.kind]
         if self.length:
             what = f"a list of {self.length} finite numbers"
+        # %g would write an integer bound such as 2**31 - 1 as 2.14748e+09
+        num = (lambda v: str(int(v))) if self.kind is int else (lambda v: f"{v:g}")
         if self.lo is not None and self.hi is not None:
-            rng = (f"{'(' if self.lo_open else '['}{self.lo:g}, {self.hi:g}"
+            rng = (f"{'(' if self.lo_open else '['}{num(self.lo)}, {num(self.hi)}"
                    f"{')' if self.hi_open else ']'}")
             return f"{what} in {rng}"
         if self.lo is not None:
-            return f"{what} {'>' if self.lo_open else '>='} {self.lo:g}"
+            return f"{what} {'>' if self.lo_open else '>='} {num(self.lo)}"
         return what
 
 

@@ -34,18 +34,9 @@ from uav_insar_planner.param_specs import SUITE_PARAMETER_NAMES
 from uav_insar_planner.params import ParamSpec, check_value, shown, unknown_parameter
 
 
-def allowed(spec: ParamSpec) -> str:
-    """What `spec` allows, in words (params.ParamSpec.allowed, plus bool and lists)."""
-    if spec.kind is bool:
-        return "true or false"
-    if spec.kind is list:
-        return "a list of " + ("strings" if isinstance(spec.default[0], str) else "integers")
-    return spec.allowed()
-
-
 def descriptor_for(spec: ParamSpec, read_only: bool) -> ParameterDescriptor:
     """A ParameterDescriptor for `spec`: description with the allowed values, closed range."""
-    desc = ParameterDescriptor(description=f"{spec.description}; {allowed(spec)}",
+    desc = ParameterDescriptor(description=f"{spec.description}; {spec.allowed()}",
                                read_only=read_only)
     if spec.kind not in (int, float) or spec.length or (spec.lo is None and spec.hi is None):
         return desc
@@ -102,7 +93,7 @@ def declare_specs(node: Node, specs: Iterable[ParamSpec], read_only: bool = Fals
         except InvalidParameterValueException:
             value = _override(node, spec.name)
         problems.append(f"{spec.name}: value {shown(value)} is not allowed; expected "
-                        f"{allowed(spec)}")
+                        f"{spec.allowed()}")
         node.declare_parameter(spec.name, spec.default, desc, ignore_override=True)
     return problems
 

@@ -1,4 +1,7 @@
-"""The suite's ROS interface in one place: topic names, the frame id and the QoS of each.
+"""The suite's ROS interface in one place: topic names, the frame id and the QoS of each, and
+`INTERFACE`, the registry of every topic and service with its type, QoS, publishers and
+subscribers (the documentation's topics page is generated from it; test_topic_registry.py
+compares it with what the running nodes create).
 
 Names are relative (a namespace moves the whole swarm) except /diagnostics. A node of one UAV
 (an agent, a bridge given `uav_id`) may also run in that UAV's own namespace, as a stack on the
@@ -11,26 +14,22 @@ domain (ros/plan_gate.py).
 """
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
 
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+from uav_insar_planner.param_specs import GCS_HEARTBEAT_PERIOD_S
 from uav_insar_planner.swarm import UAVS, uav_name
 
 FRAME_ID = "insar_track"
-# A plan's identity (ros/plan_msgs.py): formation's header.stamp, and the same stamp with the
-# planner's name in the power message's third layout dimension, "plan /planner <sec>.<ns>".
-FORMATION = "formation"  # geometry_msgs/PoseArray, LATCHED; header.stamp = the plan's stamp
-POWER = "formation/power"  # std_msgs/Float64MultiArray [uav, slot, plan id], LATCHED
-# std_msgs/Header, LATCHED: stamp = the pass's wall-clock start (time.time(); not ROS time),
-# frame_id = the identity label of the plan it starts (ros/start_msgs.py)
+FORMATION = "formation"
+POWER = "formation/power"
 FORMATION_START = "formation/start"
-MARKERS = "formation/markers"  # visualization_msgs/MarkerArray, LATCHED: the plan (markers.py)
-FLOWN_MARKERS = "formation/markers/flown"  # visualization_msgs/MarkerArray, depth 10: agents
-DIAGNOSTICS = "/diagnostics"  # diagnostic_msgs/DiagnosticArray, depth 10
-REPLAN = "~/replan"  # std_srvs/Trigger
-# std_msgs/Header, GCS_HEARTBEAT_QOS, every param_specs.GCS_HEARTBEAT_PERIOD_S from the
-# planner: stamp = its wall clock, frame_id = its fully qualified name (ros/gcs_link.py).
+MARKERS = "formation/markers"
+FLOWN_MARKERS = "formation/markers/flown"
+DIAGNOSTICS = "/diagnostics"
+REPLAN = "~/replan"
 GCS_HEARTBEAT = "gcs/heartbeat"
 
 # /formation, /formation/power and uavK/plan: a late joiner (an agent started after the
@@ -48,15 +47,18 @@ GCS_HEARTBEAT_QOS = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
 # few seconds (a busy 2-core host, a planner restarting) still gets them all.
 RATE_DEPTH = 100
 DEPTH = 10
-
-
+#: The profiles INTERFACE names, under the names the nodes pass to rclpy (an int is rclpy's
+#: shorthand for a reliable, volatile, keep-last profile of that depth).
+QOS_PROFILES: dict[str, QoSProfile] = {
+    "LATCHED": LATCHED, "GCS_HEARTBEAT_QOS": GCS_HEARTBEAT_QOS,
+    "DEPTH": QoSProfile(depth=DEPTH), "RATE_DEPTH": QoSProfile(depth=RATE_DEPTH)}
 def pose(k: int) -> str:
-    """geometry_msgs/PoseStamped: agent k's actual position."""
+    """Agent k's actual position (INTERFACE has the type and QoS of this and the below)."""
     return f"{uav_name(k)}/pose"
 
 
 def achieved_rate(k: int) -> str:
-    """std_msgs/Float64: bit/s agent k achieved in the slot just flown (RATE_DEPTH)."""
+    """The bit/s agent k achieved in the slot just flown."""
     return f"{uav_name(k)}/achieved_rate"
 
 
@@ -65,27 +67,107 @@ OFFLOAD_FIELDS = ("slot", "power_w", "energy_used_j", "energy_left_j")
 
 
 def offload(k: int) -> str:
-    """std_msgs/Float64MultiArray: agent k's slot just started, data = OFFLOAD_FIELDS (power
-    applied [W], energy used so far this slot included and left of E_com^max [J]),
-    RATE_DEPTH."""
+    """Agent k's slot just started: data = OFFLOAD_FIELDS."""
     return f"{uav_name(k)}/offload"
 
 
 def flown_plan(k: int) -> str:
-    """std_msgs/String, LATCHED: the identity label of the plan agent k flies
-    ("plan /planner <sec>.<nanosec>"), published each time it adopts one (ros/plan_gate.py)."""
+    """The identity label of the plan agent k flies."""
     return f"{uav_name(k)}/plan"
 
 
 def mavlink_pose(k: int) -> str:
-    """geometry_msgs/PoseStamped: vehicle k's LOCAL_POSITION_NED in the track frame (bridge)."""
+    """Vehicle k's position from its autopilot, in the track frame."""
     return f"{uav_name(k)}/mavlink/pose"
 
 
 def mavlink_claim(k: int) -> str:
-    """std_msgs/String, LATCHED: "claim <bridge node> <sec>.<nanosec>", the bridge that flies
-    vehicle k and its wall-clock start (ros/claims.py: the oldest claim flies)."""
+    """The claims of the bridges that would fly vehicle k (ros/claims.py)."""
     return f"{uav_name(k)}/mavlink/claim"
+
+
+@dataclass(frozen=True)
+class TopicSpec:
+    """One topic or service of the suite. `name` as the nodes create it: relative, `~/` for
+    a node's own, `{k}` for the UAV of a per-UAV topic (`uav{k}/pose`); `msg_type` as ROS
+    spells it (`pkg/msg/Type`; `pkg/srv/Type` makes it a service); `qos` the key in
+    QOS_PROFILES of the publishers' profile (empty for a service); `publishers` and
+    `subscribers` the executables that create them (for a service: servers and clients)."""
+
+    name: str
+    msg_type: str
+    qos: str
+    publishers: tuple[str, ...]
+    subscribers: tuple[str, ...]
+    description: str
+
+    @property
+    def is_service(self) -> bool:
+        return "/srv/" in self.msg_type
+
+    @property
+    def per_uav(self) -> bool:
+        return "{k}" in self.name
+
+    def profile(self) -> QoSProfile | None:
+        """The publishers' QoS profile (None for a service)."""
+        return QOS_PROFILES[self.qos] if self.qos else None
+
+    def names(self, uavs: Iterable[int] = UAVS) -> tuple[str, ...]:
+        """The names as created: one per UAV of `uavs` for a per-UAV topic."""
+        return tuple(self.name.format(k=k) for k in uavs) if self.per_uav else (self.name,)
+
+
+_PLANNER, _AGENT, _BRIDGE = ("planner",), ("agent",), ("mavlink_bridge",)
+#: Every topic and service the suite's nodes create (the tools echo and record subscribe to
+#: whatever they are given; rclpy's own /rosout, /parameter_events and parameter services are
+#: not listed).
+INTERFACE: tuple[TopicSpec, ...] = (
+    TopicSpec(FORMATION, "geometry_msgs/msg/PoseArray", "LATCHED", _PLANNER,
+              _AGENT + _BRIDGE,
+              "the plan: poses[k] = target (x_k, 0, z_k) of UAV k, NaN x and z for a UAV not "
+              "flown; header.stamp = the plan's stamp, its identity (ros/plan_msgs.py). Only "
+              "feasible plans are published"),
+    TopicSpec(POWER, "std_msgs/msg/Float64MultiArray", "LATCHED", _PLANNER, _AGENT + _BRIDGE,
+              "P_com[k][n] [W], row-major; layout [uav, slot, plan id]: the third dimension's "
+              "label is the plan's identity, `plan /planner <sec>.<nanosec>`"),
+    TopicSpec(FORMATION_START, "std_msgs/msg/Header", "LATCHED", _PLANNER, _BRIDGE,
+              "the pass start, once every flown UAV's uav{k}/mavlink/pose is within "
+              "capture_radius_m of its start point: stamp = the wall-clock start (time.time(), "
+              "not ROS time), frame_id = the identity label of the plan it starts "
+              "(ros/start_msgs.py); a bridge follows it with pass_start planner"),
+    TopicSpec(MARKERS, "visualization_msgs/msg/MarkerArray", "LATCHED", _PLANNER, (),
+              "the plan for RViz / Foxglove in frame insar_track (ros/markers.py)"),
+    TopicSpec(FLOWN_MARKERS, "visualization_msgs/msg/MarkerArray", "DEPTH", _PLANNER, (),
+              "each agent's latest uav{k}/pose and the path it flew (ros/markers.py)"),
+    TopicSpec(GCS_HEARTBEAT, "std_msgs/msg/Header", "GCS_HEARTBEAT_QOS", _PLANNER, _BRIDGE,
+              f"the ground station is alive, every {GCS_HEARTBEAT_PERIOD_S:g} s: stamp = the "
+              "planner's wall clock, frame_id = its full node name (ros/gcs_link.py); a bridge "
+              "with gcs_timeout_s holds without it"),
+    TopicSpec(DIAGNOSTICS, "diagnostic_msgs/msg/DiagnosticArray", "DEPTH", _PLANNER + _BRIDGE,
+              _PLANNER, "the planner's plan, formation publishers, swarm and per-UAV statuses; "
+              "the bridge's per-vehicle link statuses, which the planner's swarm watch reads"),
+    TopicSpec("uav{k}/pose", "geometry_msgs/msg/PoseStamped", "DEPTH", _AGENT, _PLANNER,
+              "agent k's actual position, with its disturbance"),
+    TopicSpec("uav{k}/achieved_rate", "std_msgs/msg/Float64", "RATE_DEPTH", _AGENT, _PLANNER,
+              "bit/s agent k achieved in the slot just flown, one message per slot"),
+    TopicSpec("uav{k}/offload", "std_msgs/msg/Float64MultiArray", "RATE_DEPTH", _AGENT,
+              _PLANNER, f"agent k's slot just started, data = [{', '.join(OFFLOAD_FIELDS)}]: "
+              "power applied [W], energy used so far, this slot included, and left of "
+              "E_com^max [J]; one message per slot"),
+    TopicSpec("uav{k}/plan", "std_msgs/msg/String", "LATCHED", _AGENT, _PLANNER,
+              "the identity label of the plan agent k flies (`plan /planner <sec>.<nanosec>`), "
+              "each time it adopts one (ros/plan_gate.py)"),
+    TopicSpec("uav{k}/mavlink/pose", "geometry_msgs/msg/PoseStamped", "DEPTH", _BRIDGE,
+              _PLANNER + _AGENT,
+              "vehicle k's LOCAL_POSITION_NED in the track frame; the planner's pass start "
+              "reads it, and an agent with position_source autopilot"),
+    TopicSpec("uav{k}/mavlink/claim", "std_msgs/msg/String", "LATCHED", _BRIDGE, _BRIDGE,
+              "`claim <bridge node> <sec>.<nanosec>`: a bridge that would fly vehicle k and its "
+              "wall-clock start; the oldest claim flies (ros/claims.py)"),
+    TopicSpec(REPLAN, "std_srvs/srv/Trigger", "", _PLANNER, (),
+              "solve again with the current parameters"),
+)
 
 
 def swarm_namespace(node_namespace: str, k: int | None) -> str:

@@ -1,0 +1,150 @@
+"""The documentation's generated reference pages (docs/_hooks/reference.py) say what the code
+holds: every parameter of config/params.yaml and of every node, every topic of the registry,
+every command and every exit code. No ROS graph needed; the strict MkDocs build runs where
+MkDocs is installed."""
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from uav_insar_planner import exit_codes
+from uav_insar_planner.cli import PROG, build_parser, verbs
+from uav_insar_planner.param_specs import NODE_SPECS, PARAM_SPECS
+from uav_insar_planner.params_file import read_params_file, yaml_load
+from uav_insar_planner.ros.topics import INTERFACE
+
+REPO = Path(__file__).resolve().parent.parent
+HOOKS = REPO / "docs" / "_hooks"
+sys.path.insert(0, str(HOOKS))  # as MkDocs loads the hook: its folder on the path
+
+import reference  # noqa: E402
+import reference_commands  # noqa: E402
+import reference_md  # noqa: E402
+import reference_parameters  # noqa: E402
+import reference_topics  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def pages() -> dict[str, str]:
+    return {path: build() for path, build in reference.PAGES.items()}
+
+
+def test_the_pages_are_the_four_of_the_nav(pages):
+    nav = (REPO / "mkdocs.yml").read_text()
+    assert all(f": {path}\n" in nav for path in pages)
+    assert set(pages) == {f"reference/{n}.md" for n in
+                          ("parameters", "topics", "commands", "exit-codes")}
+    assert not any((REPO / "docs" / path).exists() for path in pages), "generated, not files"
+
+
+def test_every_parameter_of_the_params_file_is_on_the_page_with_its_value(pages):
+    page = pages["reference/parameters.md"]
+    values = read_params_file(REPO / "config" / "params.yaml")
+    assert set(values) == {s.name for s in PARAM_SPECS}
+    for name, value in values.items():
+        row = re.search(rf'^\| <a id="{name}"></a>`{name}` \| [^|]+ \| `([^`]+)` \|', page, re.M)
+        assert row, name
+        assert yaml_load(f"v: {row.group(1)}") == {"v": value}, name
+
+
+def test_every_parameter_of_every_node_has_its_row_and_anchor(pages):
+    page = pages["reference/parameters.md"]
+    where = reference_parameters.anchors()
+    specs = reference_parameters.every_spec()
+    assert {id(s) for s in specs} <= set(where), "a node's parameter in no group"
+    assert len(set(where.values())) == len(where), "anchors are unique"
+    for spec in specs:
+        row = next(line for line in page.splitlines()
+                   if line.startswith(f'| <a id="{where[id(spec)]}"></a>'))
+        cells = [c.strip() for c in re.split(r"(?<!\\)\|", row)[1:-1]]
+        assert cells[1] == reference_parameters.ros_type(spec)
+        assert yaml_load(f"v: {cells[2].strip('`')}") == {"v": spec.default}, spec.name
+        assert cells[4].startswith(reference_md.text(spec.allowed())), spec.name
+        assert all(f"[`{node}`]" in cells[5] for node in NODE_SPECS if spec in NODE_SPECS[node])
+
+
+def test_units_come_out_of_the_descriptions():
+    found = {s.name: reference_parameters.unit_and_description(s)
+             for s in reference_parameters.every_spec()}
+    assert found["slot_duration_s"] == ("s", "delta_t, slot duration")
+    assert found["z_min_m"] == ("m", "z_min, lowest flying altitude (C1)")
+    assert found["max_speed_mps"] == ("m/s", "speed limit, at least speed_mps")
+    assert found["num_slots"] == ("", "N, number of time slots")
+    assert found["offloading"][0] == ""  # P_com[k][n] is no unit
+
+
+@pytest.mark.parametrize("value", [0.0, -1.0, 4.3, 1e9, 2.5e9, 1e-4, 1e-300, 123456.789, 80,
+                                   True, "", "off", "a b", "udpin:1.2.3.4:5", [1.0, -2.0],
+                                   ["udpout:127.0.0.1:14552"], [2, 3, 4]])
+def test_defaults_are_written_as_a_params_file_reads_them(value):
+    assert yaml_load(f"v: {reference_parameters.yaml_value(value)}") == {"v": value}
+
+
+def test_every_registry_topic_and_service_is_on_the_page(pages):
+    page = pages["reference/topics.md"]
+    for spec in INTERFACE:
+        shown = reference_topics.shown_name(spec)
+        start = f'| <a id="{reference_topics.topic_anchor(spec)}"></a>`{shown}`'
+        row = next((line for line in page.splitlines() if line.startswith(start)), None)
+        assert row, shown
+        assert f"`{spec.msg_type}`" in row
+        if not spec.is_service:
+            assert f"(`{spec.qos}`)" in row
+
+
+def test_every_command_has_its_help_on_the_page(pages):
+    page = pages["reference/commands.md"]
+    top, verb_parsers = build_parser(verbs())
+    assert reference_commands.help_text(top).rstrip() in page
+    for name, parser in verb_parsers.items():
+        assert f"### `{PROG} {name}`" in page
+        assert reference_commands.help_text(parser).rstrip() in page, name
+    for title in (reference_commands.DEMO, "uav-insar-vehicle", *NODE_SPECS):
+        assert f"### `{title}`" in page
+    assert "usage: uav-insar-vehicle" in page and "usage: python -m uav_insar_planner.demo" in page
+
+
+def test_every_exit_code_is_on_the_page(pages):
+    page = pages["reference/exit-codes.md"]
+    constants = {n: v for n, v in vars(exit_codes).items() if re.fullmatch(r"EXIT_[A-Z_]+", n)
+                 and isinstance(v, int)}
+    assert {(n, c) for n, c, _ in exit_codes.EXIT_CODE_TABLE} == set(constants.items())
+    for name, code, meaning in exit_codes.EXIT_CODE_TABLE:
+        assert f'| <a id="exit-{code}"></a>{code} | `{name}` | {reference_md.text(meaning)} |' \
+            in page
+
+
+def test_headings_get_the_ids_python_markdown_gives_them():
+    toc = pytest.importorskip("markdown.extensions.toc")
+    for title in ("`uav-insar plot-formation`", "python -m uav_insar_planner.demo",
+                  "mavlink_bridge", "Agent, MAVLink mode"):
+        assert reference_md.heading_id(title) == toc.slugify(title.replace("`", ""), "-")
+
+
+def test_cells_escape_what_markdown_would_take_for_markup():
+    assert reference_md.text("a | b <x> P_com[k] `c|<d>`") == r"a \| b &lt;x> P\_com\[k\] `c|<d>`"
+    assert reference_md.text("odd ` tick") == r"odd \` tick"
+
+
+def test_the_reference_pages_build_strictly(tmp_path):
+    """MkDocs builds the four pages with every link and anchor valid, warnings as errors."""
+    pytest.importorskip("mkdocs")
+    pytest.importorskip("material")
+    config = (REPO / "mkdocs.yml").read_text()
+    config = config[:config.index("\nnav:")] + (
+        "\nnav:\n" + "".join(f"  - {path}\n" for path in reference.PAGES))
+    config = (config.replace("docs_dir: docs", f"docs_dir: {REPO / 'docs'}")
+              .replace("site_dir: site", f"site_dir: {tmp_path / 'site'}")
+              .replace("- docs/_hooks/", f"- {HOOKS}/"))
+    (tmp_path / "mkdocs.yml").write_text(config)
+    proc = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "-f",
+                           str(tmp_path / "mkdocs.yml")], capture_output=True, text=True,
+                          timeout=120, env={"NO_MKDOCS_2_WARNING": "1", "PATH": ""})
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert "WARNING" not in proc.stderr
+    html = (tmp_path / "site" / "reference" / "parameters" / "index.html").read_text()
+    assert 'id="num_slots"' in html and 'id="bridge-uav_id"' in html
