@@ -1,11 +1,10 @@
 """The documentation's generated reference pages (docs/_hooks/reference.py) say what the code
 holds: every parameter of config/params.yaml and of every node, every topic of the registry,
-every command and every exit code. No ROS graph needed; the strict MkDocs build runs where
-MkDocs is installed."""
+every command and every exit code. No ROS graph needed; the strict build of the whole site is
+test_docs.py's."""
 from __future__ import annotations
 
 import re
-import subprocess
 import sys
 from pathlib import Path
 
@@ -128,23 +127,3 @@ def test_headings_get_the_ids_python_markdown_gives_them():
 def test_cells_escape_what_markdown_would_take_for_markup():
     assert reference_md.text("a | b <x> P_com[k] `c|<d>`") == r"a \| b &lt;x> P\_com\[k\] `c|<d>`"
     assert reference_md.text("odd ` tick") == r"odd \` tick"
-
-
-def test_the_reference_pages_build_strictly(tmp_path):
-    """MkDocs builds the four pages with every link and anchor valid, warnings as errors."""
-    pytest.importorskip("mkdocs")
-    pytest.importorskip("material")
-    config = (REPO / "mkdocs.yml").read_text()
-    config = config[:config.index("\nnav:")] + (
-        "\nnav:\n" + "".join(f"  - {path}\n" for path in reference.PAGES))
-    config = (config.replace("docs_dir: docs", f"docs_dir: {REPO / 'docs'}")
-              .replace("site_dir: site", f"site_dir: {tmp_path / 'site'}")
-              .replace("- docs/_hooks/", f"- {HOOKS}/"))
-    (tmp_path / "mkdocs.yml").write_text(config)
-    proc = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "-f",
-                           str(tmp_path / "mkdocs.yml")], capture_output=True, text=True,
-                          timeout=120, env={"NO_MKDOCS_2_WARNING": "1", "PATH": ""})
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    assert "WARNING" not in proc.stderr
-    html = (tmp_path / "site" / "reference" / "parameters" / "index.html").read_text()
-    assert 'id="num_slots"' in html and 'id="bridge-uav_id"' in html
