@@ -31,6 +31,9 @@ setup(
         # uav-insar record writes and uav-insar report reads rosbag2 bags with it; the report
         # runs without ROS, so this is no `ros` extra (pure Python, no ROS packages pulled).
         "rosbags>=0.11",
+        # uav-insar record writes the bag's MCAP file with it (bag/writer.py): rosbags' writer
+        # cannot write what rosbag2 Jazzy writes (topic_type_hash, header, metadata records)
+        "mcap>=1.1",
     ],
     extras_require={
         # ROS 2 Jazzy from PyPI wheels (x86_64 Linux, CPython 3.10-3.13). Not for a sourced

@@ -59,6 +59,7 @@ def test_mcap_and_its_ros2_decoder_read_every_message(mission):
 
     counts: Counter[str] = Counter()
     decoded: dict[str, list] = {}
+    in_flight: list[int] = []
     with _mcap_file(mission.bag).open("rb") as f:
         reader = make_reader(f, decoder_factories=[DecoderFactory()])
         summary = reader.get_summary()
@@ -67,9 +68,13 @@ def test_mcap_and_its_ros2_decoder_read_every_message(mission):
         by_topic = {c.topic: c for c in summary.channels.values()}
         qos = yaml.safe_load(by_topic["/formation"].metadata["offered_qos_profiles"])
         assert qos[0]["durability"] == "transient_local"
-        for _, channel, _, msg in reader.iter_decoded_messages():
+        for _, channel, message, msg in reader.iter_decoded_messages():
+            # as rosbag2's recorder: log time the receive time, publish time the send time
+            assert 0 < message.publish_time <= message.log_time, channel.topic
+            in_flight.append(message.log_time - message.publish_time)
             counts[channel.topic] += 1
             decoded.setdefault(channel.topic, []).append(msg)
+    assert max(in_flight) > 0  # the send times are the publishers', not the receive times
     meta = yaml.safe_load((mission.bag / "metadata.yaml").read_text())
     expected_counts = {t["topic_metadata"]["name"]: t["message_count"] for t in
                        meta["rosbag2_bagfile_information"]["topics_with_message_count"]}

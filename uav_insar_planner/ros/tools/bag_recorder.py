@@ -7,9 +7,10 @@ ones, or only those given with --topics (names resolved as ros2 resolves them). 
 with raw=True, so it gets the serialized CDR bytes rclpy received, and matches the publishers'
 QoS as `ros2 bag record` does: reliable only if every publisher is, transient_local only if
 every publisher is (a latched topic such as /formation is recorded even when the recorder
-starts after its publisher), depth RECORD_DEPTH. Each message is written with its receive time
-(bag.writer.McapBagWriter: OUT/metadata.yaml + OUT/OUT_0.mcap, the publishers' QoS as the
-topic's offered_qos_profiles, so `ros2 bag play` latches /formation and /formation/power again).
+starts after its publisher), depth RECORD_DEPTH. Each message is written with its receive and
+send times (bag.writer.McapBagWriter: OUT/metadata.yaml + OUT/OUT_0.mcap as rosbag2 Jazzy
+writes them, the publishers' QoS as the topic's offered_qos_profiles, so `ros2 bag play`
+latches /formation and /formation/power again).
 """
 from __future__ import annotations
 
@@ -107,7 +108,9 @@ class BagRecorder(Node):
 
     def _writer(self, topic: str) -> Callable[[bytes, dict], None]:
         def write(data: bytes, info: dict) -> None:
-            self.bag.write(topic, info["received_timestamp"], data)
+            # as rosbag2's recorder: receive time, and the publisher's send time (recorder.cpp)
+            self.bag.write(topic, info["received_timestamp"], data,
+                           info.get("source_timestamp") or None)
         return write
 
     def _skip(self, topic: str, why: str) -> None:
