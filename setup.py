@@ -47,7 +47,11 @@ setup(
         "test": ["pytest>=7", "pytest-timeout>=2", "ruff>=0.4", "scipy>=1.10", "mavsdk==3.17.4",
                  "hypothesis>=6",
                  # independent readers of the recorded bags (test/test_bag_record.py)
-                 "mcap>=1.1", "mcap-ros2-support>=0.5"],
+                 "mcap>=1.1", "mcap-ros2-support>=0.5",
+                 # `--scheduler` of sweep / map on a local Dask cluster (test/test_param_map.py)
+                 "dask[distributed]>=2024.1"],
+        # `uav-insar sweep/map --scheduler ADDRESS`: the solves on a Dask cluster's workers
+        "cluster": ["dask[distributed]>=2024.1"],
         # the documentation site (mkdocs.yml); its strict build is part of the tests
         "docs": ["mkdocs>=1.6,<2", "mkdocs-material>=9.5,<10"],
     },

@@ -9,8 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
-from uav_insar_planner.params import SPEC_BY_NAME, ParamError, Params
+from uav_insar_planner.params import SPEC_BY_NAME, ParamError, Params, shown
 from uav_insar_planner.solver import solve
+from uav_insar_planner.study.executors import Runner, run_serial
 
 _INDEXED = re.compile(r"^(?P<name>[a-z_0-9]+)(?:\[(?P<index>\d+)\])?$")
 
@@ -38,18 +39,19 @@ class SweepRow:
     mc_ambiguity: float = float("nan")
 
 
-def parse_sweep_name(text: str) -> tuple[str, int | None]:
-    """`h_amb_min_m` or an element of a list parameter, `rate_min_mbps[1]`."""
+def parse_sweep_name(text: str, field: str = "sweep NAME") -> tuple[str, int | None]:
+    """`h_amb_min_m` or an element of a list parameter, `rate_min_mbps[1]`; `field` names the
+    argument in the error line."""
     m = _INDEXED.match(text)
     spec = SPEC_BY_NAME.get(m.group("name")) if m else None
     if spec is None or spec.kind is str:
-        raise ParamError([f"sweep NAME: value {text!r} is not allowed; expected a numeric "
+        raise ParamError([f"{field}: value {shown(text)} is not allowed; expected a numeric "
                           "parameter of config/params.yaml, e.g. h_amb_min_m or "
                           "rate_min_mbps[1]"])
     index = m.group("index")
     if (index is None) != (spec.length == 0) or (index is not None and
                                                  int(index) >= spec.length):
-        raise ParamError([f"sweep NAME: value {text!r} is not allowed; {spec.name} "
+        raise ParamError([f"{field}: value {shown(text)} is not allowed; {spec.name} "
                           + (f"needs an index 0..{spec.length - 1}" if spec.length
                              else "takes no index")])
     return spec.name, None if index is None else int(index)
@@ -67,30 +69,40 @@ def with_value(params: Params, name: str, index: int | None, value: float) -> Pa
 def run_sweep(params: Params, name: str, values: Iterable[float], schemes: Sequence[str],
               objective: str | None = None, solver: str | None = None, band: bool = False,
               progress: Callable[[], None] | None = None,
-              montecarlo: int = 0) -> list[SweepRow]:
-    """Solve every (value, scheme); `progress` is called once per solve. `montecarlo` > 0:
-    that many Monte-Carlo samples per pair (seed 0) for each feasible plan."""
+              montecarlo: int = 0, run: Runner = run_serial) -> list[SweepRow]:
+    """Solve every (value, scheme), in that order; `progress` is called once per solve.
+    `montecarlo` > 0: that many Monte-Carlo samples per pair (seed 0) for each feasible plan.
+    `run` (study/executors.py) runs the solves: here by default, or on worker processes."""
     base, index = parse_sweep_name(name)
-    rows = []
-    for value in values:
-        p = with_value(params, base, index, float(value))
-        for scheme in schemes:
-            plan = solve(p, scheme=scheme, objective=objective, solver=solver)
-            bound_opt = lo = hi = float("nan")
-            if band and plan.feasible:
-                from uav_insar_planner.solver.global_opt.band import bound_minimizer_band
+    points = [(with_value(params, base, index, float(v)), float(v)) for v in values]
+    return run(solve_point, point_tasks(points, schemes, objective, solver, band, montecarlo),
+               progress)
 
-                bound_opt = solve(p, scheme=scheme, objective="bound",
-                                  solver="global").sigma_h_bound_m
-                lo, hi = bound_minimizer_band(p, scheme)
-            rows.append(SweepRow(float(value), scheme, plan.feasible, plan.sigma_h_m,
-                                 plan.sigma_h_bound_m, bound_opt, lo, hi, plan.optimality_gap,
-                                 plan.solve_time_s, " ".join(plan.blocking_constraints),
-                                 *(_montecarlo(p, plan, montecarlo) if montecarlo
-                                   and plan.feasible else ())))
-            if progress:
-                progress()
-    return rows
+
+def point_tasks(points: Sequence[tuple[Params, float]], schemes: Sequence[str],
+                objective: str | None, solver: str | None, band: bool,
+                montecarlo: int) -> list[tuple]:
+    """The arguments of solve_point for each (Params, value) of `points` and each scheme."""
+    return [(p, value, scheme, objective, solver, band, montecarlo)
+            for p, value in points for scheme in schemes]
+
+
+def solve_point(p: Params, value: float, scheme: str, objective: str | None,
+                solver: str | None, band: bool, montecarlo: int) -> SweepRow:
+    """One row: `p` (already at `value`) solved for `scheme` (a task of any runner)."""
+    plan = solve(p, scheme=scheme, objective=objective, solver=solver)
+    bound_opt = lo = hi = float("nan")
+    if band and plan.feasible:
+        from uav_insar_planner.solver.global_opt.band import bound_minimizer_band
+
+        bound_opt = solve(p, scheme=scheme, objective="bound",
+                          solver="global").sigma_h_bound_m
+        lo, hi = bound_minimizer_band(p, scheme)
+    return SweepRow(value, scheme, plan.feasible, plan.sigma_h_m, plan.sigma_h_bound_m,
+                    bound_opt, lo, hi, plan.optimality_gap, plan.solve_time_s,
+                    " ".join(plan.blocking_constraints),
+                    *(_montecarlo(p, plan, montecarlo) if montecarlo and plan.feasible
+                      else ()))
 
 
 def _montecarlo(p: Params, plan, samples: int) -> tuple[float, float]:
@@ -101,11 +113,17 @@ def _montecarlo(p: Params, plan, samples: int) -> tuple[float, float]:
     return top["sigma_h_mc_m"]["value"], top["ambiguity_rate"]["value"]
 
 
+def csv_fields(rows: Sequence[SweepRow]) -> list[str]:
+    """The CSV columns of `rows`: every field, the Monte-Carlo ones only when they were run."""
+    fields = list(asdict(rows[0]).keys()) if rows else ["value"]
+    if not any(np.isfinite(r.mc_sigma_h_m) for r in rows):  # the default columns only
+        fields = [f for f in fields if not f.startswith("mc_")]
+    return fields
+
+
 def write_csv(rows: Sequence[SweepRow], path: str | Path, name: str) -> None:
+    fields = csv_fields(rows)
     with open(path, "w", newline="") as fh:
-        fields = list(asdict(rows[0]).keys()) if rows else ["value"]
-        if not any(np.isfinite(r.mc_sigma_h_m) for r in rows):  # the default columns only
-            fields = [f for f in fields if not f.startswith("mc_")]
         writer = csv.DictWriter(fh, fieldnames=fields)
         fh.write(f"# sweep of {name}\n")
         writer.writeheader()

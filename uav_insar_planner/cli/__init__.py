@@ -30,6 +30,7 @@ def verbs() -> dict[str, ModuleType]:
     from uav_insar_planner.cli import (
         echo,
         montecarlo,
+        param_map,
         plot_formation,
         record,
         report,
@@ -37,7 +38,7 @@ def verbs() -> dict[str, ModuleType]:
         sweep,
     )
 
-    return {"solve": solve, "sweep": sweep, "plot-formation": plot_formation,
+    return {"solve": solve, "sweep": sweep, "map": param_map, "plot-formation": plot_formation,
             "montecarlo": montecarlo, "echo": echo, "record": record, "report": report}
 
 

@@ -11,10 +11,15 @@ import os
 import shutil
 import tempfile
 from pathlib import Path
+from urllib.parse import urlsplit
 
-from uav_insar_planner.params import ParamError, shown
+from uav_insar_planner.params import SCHEMES, ParamError, shown
+from uav_insar_planner.study.executors import jobs_max
 
 SWEEP_COUNT_MAX = 10_000  # evenly spaced values per sweep; each costs a solve per scheme
+# Solves of a map (COUNT1 x COUNT2 x schemes): as many as the largest sweep may ask for.
+MAP_SOLVES_MAX = SWEEP_COUNT_MAX * len(SCHEMES)
+SCHEDULER_SCHEMES = ("tcp", "tls", "ws", "wss")  # the Dask transports a scheduler listens on
 
 
 def sweep_count(text: str) -> int:
@@ -25,6 +30,34 @@ def sweep_count(text: str) -> int:
         raise argparse.ArgumentTypeError(f"value {shown(text)} is not allowed; expected an "
                                          f"integer in 1..{SWEEP_COUNT_MAX}")
     return int(stripped)
+
+
+def jobs_count(text: str) -> int:
+    """argparse type of --jobs: an integer in 1..executors.jobs_max() (per core, a bound)."""
+    stripped, most = text.strip(), jobs_max()
+    if not (stripped.lstrip("+-").isdigit() and len(stripped) <= 12
+            and 1 <= int(stripped) <= most):
+        raise argparse.ArgumentTypeError(f"value {shown(text)} is not allowed; expected an "
+                                         f"integer in 1..{most} (worker processes, at most "
+                                         f"{most // (os.cpu_count() or 1)} per core here)")
+    return int(stripped)
+
+
+def scheduler_address(text: str) -> str:
+    """argparse type of --scheduler: SCHEME://HOST:PORT of a Dask scheduler."""
+    try:
+        parts = urlsplit(text)
+        ok = (parts.scheme in SCHEDULER_SCHEMES and bool(parts.hostname)
+              and parts.port is not None and parts.port > 0 and parts.path in ("", "/")
+              and not parts.query and not parts.fragment)
+    except ValueError:  # a port out of 0..65535 or not a number
+        ok = False
+    if not ok:
+        raise argparse.ArgumentTypeError(
+            f"value {shown(text)} is not allowed; expected SCHEME://HOST:PORT of a Dask "
+            f"scheduler, SCHEME one of {', '.join(SCHEDULER_SCHEMES)}, e.g. "
+            "tcp://127.0.0.1:8786")
+    return text
 
 
 def finite_float(text: str) -> float:

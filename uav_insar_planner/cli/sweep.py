@@ -1,18 +1,20 @@
 """`uav-insar sweep NAME START STOP COUNT`: solve along one parameter for several schemes.
 
 Prints one row per (value, scheme); `--csv` and `--plot` (the paper's Figures 3/4) write them.
-Every value, `--mc-samples` and both output paths are checked before the first solve. Time:
-COUNT (at most checks.SWEEP_COUNT_MAX) times the schemes solves, each with a Monte-Carlo of at
-most cli/montecarlo.MAX_DRAWS draws per pair with `--montecarlo`. Exit codes (exit_codes.py):
-EXIT_OK (an infeasible value is a row, not a failure), EXIT_BAD_INPUT, EXIT_CRASH when a solver
-fails.
+Every value, `--mc-samples`, both output paths and where to solve are checked before the first
+solve. Time: COUNT (at most checks.SWEEP_COUNT_MAX) times the schemes solves, each with a
+Monte-Carlo of at most cli/montecarlo.MAX_DRAWS draws per pair with `--montecarlo`, on `--jobs`
+worker processes (default one per core) or a Dask cluster's workers (`--scheduler`;
+cli/execution.py), rows in the same order and with the same values whichever. Exit codes
+(exit_codes.py): EXIT_OK (an infeasible value is a row, not a failure), EXIT_BAD_INPUT,
+EXIT_CRASH when a solver fails.
 """
 from __future__ import annotations
 
 import argparse
-import sys
 
 from uav_insar_planner.cli.checks import check_output_path, finite_float, sweep_count
+from uav_insar_planner.cli.execution import add_execution_arguments, solving
 from uav_insar_planner.cli.scenario import add_scenario_arguments, scenario_params
 from uav_insar_planner.exit_codes import EXIT_OK
 from uav_insar_planner.params import SCHEMES
@@ -40,12 +42,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="samples per pair for --montecarlo (default 100000)")
     parser.add_argument("--csv", metavar="FILE", help="write one row per (value, scheme)")
     parser.add_argument("--plot", metavar="FILE.png", help="plot as the paper's Figures 3/4")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    add_execution_arguments(parser)
 
 
 def main(args: argparse.Namespace) -> int:
     import numpy as np
-    from tqdm import tqdm
 
     from uav_insar_planner.sweep import parse_sweep_name, run_sweep, with_value, write_csv
 
@@ -63,11 +64,9 @@ def main(args: argparse.Namespace) -> int:
         from uav_insar_planner.cli.montecarlo import parse_samples
 
         mc = parse_samples("--mc-samples", args.mc_samples, looks)
-    bar = tqdm(total=len(values) * len(args.schemes), unit="solve", file=sys.stderr,
-               disable=args.no_progress)
-    rows = run_sweep(params, args.name, values, args.schemes, band=args.band,
-                     progress=bar.update, montecarlo=mc)
-    bar.close()
+    with solving(args, len(values) * len(args.schemes)) as (run, bar):
+        rows = run_sweep(params, args.name, values, args.schemes, band=args.band,
+                         progress=bar.update, montecarlo=mc, run=run)
     _print_rows(rows, args, mc)
     if args.csv:
         write_csv(rows, args.csv, args.name)

@@ -1,4 +1,5 @@
-"""Figures: sweeps in the style of the paper's Figures 3 and 4, and the across-track formation.
+"""Figures: sweeps in the style of the paper's Figures 3 and 4, parameter maps, and the
+across-track formation.
 
 Drawn with matplotlib's Agg back end, so it works without a screen (as recorded_plots.py,
 the mission report's PNGs; cli/checks.py asks matplotlib only which file types it saves).
@@ -20,6 +21,7 @@ from uav_insar_planner.plan import Plan  # noqa: E402
 from uav_insar_planner.scene import swath_edges  # noqa: E402
 from uav_insar_planner.solver import rays  # noqa: E402
 from uav_insar_planner.solver.power import station_radius_sq  # noqa: E402
+from uav_insar_planner.study.grid import MapRow  # noqa: E402
 from uav_insar_planner.swarm import UAVS  # noqa: E402
 from uav_insar_planner.sweep import SweepRow  # noqa: E402
 
@@ -66,6 +68,47 @@ def plot_sweep(rows: Sequence[SweepRow], name: str, path: str | Path) -> None:
     ax.legend(fontsize=8)
     ax.set_title("Height error of the fused DEM (red: a scheme is infeasible)")
     fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def _cell_edges(values: Sequence[float]) -> np.ndarray:
+    v = np.asarray(values, dtype=float)
+    if len(v) == 1:
+        return np.array([v[0] - 0.5, v[0] + 0.5])
+    mid = (v[1:] + v[:-1]) / 2
+    return np.concatenate([[2 * v[0] - mid[0]], mid, [2 * v[-1] - mid[-1]]])
+
+
+def plot_map(rows: Sequence[MapRow], name1: str, name2: str, path: str | Path) -> None:
+    """A heat map of sigma_h over (value1, value2) per scheme, one colour scale for all;
+    cells where the scheme is infeasible red, as the paper's red region."""
+    schemes = list(dict.fromkeys(r.point.scheme for r in rows))
+    v1, v2 = sorted({r.value1 for r in rows}), sorted({r.value2 for r in rows})
+    grids = {s: np.full((len(v2), len(v1)), np.nan) for s in schemes}
+    for r in rows:
+        if r.point.feasible:
+            grids[r.point.scheme][v2.index(r.value2), v1.index(r.value1)] = r.point.sigma_h_m
+    finite = np.concatenate([g[np.isfinite(g)] for g in grids.values()])
+    norm = (matplotlib.colors.Normalize(finite.min(), finite.max()) if finite.size
+            else matplotlib.colors.Normalize(0.0, 1.0))
+    cmap = plt.get_cmap("viridis").copy()
+    cmap.set_bad("tab:red")
+    ncols = min(len(schemes), 2)
+    nrows = -(-len(schemes) // ncols)
+    fig, axes = plt.subplots(nrows, ncols, figsize=(5.2 * ncols, 4 * nrows), squeeze=False,
+                             layout="constrained")
+    for ax, scheme in zip(axes.flat, schemes, strict=False):
+        grid = grids[scheme]
+        mesh = ax.pcolormesh(_cell_edges(v1), _cell_edges(v2), np.ma.masked_invalid(grid),
+                             cmap=cmap, norm=norm)
+        ax.set_title(f"{SCHEME_STYLE.get(scheme, (0, 0, scheme))[2]}: "
+                     f"{int(np.isfinite(grid).sum())}/{grid.size} feasible", fontsize=9)
+        ax.set_xlabel(name1)
+        ax.set_ylabel(name2)
+    for ax in list(axes.flat)[len(schemes):]:
+        ax.set_visible(False)
+    fig.colorbar(mesh, ax=axes, label=r"$\sigma_h$ [m] (red: infeasible)")
     fig.savefig(path, dpi=120)
     plt.close(fig)
 
