@@ -19,6 +19,7 @@ import warnings
 from datetime import datetime, timedelta, timezone
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from uav_insar_planner import load_params
@@ -285,3 +286,239 @@ def test_mavsdk_imports_each_file_and_uploads_it_to_the_vehicle(tmp_path, autopi
             assert [got.param1, got.param2, got.param3, got.param4] == [
                 pytest.approx(v, nan_ok=True) for v in want]
         assert vehicle.errors == 0
+
+
+# --- three ArduCopter SITL instances fly their files ---------------------------------------
+SITL_DIR = Path(__file__).resolve().parent.parent.parent / "shared" / "sitl"
+ARDUCOPTER = SITL_DIR / "arducopter"
+SITL_SPEEDUP = 2  # as test_sitl.py
+SITL_INSTANCES = (7, 8, 9)  # TCP 5830, 5840, 5850: clear of the other SITL tests' -I0..-I2
+SITL_HOME = "-35.363261,149.165230,584,353"
+# AUTO takes off without a pilot raising the throttle (bit 1), as no RC is connected here
+SITL_PARM = "AUTO_OPTIONS 2\n"
+LEAD_SIM_S = 80.0  # vehicle (simulated) seconds from choosing the start to the start
+STREAMS = {33: 20.0, 2: 2.0}  # GLOBAL_POSITION_INT, SYSTEM_TIME [Hz]
+
+
+def mission_item_ints(doc: dict) -> list[tuple]:
+    """The MISSION_ITEM_INT fields of a .plan, as MAVSDK's import makes them for ArduPilot
+    (plannedHomePosition first, null -> NaN / 0): (frame, command, p1..p4, x, y, z)."""
+    home = doc["mission"]["plannedHomePosition"]
+    rows = [(0, 16, 0.0, 0.0, 0.0, 0.0, round(home[0] * 1e7), round(home[1] * 1e7), home[2])]
+    for item in doc["mission"]["items"]:
+        p = [math.nan if v is None else float(v) for v in item["params"]]
+        if item["frame"] == 2:
+            x, y = (0 if math.isnan(v) else int(v) for v in p[4:6])
+        else:
+            x, y = round(p[4] * 1e7), round(p[5] * 1e7)
+        rows.append((item["frame"], item["command"], *p[:4], x, y, p[6]))
+    return rows
+
+
+class Copter:
+    """One SITL instance: its process, its pymavlink link and what it reported."""
+
+    def __init__(self, k: int, instance: int, workdir: Path):
+        import subprocess
+
+        (workdir / "mission.parm").write_text(SITL_PARM)
+        self.k, self.sysid = k, 2 + k
+        self.log = open(workdir / "sitl.log", "w")  # noqa: SIM115 - closed in stop()
+        self.proc = subprocess.Popen(
+            [str(ARDUCOPTER), "--model", "+", "--speedup", str(SITL_SPEEDUP), f"-I{instance}",
+             "--sysid", str(self.sysid), "--defaults",
+             f"{SITL_DIR / 'copter.parm'},{workdir / 'mission.parm'}", "--home", SITL_HOME],
+            cwd=workdir, stdout=self.log, stderr=subprocess.STDOUT,
+            stdin=subprocess.DEVNULL, start_new_session=True)
+        self.port = 5760 + 10 * instance
+        self.m = None
+        self.clock_ms: float | None = None  # vehicle unix ms - time_boot_ms (GPS-set RTC)
+        self.using_gps = False
+        self.mode, self.armed = -1, False
+        self.track: list[tuple] = []  # (wall, vehicle unix s, x, y, z)
+        self.acks: list = []
+        self.requests: list = []
+
+    def connect(self) -> None:
+        from pymavlink import mavutil
+
+        self.m = mavutil.mavlink_connection(f"tcp:127.0.0.1:{self.port}", source_system=255,
+                                            retries=60)
+
+    def stop(self) -> None:
+        import os
+        import signal
+
+        if self.proc.poll() is None:
+            os.killpg(self.proc.pid, signal.SIGKILL)
+        self.proc.wait(timeout=10)
+        if self.m is not None:
+            self.m.close()
+        self.log.close()
+
+    def command(self, command: int, *params: float) -> None:
+        p = list(params) + [0.0] * (7 - len(params))
+        self.m.mav.command_long_send(self.sysid, 1, command, 0, *p)
+
+    def poll(self, bearing: float) -> None:
+        import time
+
+        while (msg := self.m.recv_match(blocking=False)) is not None:
+            kind = msg.get_type()
+            if kind == "SYSTEM_TIME" and msg.time_unix_usec > 0:
+                self.clock_ms = msg.time_unix_usec / 1e3 - msg.time_boot_ms
+            elif kind == "STATUSTEXT" and "is using GPS" in msg.text:
+                self.using_gps = True  # arming works from here (../shared/sitl/README.md)
+            elif kind == "HEARTBEAT" and msg.get_srcSystem() == self.sysid:
+                self.mode, self.armed = msg.custom_mode, bool(msg.base_mode & 128)
+            elif kind == "COMMAND_ACK":
+                self.acks.append((msg.command, msg.result))
+            elif kind in ("MISSION_REQUEST", "MISSION_REQUEST_INT", "MISSION_ACK"):
+                self.requests.append(msg)
+            elif kind == "GLOBAL_POSITION_INT" and self.clock_ms is not None:
+                n, e = exact_ne(HOME[0], HOME[1], msg.lat / 1e7, msg.lon / 1e7)
+                x, y = track_xy(n, e, bearing)
+                self.track.append((time.monotonic(), (msg.time_boot_ms + self.clock_ms) / 1e3,
+                                   x, y, msg.relative_alt / 1e3))
+
+    def vehicle_now(self) -> float:
+        import time
+
+        return time.time() if self.clock_ms is None else self.track[-1][1] if self.track \
+            else math.nan
+
+
+def spin(copters: list[Copter], until, timeout: float, bearing: float, what: str) -> None:
+    import time
+
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        for c in copters:
+            c.poll(bearing)
+            assert c.proc.poll() is None, f"SITL {c.k} died"
+        if until():
+            return
+        time.sleep(0.02)
+    raise AssertionError(f"timed out: {what}")
+
+
+def upload(copters: list[Copter], rows: dict[int, list[tuple]], bearing: float) -> None:
+    """The MAVLink mission upload (MISSION_COUNT, requests, MISSION_ITEM_INT, MISSION_ACK)."""
+    from pymavlink.dialects.v20 import common as mav
+
+    for c in copters:
+        c.requests.clear()
+        c.m.mav.mission_count_send(c.sysid, 1, len(rows[c.k]), 0)
+    acked: dict[int, int] = {}
+
+    def serve() -> bool:
+        for c in copters:
+            while c.requests:
+                msg = c.requests.pop(0)
+                if msg.get_type() == "MISSION_ACK":
+                    acked[c.k] = msg.type
+                else:
+                    f, cmd, p1, p2, p3, p4, x, y, z = rows[c.k][msg.seq]
+                    c.m.mav.mission_item_int_send(c.sysid, 1, msg.seq, f, cmd, 0, 1, p1, p2,
+                                                  p3, p4, x, y, z, 0)
+        return len(acked) == len(copters)
+
+    spin(copters, serve, 20.0, bearing, "mission upload")
+    assert acked == {c.k: mav.MAV_MISSION_ACCEPTED for c in copters}, acked
+
+
+def crossing(track: list[tuple], y: float, after: float) -> tuple:
+    """(wall, vehicle time, x, z) where the track first crosses along-track y after vehicle
+    time `after`, interpolated."""
+    track = [r for r in track if r[1] >= after]
+    for a, b in zip(track, track[1:], strict=False):
+        if a[3] < y <= b[3]:
+            f = (y - a[3]) / (b[3] - a[3])
+            return tuple(a[i] + f * (b[i] - a[i]) for i in (0, 1, 2, 4))
+    raise AssertionError(f"never crossed y = {y}")
+
+
+@pytest.mark.timeout(300)
+@pytest.mark.skipif(not ARDUCOPTER.exists(), reason=f"ArduCopter SITL not found at "
+                    f"{ARDUCOPTER}: a user's machine does not have it")
+def test_sitl_three_copters_fly_their_files(tmp_path):
+    import time
+
+    copters: list[Copter] = []
+    try:
+        for k, instance in zip(UAVS, SITL_INSTANCES, strict=True):
+            (tmp_path / f"copter{k}").mkdir()
+            copters.append(Copter(k, instance, tmp_path / f"copter{k}"))
+        t_boot = time.monotonic()
+        for c in copters:  # all started first: a SITL's clock runs from its own start
+            c.connect()
+        for c in copters:
+            c.m.wait_heartbeat(timeout=30)
+            for msgid, hz in STREAMS.items():
+                c.command(511, msgid, 1e6 / hz)  # MAV_CMD_SET_MESSAGE_INTERVAL
+        spin(copters, lambda: all(c.clock_ms is not None and c.track and c.using_gps
+                                  for c in copters), 120.0, BEARING, "GPS time, EKF on GPS")
+        ready_s = time.monotonic() - t_boot
+        clocks = [c.vehicle_now() for c in copters]
+        start = datetime.fromtimestamp(math.ceil(max(clocks) + LEAD_SIM_S), timezone.utc)
+        assert export(tmp_path / "plans", "--start-utc", start.isoformat()) == EXIT_OK
+        rows = {c.k: mission_item_ints(json.loads(
+            (tmp_path / "plans" / f"{uav_name(c.k)}.plan").read_text())) for c in copters}
+        upload(copters, rows, BEARING)
+        tried = dict.fromkeys(UAVS, 0.0)
+
+        def arm_then_auto() -> bool:  # armed in GUIDED, then AUTO at once (DISARM_DELAY)
+            for c in copters:
+                if c.armed and c.mode == 3:
+                    continue
+                if (400, 0) in c.acks:
+                    c.command(176, 1, 3)  # MAV_CMD_DO_SET_MODE AUTO: the mission flies
+                elif time.monotonic() - tried[c.k] > 2.0:
+                    tried[c.k] = time.monotonic()
+                    c.command(176, 1, 4)  # GUIDED
+                    c.command(400, 1)  # arm (FAILED until the pre-arm checks pass)
+            return all(c.armed and c.mode == 3 for c in copters)
+
+        spin(copters, arm_then_auto, 30.0, BEARING, "armed in AUTO")
+        armed_s = time.monotonic() - t_boot
+        params = load_params(overrides={"num_slots": SLOTS})
+        plan = solve(params)
+        length = SLOTS * params.slot_duration_s * params.speed
+        spin(copters, lambda: all(c.track[-1][3] > 0.5 * length for c in copters),
+             (LEAD_SIM_S + 60.0) / SITL_SPEEDUP, BEARING, "the passes")
+    finally:
+        for c in copters:
+            c.stop()
+    t0 = start.timestamp()
+    figures = {"ready_s": round(ready_s, 1), "auto_s": round(armed_s, 1),
+               "clock_spread_s": round(max(clocks) - min(clocks), 3)}
+    y_hold = -RUN_UP_S * params.speed
+    at_zero, ys_own = {}, []
+    for c in copters:
+        held = [r for r in c.track if r[1] < t0]
+        # left the hold: the first sample 0.1 m along-track past the last one before t0
+        depart = next(r for r in c.track if r[1] >= t0 and r[3] > held[-1][3] + 0.1)
+        figures[f"uav{c.k}_depart_after_start_s"] = round(depart[1] - t0, 3)
+        figures[f"uav{c.k}_clock_ahead_s"] = round(clocks[c.k] - min(clocks), 3)
+        ys_own.append(np.interp(t0 + 3.0, [r[1] for r in c.track], [r[3] for r in c.track]))
+        figures[f"uav{c.k}_hold_error_m"] = round(math.dist(
+            (held[-1][2], held[-1][3], held[-1][4]), (plan.formation[c.k, 0], y_hold,
+                                                      plan.formation[c.k, 1])), 3)
+        at_zero[c.k] = crossing(c.track, 0.0, t0)
+        wall, _, x, z = at_zero[c.k]
+        figures[f"uav{c.k}_pass_start_dx_m"] = round(float(x - plan.formation[c.k, 0]), 3)
+        figures[f"uav{c.k}_pass_start_dz_m"] = round(float(z - plan.formation[c.k, 1]), 3)
+    first = min(v[0] for v in at_zero.values())
+    ys = [np.interp(first, [r[0] for r in c.track], [r[3] for r in c.track]) for c in copters]
+    figures["along_track_spread_at_pass_start_m"] = round(float(max(ys) - min(ys)), 3)
+    figures["pass_start_spread_sim_s"] = round(
+        (max(v[0] for v in at_zero.values()) - first) * SITL_SPEEDUP, 3)
+    # each on its own clock, 3 s after the start: the spread with clocks that agree (GNSS)
+    figures["along_track_spread_own_clocks_m"] = round(float(max(ys_own) - min(ys_own)), 3)
+    print("SITL export-mission figures:", figures)
+    for c in copters:
+        assert 0.0 <= figures[f"uav{c.k}_depart_after_start_s"] < 2.0, figures
+        assert abs(figures[f"uav{c.k}_pass_start_dx_m"]) < 0.5, figures
+        assert abs(figures[f"uav{c.k}_pass_start_dz_m"]) < 0.5, figures
+    assert figures["along_track_spread_at_pass_start_m"] < 2.0, figures
+    assert figures["along_track_spread_own_clocks_m"] < 1.0, figures

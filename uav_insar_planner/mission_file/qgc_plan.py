@@ -105,7 +105,8 @@ def mission_items(home: Home, flight: Pass, x: float, z: float, start: datetime,
              (CMD_CHANGE_SPEED, [1.0, flight.speed_mps, -1.0, 0.0, nan, nan, nan], None),
              (CMD_WAYPOINT, [0.0, 0.0, 0.0, nan, *finish, z], z)]
     if end == "hold":
-        items.append((CMD_LOITER_UNLIM, [0.0, 0.0, 0.0, nan, *finish, z], z))
+        # yaw 0, not NaN: ArduPilot refuses a NaN param4 on every command but a few
+        items.append((CMD_LOITER_UNLIM, [0.0, 0.0, 0.0, 0.0, *finish, z], z))
     else:
         items.append((CMD_RTL, [0.0] * 7, None))
     return [_item(i + 1, cmd, [float(p) for p in params], alt)
