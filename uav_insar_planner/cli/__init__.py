@@ -29,6 +29,7 @@ def verbs() -> dict[str, ModuleType]:
     light)."""
     from uav_insar_planner.cli import (
         echo,
+        export_mission,
         montecarlo,
         param_map,
         plot_formation,
@@ -39,7 +40,8 @@ def verbs() -> dict[str, ModuleType]:
     )
 
     return {"solve": solve, "sweep": sweep, "map": param_map, "plot-formation": plot_formation,
-            "montecarlo": montecarlo, "echo": echo, "record": record, "report": report}
+            "montecarlo": montecarlo, "export-mission": export_mission, "echo": echo,
+            "record": record, "report": report}
 
 
 def build_parser(table: dict[str, ModuleType]) -> tuple[argparse.ArgumentParser,

@@ -28,8 +28,10 @@ started `airborne` never boots. The MAVLink side, like the real autopilots (flig
 - Obeyed only from the ground station `gcs_sysid` (default 255; 0 = anyone): COMMAND_LONG and
   COMMAND_INT (see `commands`), SET_MODE, SET_POSITION_TARGET_LOCAL_NED (frames LOCAL_NED,
   LOCAL_OFFSET_NED, BODY_NED, BODY_OFFSET_NED for ArduPilot, LOCAL_NED and BODY_NED for PX4;
-  a mask of 0 uses every field; non-finite used fields are refused and counted), PARAM_SET.
-  Answered from anyone: PARAM_REQUEST_LIST, PARAM_REQUEST_READ (PARAM_VALUE).
+  a mask of 0 uses every field; non-finite used fields are refused and counted), PARAM_SET,
+  a mission upload (MISSION_COUNT, MISSION_ITEM_INT, MISSION_CLEAR_ALL: `mission_upload`,
+  stored in `mission.items`, not flown). Answered from anyone: PARAM_REQUEST_LIST,
+  PARAM_REQUEST_READ (PARAM_VALUE), MISSION_REQUEST_LIST / MISSION_REQUEST_INT (download).
 - Messages for another system or component are ignored; a malformed one never stops it.
 - Drops are counted in `stats` (link.LinkStats) and, on the command line, logged to stderr
   once per kind every 10 s (`guard.DropLog`): `foreign` (an obeyed message not from
@@ -57,6 +59,7 @@ from uav_insar_planner.mavlink.setpoints import used_values
 from uav_insar_planner.mavlink.signing import signing_state
 from uav_insar_sim.vehicle.autopilot import Autopilot
 from uav_insar_sim.vehicle.commands import run_command
+from uav_insar_sim.vehicle.mission_upload import MissionStore
 from uav_insar_sim.vehicle.parameters import ParamTable, vehicle_params
 from uav_insar_sim.vehicle.telemetry import SITL_HOME, Streams, Telemetry
 
@@ -64,9 +67,12 @@ __all__ = ["SimVehicle"]
 
 PHYSICS_HZ = 50.0
 MAX_COMMANDS_KEPT = 1000
+MISSION_IN = frozenset(("MISSION_COUNT", "MISSION_ITEM_INT", "MISSION_CLEAR_ALL",
+                        "MISSION_REQUEST_LIST", "MISSION_REQUEST_INT"))
 OBEYED = frozenset(("COMMAND_LONG", "COMMAND_INT", "SET_MODE",
-                    "SET_POSITION_TARGET_LOCAL_NED", "PARAM_SET"))
-HANDLED = OBEYED | {"PARAM_REQUEST_LIST", "PARAM_REQUEST_READ"}
+                    "SET_POSITION_TARGET_LOCAL_NED", "PARAM_SET", "MISSION_COUNT",
+                    "MISSION_ITEM_INT", "MISSION_CLEAR_ALL"))
+HANDLED = OBEYED | MISSION_IN | {"PARAM_REQUEST_LIST", "PARAM_REQUEST_READ"}
 
 
 class SimVehicle:
@@ -110,6 +116,7 @@ class SimVehicle:
         #: of commands must not grow memory)
         self.commands: deque[tuple[int, int]] = deque(maxlen=MAX_COMMANDS_KEPT)
         self.errors = 0  # messages whose handling raised (answered FAILED, never fatal)
+        self.mission = MissionStore()  # accepted and stored, not flown
 
     # ------------------------------------------------------------------------- public API
     @property
@@ -301,7 +308,10 @@ class SimVehicle:
             # only the configured ground station commands this vehicle
             self._drop("foreign", f"{kind} from sysid {src}, not the GCS {self.gcs_sysid}")
             return
-        if kind == "SET_POSITION_TARGET_LOCAL_NED":
+        if kind in MISSION_IN:
+            for reply in self.mission.handle(self._link.mav, msg):
+                self._send(reply)
+        elif kind == "SET_POSITION_TARGET_LOCAL_NED":
             position, velocity = (msg.x, msg.y, msg.z), (msg.vx, msg.vy, msg.vz)
             if not finite(used_values(msg.type_mask, position, velocity)):
                 self._drop("bad_value", f"setpoint with a used field not finite: position "

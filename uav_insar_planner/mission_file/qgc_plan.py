@@ -1,0 +1,126 @@
+"""One QGroundControl `.plan` file per UAV: the pass flown by the autopilot on its own.
+
+The items, in order (MAVLink mission, `frame` 3 = MAV_FRAME_GLOBAL_RELATIVE_ALT for the
+positions, 2 = MAV_FRAME_MISSION for the others, as QGroundControl writes them):
+
+1. MAV_CMD_NAV_TAKEOFF to z_k (its coordinate is the pass start: ArduCopter climbs where it
+   stands, PX4 climbs and then flies there);
+2. MAV_CMD_NAV_WAYPOINT at the pass start (x_k, -run_up, z_k): the run-up lets the vehicle
+   reach v_y before y = 0 (`run_up_m`, default RUN_UP_S of v_y);
+3. MAV_CMD_NAV_DELAY with param1 = -1 and param2..4 = hour, minute, second UTC: every UAV
+   waits at its start until that time on its own (GNSS-synced) clock, so the passes start
+   together without a link between them; a vehicle that arrives after that time waits for it
+   on the next day (ArduPilot), so the time must leave room for take-off and transit;
+4. MAV_CMD_DO_CHANGE_SPEED (ground speed) to v_y, then MAV_CMD_NAV_WAYPOINT at the pass end
+   y = num_slots * slot_duration_s * v_y;
+5. MAV_CMD_NAV_LOITER_UNLIM at the pass end (`end="hold"`) or MAV_CMD_NAV_RETURN_TO_LAUNCH
+   (`end="rtl"`).
+
+Track frame (x across-track, y along-track, z up) -> local NED about the home with
+`mavlink.frames.TrackFrame` (bearing of y from north), NED -> latitude / longitude with
+`geodesy` (tangent-plane approximation; its error bound is there). The file format is
+QGroundControl's (`fileType` Plan, version 1; mission version 2), as MAVSDK's
+`mission_raw.import_qgroundcontrol_mission` reads it.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from datetime import datetime, timedelta
+
+from uav_insar_planner.mavlink.frames import TrackFrame
+from uav_insar_planner.mission_file.geodesy import ned_to_latlon
+
+FIRMWARE_TYPES = {"ardupilot": 3, "px4": 12}  # MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_AUTOPILOT_PX4
+VEHICLE_TYPE = 2  # MAV_TYPE_QUADROTOR
+ENDS = ("hold", "rtl")
+FRAME_MISSION, FRAME_RELATIVE_ALT = 2, 3
+CMD_WAYPOINT, CMD_LOITER_UNLIM, CMD_RTL, CMD_TAKEOFF = 16, 17, 20, 22
+CMD_DELAY, CMD_CHANGE_SPEED = 93, 178
+RUN_UP_S = 3.0  # ArduCopter's jerk-limited start (WPNAV_ACCEL 2.5 m/s^2) needs ~2.5 s to 5 m/s
+# The default start time (default_start): time to upload, arm and switch to AUTO, then a
+# climb and a transit slower than the autopilots' defaults (ArduCopter 2.5 m/s up, 10 m/s
+# across; PX4 3 m/s, 5 m/s), then time to settle at the start point.
+PREFLIGHT_S = 120.0
+CLIMB_MPS = 1.0
+TRANSIT_MPS = 2.0
+SETTLE_S = 20.0
+
+
+@dataclass(frozen=True)
+class Home:
+    """The track origin (x = y = 0 on the ground): latitude, longitude [deg], AMSL [m]."""
+
+    lat_deg: float
+    lon_deg: float
+    alt_m: float
+
+
+@dataclass(frozen=True)
+class Pass:
+    """What every UAV flies: the along-track speed v_y [m/s], the pass length [m] and the
+    run-up before y = 0 [m]; `bearing_deg` points y (from north, clockwise)."""
+
+    speed_mps: float
+    length_m: float
+    run_up_m: float
+    bearing_deg: float
+
+
+def track_to_latlon(home: Home, bearing_deg: float, x: float, y: float) -> tuple[float, float]:
+    """The latitude and longitude of the ground point (x, y) of the track frame."""
+    n, e, _ = TrackFrame.from_degrees(bearing_deg).to_ned(x, y, 0.0)
+    return ned_to_latlon(home.lat_deg, home.lon_deg, n, e)
+
+
+def default_start(now: datetime, xz: dict[int, tuple[float, float]], run_up_m: float
+                  ) -> datetime:
+    """The start time when none is given: `now` + PREFLIGHT_S + the slowest UAV's climb to
+    z_k at CLIMB_MPS and transit to its start point at TRANSIT_MPS + SETTLE_S, rounded up to
+    the next whole second (NAV_DELAY has whole seconds)."""
+    fly = max(z / CLIMB_MPS + math.hypot(x, run_up_m) / TRANSIT_MPS for x, z in xz.values())
+    t = now + timedelta(seconds=PREFLIGHT_S + fly + SETTLE_S)
+    return t.replace(microsecond=0) + timedelta(seconds=1 if t.microsecond else 0)
+
+
+def _item(seq: int, command: int, params: list[float], altitude: float | None = None) -> dict:
+    item = {"type": "SimpleItem", "command": command,
+            "frame": FRAME_MISSION if altitude is None else FRAME_RELATIVE_ALT,
+            "params": [None if math.isnan(p) else p for p in params],
+            "autoContinue": True, "doJumpId": seq}
+    if altitude is not None:
+        item |= {"AMSLAltAboveTerrain": None, "Altitude": altitude, "AltitudeMode": 1}
+    return item
+
+
+def mission_items(home: Home, flight: Pass, x: float, z: float, start: datetime, end: str
+                  ) -> list[dict]:
+    """The `.plan` items of the UAV flying across-track position x at height z."""
+    nan = math.nan
+    begin = track_to_latlon(home, flight.bearing_deg, x, -flight.run_up_m)
+    finish = track_to_latlon(home, flight.bearing_deg, x, flight.length_m)
+    items = [(CMD_TAKEOFF, [0.0, 0.0, 0.0, nan, *begin, z], z),
+             (CMD_WAYPOINT, [0.0, 0.0, 0.0, nan, *begin, z], z),
+             (CMD_DELAY, [-1.0, start.hour, start.minute, start.second, nan, nan, nan], None),
+             (CMD_CHANGE_SPEED, [1.0, flight.speed_mps, -1.0, 0.0, nan, nan, nan], None),
+             (CMD_WAYPOINT, [0.0, 0.0, 0.0, nan, *finish, z], z)]
+    if end == "hold":
+        # yaw 0, not NaN: ArduPilot refuses a NaN param4 on every command but a few
+        items.append((CMD_LOITER_UNLIM, [0.0, 0.0, 0.0, 0.0, *finish, z], z))
+    else:
+        items.append((CMD_RTL, [0.0] * 7, None))
+    return [_item(i + 1, cmd, [float(p) for p in params], alt)
+            for i, (cmd, params, alt) in enumerate(items)]
+
+
+def plan_document(home: Home, flight: Pass, x: float, z: float, start: datetime, end: str,
+                  autopilot: str) -> dict:
+    """The whole `.plan` JSON object of one UAV (geofence and rally points empty)."""
+    return {"fileType": "Plan", "version": 1, "groundStation": "QGroundControl",
+            "mission": {"version": 2, "firmwareType": FIRMWARE_TYPES[autopilot],
+                        "vehicleType": VEHICLE_TYPE, "cruiseSpeed": flight.speed_mps,
+                        "hoverSpeed": flight.speed_mps, "globalPlanAltitudeMode": 1,
+                        "plannedHomePosition": [home.lat_deg, home.lon_deg, home.alt_m],
+                        "items": mission_items(home, flight, x, z, start, end)},
+            "geoFence": {"version": 2, "circles": [], "polygons": []},
+            "rallyPoints": {"version": 2, "points": []}}
