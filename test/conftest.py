@@ -6,6 +6,7 @@ import itertools
 import os
 import subprocess
 import sys
+from contextlib import contextmanager
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -121,6 +122,29 @@ def watcher(ros_context):
     w.destroy()
 
 
+@contextmanager
+def private_graph():
+    """A private domain of its own for processes started with `env` (discovery on this host,
+    no static peers), and a TopicWatcher on it; both shut down on leaving, so nothing of it
+    stays on the graph for the tests that follow. Yields (env, watcher)."""
+    import rclpy
+
+    from uav_insar_planner.demo.processes import ros_env
+    from uav_insar_planner.ros.tools.topic_watcher import TopicWatcher
+
+    domain = _next_domain()
+    env = dict(ros_env(domain), PYTHONPATH=str(REPO))
+    env.pop("ROS_STATIC_PEERS", None)
+    ctx = rclpy.Context()
+    rclpy.init(args=["test"], context=ctx, domain_id=domain)
+    w = TopicWatcher(ctx)
+    try:
+        yield env, w
+    finally:
+        w.destroy()
+        ctx.try_shutdown()
+
+
 MISSION_SLOTS = 4
 
 
@@ -130,46 +154,37 @@ def mission(tmp_path_factory):
     three agent processes and the planner on a private domain, MISSION_SLOTS slots at
     time_scale 40, recorded by `uav-insar record`'s recorder process; `bag`, the recorder's
     exit `code` and last `line`, and what a watcher saw: the `formation`, the `rates`."""
-    import rclpy
     from visualization_msgs.msg import MarkerArray
 
-    from uav_insar_planner.demo.processes import ros_env, start_node, start_process, stop_nodes
+    from uav_insar_planner.demo.processes import start_node, start_process, stop_nodes
     from uav_insar_planner.demo.recorder import recorder_ready, stop_recorder
-    from uav_insar_planner.ros.tools.topic_watcher import TopicWatcher
 
-    domain = _next_domain()
-    env = dict(ros_env(domain), PYTHONPATH=str(REPO))
-    env.pop("ROS_STATIC_PEERS", None)
-    ctx = rclpy.Context()
-    rclpy.init(args=["test"], context=ctx, domain_id=domain)
-    w = TopicWatcher(ctx)
-    bag = tmp_path_factory.mktemp("bags") / "mission"
-    recorder = start_process([sys.executable, "-m", "uav_insar_planner.ros.tools.record", str(bag)],
-                             env)
-    nodes = [start_node("agent", ["-p", f"uav_id:={k}", "-p", "time_scale:=40.0", "-p",
-                                  f"num_slots:={MISSION_SLOTS}", "-r", f"__node:=agent{k}"], env)
-             for k in range(3)]
-    try:
-        assert w.spin_until(lambda: w.agents_matched() and recorder_ready(w.node), 30.0,
-                            [*nodes, recorder]), "agents or recorder did not come up"
-        nodes.append(start_node("planner", ["-p", f"num_slots:={MISSION_SLOTS}"], env))
-        # the latched plan reaches the watcher whenever its discovery of the planner ends,
-        # which may be after the agents flew their slots
-        assert w.spin_until(lambda: w.formations and all(len(w.rates[k]) >= MISSION_SLOTS
-                                                         for k in range(3)), 60.0,
-                            nodes), "the mission did not complete"
-        # the planner draws the agents' poses once its discovery of them ends (seconds on a
-        # busy host): wait for its first flown markers, then a last second of them
-        flown = []
-        w.node.create_subscription(MarkerArray, "/formation/markers/flown", flown.append, 10)
-        assert w.spin_until(lambda: flown, 30.0, nodes), "no flown markers from the planner"
-        w.spin_until(lambda: False, 1.0)
-        code, line = stop_recorder(recorder)
-        seen = SimpleNamespace(bag=bag, code=code, line=line, formation=w.formations[0],
-                               rates={k: list(w.rates[k]) for k in range(3)})
-    finally:
-        stop_nodes(nodes + [recorder])
-        # the session goes on: leave nothing of this mission on the graph
-        w.destroy()
-        ctx.try_shutdown()
+    with private_graph() as (env, w):
+        bag = tmp_path_factory.mktemp("bags") / "mission"
+        recorder = start_process([sys.executable, "-m", "uav_insar_planner.ros.tools.record",
+                                  str(bag)], env)
+        nodes = [start_node("agent", ["-p", f"uav_id:={k}", "-p", "time_scale:=40.0", "-p",
+                                      f"num_slots:={MISSION_SLOTS}", "-r", f"__node:=agent{k}"],
+                            env)
+                 for k in range(3)]
+        try:
+            assert w.spin_until(lambda: w.agents_matched() and recorder_ready(w.node), 30.0,
+                                [*nodes, recorder]), "agents or recorder did not come up"
+            nodes.append(start_node("planner", ["-p", f"num_slots:={MISSION_SLOTS}"], env))
+            # the latched plan reaches the watcher whenever its discovery of the planner ends,
+            # which may be after the agents flew their slots
+            assert w.spin_until(lambda: w.formations and all(len(w.rates[k]) >= MISSION_SLOTS
+                                                             for k in range(3)), 60.0,
+                                nodes), "the mission did not complete"
+            # the planner draws the agents' poses once its discovery of them ends (seconds on a
+            # busy host): wait for its first flown markers, then a last second of them
+            flown = []
+            w.node.create_subscription(MarkerArray, "/formation/markers/flown", flown.append, 10)
+            assert w.spin_until(lambda: flown, 30.0, nodes), "no flown markers from the planner"
+            w.spin_until(lambda: False, 1.0)
+            code, line = stop_recorder(recorder)
+            seen = SimpleNamespace(bag=bag, code=code, line=line, formation=w.formations[0],
+                                   rates={k: list(w.rates[k]) for k in range(3)})
+        finally:
+            stop_nodes(nodes + [recorder])
     yield seen

@@ -57,58 +57,44 @@ def _crossing(track: np.ndarray, line: float) -> np.ndarray:
 @pytest.fixture(scope="module")
 def flown(tmp_path_factory):
     """One recorded mission; what a watcher saw of it."""
-    import rclpy
-    from conftest import _next_domain
+    from conftest import private_graph
 
-    from uav_insar_planner.demo.processes import (
-        executable,
-        ros_env,
-        start_node,
-        start_process,
-        stop_nodes,
-    )
+    from uav_insar_planner.demo.processes import executable, start_node, start_process, stop_nodes
     from uav_insar_planner.demo.recorder import recorder_ready, stop_recorder
-    from uav_insar_planner.ros.tools.topic_watcher import TopicWatcher
 
     params = load_params(overrides=SCENARIO)
     plan = solve(params)
-    domain = _next_domain()
-    env = dict(ros_env(domain), PYTHONPATH=str(REPO))
-    env.pop("ROS_STATIC_PEERS", None)
-    ctx = rclpy.Context()
-    rclpy.init(args=["test"], context=ctx, domain_id=domain)
-    w = TopicWatcher(ctx)
-    bag = tmp_path_factory.mktemp("bags") / "autopilot"
-    ports = [BASE_PORT + 10 * k for k in range(3)]
-    # Each vehicle starts airborne a few metres off its planned start, so the bridge's approach
-    # is short but real (N = y, E = x, D = -z: the bridge's default frame).
-    procs = [start_process([sys.executable, "-m", "uav_insar_planner.ros.tools.record",
-                            str(bag)], env)]
-    procs += [start_process([*executable("uav-insar-vehicle"), "--sysid", str(FIRST_SYSID + k),
-                             "--listen", f"udpin:127.0.0.1:{port}", "--airborne",
-                             "--start-ned", "-3", str(plan.formation[k, 0] + 2.0),
-                             str(-plan.formation[k, 1] + 2.0)], env)
-              for k, port in enumerate(ports)]
-    connections = ", ".join(f"'udpout:127.0.0.1:{p}'" for p in ports)
-    procs.append(start_node("mavlink_bridge", [
-        "-p", f"connections:=[{connections}]", "-p", "velocity_feedforward:=true",
-        "-p", "capture_radius_m:=0.3", "-p", f"track_duration_s:={N + 1.0}"], env))
-    procs += [start_node("agent", ["-p", f"uav_id:={k}", "-p", f"num_slots:={N}", "-p",
-                                   "position_source:=autopilot", "-r", f"__node:=agent{k}"], env)
-              for k in range(3)]
-    try:
-        assert w.spin_until(lambda: w.agents_matched() and recorder_ready(w.node), 30.0,
-                            procs), "agents or recorder did not come up"
-        procs.append(start_node("planner", ["-p", f"num_slots:={N}"], env))
-        assert w.spin_until(lambda: w.formations and all(len(w.rates[k]) >= N
-                                                         for k in range(3)), 90.0,
-                            procs), {k: len(r) for k, r in w.rates.items()}
-        w.spin_until(lambda: False, 1.5)
-        code, _ = stop_recorder(procs[0])
-    finally:
-        codes = stop_nodes(procs)
-    w.destroy()
-    ctx.try_shutdown()
+    with private_graph() as (env, w):
+        bag = tmp_path_factory.mktemp("bags") / "autopilot"
+        ports = [BASE_PORT + 10 * k for k in range(3)]
+        # Each vehicle starts airborne a few metres off its planned start, so the bridge's approach
+        # is short but real (N = y, E = x, D = -z: the bridge's default frame).
+        procs = [start_process([sys.executable, "-m", "uav_insar_planner.ros.tools.record",
+                                str(bag)], env)]
+        procs += [start_process([*executable("uav-insar-vehicle"), "--sysid", str(FIRST_SYSID + k),
+                                 "--listen", f"udpin:127.0.0.1:{port}", "--airborne",
+                                 "--start-ned", "-3", str(plan.formation[k, 0] + 2.0),
+                                 str(-plan.formation[k, 1] + 2.0)], env)
+                  for k, port in enumerate(ports)]
+        connections = ", ".join(f"'udpout:127.0.0.1:{p}'" for p in ports)
+        procs.append(start_node("mavlink_bridge", [
+            "-p", f"connections:=[{connections}]", "-p", "velocity_feedforward:=true",
+            "-p", "capture_radius_m:=0.3", "-p", f"track_duration_s:={N + 1.0}"], env))
+        procs += [start_node("agent", ["-p", f"uav_id:={k}", "-p", f"num_slots:={N}", "-p",
+                                       "position_source:=autopilot", "-r", f"__node:=agent{k}"],
+                             env)
+                  for k in range(3)]
+        try:
+            assert w.spin_until(lambda: w.agents_matched() and recorder_ready(w.node), 30.0,
+                                procs), "agents or recorder did not come up"
+            procs.append(start_node("planner", ["-p", f"num_slots:={N}"], env))
+            assert w.spin_until(lambda: w.formations and all(len(w.rates[k]) >= N
+                                                             for k in range(3)), 90.0,
+                                procs), {k: len(r) for k, r in w.rates.items()}
+            w.spin_until(lambda: False, 1.5)
+            code, _ = stop_recorder(procs[0])
+        finally:
+            codes = stop_nodes(procs)
     yield {"params": params, "plan": plan, "bag": bag, "recorder": code, "codes": codes,
            "w": w}
 
