@@ -44,7 +44,7 @@ def main() -> None:
 
                 def run(p=p, power=plan.p_com_w, lost=lost, survivor=survivor, n0=n0,
                         energy=energy):
-                    return replan.replan_without(p, power, lost, survivor, n0, energy)
+                    return replan.replan_without(p, power, lost, (survivor,), n0, energy)
 
                 t = median_s(run, args.runs)
                 new, _ = run()

@@ -32,7 +32,7 @@ def test_lost_slave_gives_a_feasible_single_baseline_plan_for_the_slots_left(
     p, plan = table1
     n0 = 30
     energy = {k: replan.energy_left_j(p, plan.p_com_w, k, n0) for k in range(3)}
-    full, problem = replan.replan_without(p, plan.p_com_w, lost, survivor, n0, energy)
+    full, problem = replan.replan_without(p, plan.p_com_w, lost, (survivor,), n0, energy)
     assert full.feasible and full.scheme == "single-baseline"
     assert full.active_uavs == [0, survivor]
     assert np.isnan(full.formation[lost]).all()
@@ -59,7 +59,7 @@ def test_a_survivor_short_of_energy_is_held_to_it(table1):
     p, plan = table1
     n0 = 40
     energy = {0: replan.energy_left_j(p, plan.p_com_w, 0, n0), 1: 60.0, 2: 0.0}
-    full, problem = replan.replan_without(p, plan.p_com_w, 2, 1, n0, energy)
+    full, problem = replan.replan_without(p, plan.p_com_w, 2, (1,), n0, energy)
     assert problem.params.energy_budget_j(1) == 60.0
     if full.feasible:
         assert full.p_com_w[1, n0:].sum() * p.slot_duration_s <= 60.0 * (1 + 1e-9)
@@ -75,15 +75,16 @@ def test_a_survivor_short_of_energy_is_held_to_it(table1):
 def test_reduced_problem_refuses_the_master_a_past_slot_or_no_energy(table1):
     p, plan = table1
     energy = {0: 100.0, 1: 100.0, 2: 100.0}
-    for args in ((0, 1, 10, energy), (1, 2, 80, energy), (1, 2, -1, energy),
-                 (1, 2, 10, {**energy, 2: 0.0})):
+    for args in ((0, (1,), 10, energy), (1, (2,), 80, energy), (1, (2,), -1, energy),
+                 (1, (2,), 10, {**energy, 2: 0.0}), (1, (), 10, energy),
+                 (1, (1, 2), 10, energy)):
         with pytest.raises(ValueError, match=r"^(lost|first_slot|energy_left): value "):
             replan.remaining_problem(p, *args)
 
 
 def test_the_shifted_station_is_exact(table1):
     p, _ = table1
-    problem = replan.remaining_problem(p, 2, 1, 25, {0: 300.0, 1: 300.0})
+    problem = replan.remaining_problem(p, 2, (1,), 25, {0: 300.0, 1: 300.0})
     r = problem.params
     assert r.num_slots == p.num_slots - 25
     assert (r.y_track - r.ground_station[1]) == pytest.approx(p.y_track[25:]

@@ -92,7 +92,7 @@ def test_killed_slave_is_replanned_out_and_the_survivors_finish(watcher, procs):
     assert (p_new[1] == 0).all()
     assert p_new[[0, 2], :n0] == pytest.approx(plan.p_com_w[[0, 2], :n0])
     energy = {k: replan.energy_left_j(params, plan.p_com_w, k, n0) for k in range(3)}
-    problem = replan.remaining_problem(params, 1, 2, n0, energy)
+    problem = replan.remaining_problem(params, 1, (2,), n0, energy)
     rows = np.vstack([q[[0, 2]], [[np.nan, np.nan]]])
     tail = np.vstack([p_new[[0, 2], n0:], np.zeros((1, N - n0))])
     ev = evaluate(problem.params, rows, tail, "single-baseline")

@@ -74,16 +74,16 @@ def pair_metrics(p: Params, q0: np.ndarray, qk: np.ndarray) -> dict[str, float]:
 
 
 def evaluate(p: Params, formation: np.ndarray, p_com: np.ndarray, scheme: str) -> Evaluation:
-    """Metrics and C1..C11 for `formation` ((NUM_UAVS, 2) rows (x_k, z_k), NaN rows for UAVs the
-    scheme does not fly) and `p_com` ((NUM_UAVS, N) watts)."""
+    """Metrics and C1..C11 for `formation` ((num_uavs, 2) rows (x_k, z_k), NaN rows for UAVs the
+    scheme does not fly) and `p_com` ((num_uavs, N) watts)."""
     q = np.asarray(formation, dtype=float)
     power = np.asarray(p_com, dtype=float)
-    uavs = active_uavs(scheme)
-    slaves = slave_uavs(scheme)
+    uavs = active_uavs(scheme, p.num_uavs)
+    slaves = slave_uavs(scheme, p.num_uavs)
     pairs = {k: pair_metrics(p, q[0], q[k]) for k in slaves}
 
     sig = [pairs[k]["sigma_h_m"] for k in slaves]
-    sigma_h = model.fused_height_error_of_pairs(sig)
+    sigma_h = float(model.fused_height_error(*sig))
     r0 = float(model.slant_range(q[0, 0], q[0, 1], p.x_t))
     bsq = sum(pairs[k]["b_perp_m"] ** 2 for k in slaves)
     bound = float(model.height_error_bound(p.wavelength, r0, p.theta0, bsq,

@@ -171,25 +171,19 @@ def height_error(h_amb: ArrayLike, sigma_phi: ArrayLike) -> ArrayLike:
     return np.asarray(h_amb) * np.asarray(sigma_phi) / (2.0 * np.pi)
 
 
-def fusion_weights(sigma_h1: ArrayLike, sigma_h2: ArrayLike) -> tuple[ArrayLike, ArrayLike]:
+def fusion_weights(*sigma_hk: ArrayLike) -> tuple[ArrayLike, ...]:
     """w_k = 1/sigma_hk^2, the inverse-variance weights of the fused DEM
-    h = (w_1 h_1 + w_2 h_2) / (w_1 + w_2)  (eq. 15)."""
-    s1, s2 = np.asarray(sigma_h1, dtype=float), np.asarray(sigma_h2, dtype=float)
-    return 1.0 / s1**2, 1.0 / s2**2
+    h = sum_k w_k h_k / sum_k w_k over the K pairs (eq. 15 for K = 2)."""
+    return tuple(1.0 / np.asarray(s, dtype=float) ** 2 for s in sigma_hk)
 
 
-def fused_height_error(sigma_h1: ArrayLike, sigma_h2: ArrayLike) -> ArrayLike:
-    """sigma_h = sqrt(sum w_k^2 sigma_hk^2 / (sum w_k)^2) with w_k = 1/sigma_hk^2  (eq. 15),
-    which simplifies to (1/sigma_h1^2 + 1/sigma_h2^2)^(-1/2)."""
-    s1, s2 = np.asarray(sigma_h1, dtype=float), np.asarray(sigma_h2, dtype=float)
-    w1, w2 = fusion_weights(s1, s2)
-    return np.sqrt((w1**2 * s1**2 + w2**2 * s2**2) / (w1 + w2) ** 2)
-
-
-def fused_height_error_of_pairs(sigmas: list[float]) -> float:
-    """The DEM's sigma_h from the flown pairs' sigma_hk: eq. 15 for the dual baseline, the
-    pair's own sigma_h1 for a single baseline."""
-    return float(fused_height_error(*sigmas)) if len(sigmas) == 2 else sigmas[0]
+def fused_height_error(*sigma_hk: ArrayLike) -> ArrayLike:
+    """sigma_h = sqrt(sum_k w_k^2 sigma_hk^2 / (sum_k w_k)^2) with w_k = 1/sigma_hk^2 over the
+    K pairs (eq. 15 for K = 2), which simplifies to (sum_k sigma_hk^-2)^(-1/2); a single
+    baseline's sigma_h is its pair's sigma_h1."""
+    sig = [np.asarray(s, dtype=float) for s in sigma_hk]
+    w = fusion_weights(*sig)
+    return np.sqrt(sum(wk**2 * sk**2 for wk, sk in zip(w, sig, strict=True)) / sum(w) ** 2)
 
 
 def worst_case_coherence(p: Params) -> float:
@@ -199,8 +193,8 @@ def worst_case_coherence(p: Params) -> float:
 
 def bound_constant(wavelength: float, theta0: float, worst_coherence: float,
                    looks: int) -> float:
-    """K = sqrt(lambda^2 sin^2(theta_0) (1 - A^2) / (8 pi^2 A^2 n_L)), the constant of
-    Proposition 1: sigma_h_bar = K r_0 / sqrt(b_perp,1^2 + b_perp,2^2)  (eq. 19)."""
+    """C = sqrt(lambda^2 sin^2(theta_0) (1 - A^2) / (8 pi^2 A^2 n_L)), the constant of
+    Proposition 1: sigma_h_bar = C r_0 / sqrt(sum_k b_perp,k^2)  (eq. 19 for two slaves)."""
     a = worst_coherence
     return math.sqrt(wavelength**2 * math.sin(theta0) ** 2 * (1.0 - a * a)
                      / (8.0 * math.pi**2 * a * a * looks))
@@ -208,12 +202,13 @@ def bound_constant(wavelength: float, theta0: float, worst_coherence: float,
 
 def height_error_bound(wavelength: float, r0: ArrayLike, theta0: float, b_perp_sq_sum: ArrayLike,
                        worst_coherence: float, looks: int) -> ArrayLike:
-    """Proposition 1: sigma_h <= sqrt(lambda^2 r_0^2 sin^2(theta_0) (1 - A^2) /
-    (8 pi^2 A^2 n_L (b_perp,1^2 + b_perp,2^2))) = K r_0 / sqrt(b_perp,1^2 + b_perp,2^2);
-    +inf when both perpendicular baselines vanish.
+    """Proposition 1 for K slaves: sigma_h <= sqrt(lambda^2 r_0^2 sin^2(theta_0) (1 - A^2) /
+    (8 pi^2 A^2 n_L sum_k b_perp,k^2)) = C r_0 / sqrt(sum_k b_perp,k^2); +inf when every
+    perpendicular baseline vanishes. Each sigma_hk <= C r_0 / b_perp,k at coherence >= A, and
+    the fused (sum_k sigma_hk^-2)^(-1/2) is then at most C r_0 (sum_k b_perp,k^2)^(-1/2).
 
-    Single-baseline (benchmark 1) is the same expression with b_perp,2 = 0, i.e. the bound on
-    sigma_h1 (eq. 27 of the appendix).
+    Single-baseline (benchmark 1) is the same expression with one term, the bound on sigma_h1
+    (eq. 27 of the appendix).
     """
     k = bound_constant(wavelength, theta0, worst_coherence, looks)
     with np.errstate(divide="ignore"):

@@ -148,5 +148,5 @@ def plan_metrics(pairs: dict[str, dict[str, float]], looks: int) -> dict[str, ob
         s_h = float(model.height_error(pm["h_amb_m"], s_phi))
         out["pairs"][name] = {"phase_error_rad": s_phi, "sigma_h_m": s_h}
         sig.append(s_h)
-    out["sigma_h_m"] = model.fused_height_error_of_pairs(sig)
+    out["sigma_h_m"] = float(model.fused_height_error(*sig))
     return out

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from uav_insar_planner.plan import SAFE_SEPARATION_M
-from uav_insar_planner.swarm import NUM_UAVS, UAVS
+from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, MAX_UAVS, MIN_UAVS, uavs
 
 SCHEMES = ("proposed", "single-baseline", "fixed-master", "static-power")
 OBJECTIVES = ("exact", "bound", "multilook")
@@ -27,7 +27,8 @@ SOLVERS = ("global", "paper-ao")
 
 @dataclass(frozen=True)
 class ParamSpec:
-    """One user-facing parameter. `length` > 0 means a list of that many numbers."""
+    """One user-facing parameter. `length` > 0 means a list of that many numbers; `per_uav` a
+    list of one number per UAV (num_uavs of them, checked against num_uavs by `params`)."""
 
     name: str
     kind: type  # int, float or str
@@ -40,6 +41,7 @@ class ParamSpec:
     choices: tuple[str, ...] = ()
     hi_open: bool = False
     why: str = ""  # why the range stops where it does (shown with a value outside it)
+    per_uav: bool = False
 
     def allowed(self) -> str:
         """What the parameter allows, in words (node descriptors, errors, the docs)."""
@@ -52,6 +54,8 @@ class ParamSpec:
         what = {int: "an integer", float: "a finite number", str: "a string"}[self.kind]
         if self.length:
             what = f"a list of {self.length} finite numbers"
+        if self.per_uav:
+            what = "a list of num_uavs finite numbers (one per UAV, U0 first)"
         # %g would write an integer bound such as 2**31 - 1 as 2.14748e+09
         num = (lambda v: str(int(v))) if self.kind is int else (lambda v: f"{v:g}")
         if self.lo is not None and self.hi is not None:
@@ -63,10 +67,11 @@ class ParamSpec:
         return what
 
 
-def _f(name, default, desc, lo=None, hi=None, lo_open=False, length=0, hi_open=False, why=""):
+def _f(name, default, desc, lo=None, hi=None, lo_open=False, length=0, hi_open=False, why="",
+       per_uav=False):
     """A float parameter; `why` (the reason for its range) is also appended to `desc`."""
     return ParamSpec(name, float, default, f"{desc}; {why}" if why else desc, lo, hi, lo_open,
-                     length, hi_open=hi_open, why=why)
+                     length, hi_open=hi_open, why=why, per_uav=per_uav)
 
 
 # Lengths stop at 1000 km: beyond any UAV's reach, and their squares and the radar
@@ -76,6 +81,10 @@ _LENGTH_WHY = "1000 km at most, beyond any UAV's reach"
 
 
 PARAM_SPECS: tuple[ParamSpec, ...] = (
+    ParamSpec("num_uavs", int, DEFAULT_NUM_UAVS, "N_UAV, UAVs in the swarm: the master U0 and "
+              "N_UAV - 1 slaves, one interferogram each; every per-UAV list has this length",
+              MIN_UAVS, MAX_UAVS, why=f"{MIN_UAVS} is the single baseline; the certified solver "
+              f"is measured up to {MAX_UAVS}"),
     ParamSpec("num_slots", int, 80, "N, number of time slots", 1, 100000),
     _f("slot_duration_s", 1.0, "delta_t, slot duration [s]", 0.0, 3600.0, True,
        why="at most an hour"),
@@ -98,8 +107,8 @@ PARAM_SPECS: tuple[ParamSpec, ...] = (
     _f("p_com_max_db", 10.1, "P_com^max, peak communication power [dBW] (C9)", -100.0, 60.0),
     _f("e_com_max_j", 594.0, "E_com^max, communication energy budget per UAV [J] (C11)",
        0.0, None, True),
-    _f("rate_min_mbps", [10.0, 16.95, 1.0], "R_min,k, minimum data rate of U0, U1, U2 "
-       "[Mbit/s] (C10)", 0.0, None, length=NUM_UAVS),
+    _f("rate_min_mbps", [10.0, 16.95, 1.0], "R_min,k, minimum data rate of each UAV, U0 first "
+       "[Mbit/s] (C10)", 0.0, None, per_uav=True),
     _f("comm_bandwidth_hz", 1.0e9, "B_c, FDMA bandwidth per UAV [Hz]", 0.0, None, True),
     _f("ref_snr_db", 18.69, "beta_c, channel gain at 1 m over noise power [dB]", -200.0, 200.0),
     _f("coherence_rg_min", 0.8, "gamma_Rg^min, minimum baseline coherence (C7)", 0.01, 1.0,
@@ -159,7 +168,8 @@ PASS_STARTS = ("auto", "capture", "planner")  # who starts the bridge's pass
 POSITION_SOURCES = ("agent", "autopilot")  # where an agent takes its UAV's position from
 
 AGENT_SPECS = (
-    ParamSpec("uav_id", int, 0, "which UAV this agent flies: 0 master, 1, 2", 0, NUM_UAVS - 1),
+    ParamSpec("uav_id", int, 0, "which UAV this agent flies: 0 master, 1..num_uavs - 1 the "
+              "slaves", 0, MAX_UAVS - 1),
     ParamSpec("time_scale", float, 1.0, "mission seconds per wall-clock second", 0.0, 1000.0,
               True),
     ParamSpec("position_noise_std_m", float, 0.0, "std of the position disturbance per axis "
@@ -218,8 +228,8 @@ PLANNER_SPECS = (
 )
 #: The scenario parameters an agent needs (P_max and E_max for the closed loop).
 AGENT_SCENARIO_SPECS = tuple(SPEC_BY_NAME[n] for n in (
-    "num_slots", "slot_duration_s", "speed_mps", "ground_station_m", "comm_bandwidth_hz",
-    "ref_snr_db", "rate_min_mbps", "p_com_max_db", "e_com_max_j"))
+    "num_uavs", "num_slots", "slot_duration_s", "speed_mps", "ground_station_m",
+    "comm_bandwidth_hz", "ref_snr_db", "rate_min_mbps", "p_com_max_db", "e_com_max_j"))
 
 #: The planner's gcs/heartbeat period [s] (ros/gcs_link.py): 2 Hz is ~100 bytes/s on the
 #: radio, and a timeout of a few seconds then spans several heartbeats.
@@ -234,17 +244,18 @@ GCS_TIMEOUT_DEFAULT_S = 5.0
 # The bridge's parameters (ROS descriptors, the parameter reference, BridgeConfig.validate).
 # Defaults pair with `uav-insar-vehicle --sysid 2..4 --listen udpin:127.0.0.1:14552/14562/14572`.
 BRIDGE_SPECS = (
-    ParamSpec("uav_id", int, -1, "fly this UAV only (0..2: one stack per UAV, one connection "
-              "and one sysid, default that UAV's); -1: every UAV (one ground radio)", -1,
-              NUM_UAVS - 1),
+    ParamSpec("uav_id", int, -1, "fly this UAV only (0..num_uavs - 1: one stack per UAV, one "
+              "connection and one sysid, default that UAV's); -1: every UAV (one ground radio)",
+              -1, MAX_UAVS - 1),
     ParamSpec("pass_start", str, "auto", "who starts the pass: capture = this bridge once "
               "every UAV it flies is captured, planner = at the planner's formation/start; "
               "auto = planner with uav_id, else capture", choices=PASS_STARTS),
     ParamSpec("connections", list,
-              [f"udpout:127.0.0.1:{FIRST_PORT + PORT_STEP * k}" for k in UAVS],
+              [f"udpout:127.0.0.1:{FIRST_PORT + PORT_STEP * k}"
+               for k in uavs(DEFAULT_NUM_UAVS)],
               "pymavlink connection string per UAV (or one shared): udpout:HOST:PORT, "
               "udpin:HOST:PORT, tcp:HOST:PORT, /dev/ttyUSB0,57600"),
-    ParamSpec("target_sysids", list, [FIRST_SYSID + k for k in UAVS],
+    ParamSpec("target_sysids", list, [FIRST_SYSID + k for k in uavs(DEFAULT_NUM_UAVS)],
               "MAVLink system id of UAV 0, 1, 2 (1..255, distinct)"),
     ParamSpec("source_sysid", int, 255, "our own system id (ArduPilot: match SYSID_MYGCS)",
               1, 255),

@@ -26,6 +26,7 @@ from uav_insar_planner.param_specs import (
     ParamSpec,
     nodes_taking,
 )
+from uav_insar_planner.swarm import MAX_UAVS, MIN_UAVS
 
 # Re-exported: callers import the table and its choices from here, with the values.
 __all__ = ["LENGTH_MAX_M", "MULTILOOK_MAX_LOOKS", "OBJECTIVES", "PARAM_SPECS", "SCHEMES",
@@ -58,6 +59,7 @@ class Params:
     """Validated scenario in SI units (metres, seconds, watts, bit/s, radians, linear ratios)."""
 
     raw: Mapping[str, Any] = field(repr=False)
+    num_uavs: int
     num_slots: int
     slot_duration_s: float
     z_min: float
@@ -70,7 +72,7 @@ class Params:
     speed: float
     p_max_w: float
     e_max_j: float
-    rate_min_bps: tuple[float, ...]  # one per UAV (swarm.NUM_UAVS)
+    rate_min_bps: tuple[float, ...]  # one per UAV (num_uavs)
     comm_bandwidth_hz: float
     beta_c: float
     coherence_rg_min: float
@@ -99,7 +101,7 @@ class Params:
     solver: str
     #: Per-UAV budgets [J] in place of E_com^max in C11, for a re-plan in mid-mission
     #: (replan.py); None: e_max_j for every UAV. Not a user parameter: `replace` drops it.
-    energy_budget_uav_j: tuple[float, ...] | None = None  # one per UAV (swarm.NUM_UAVS)
+    energy_budget_uav_j: tuple[float, ...] | None = None  # one per UAV (num_uavs)
 
     def energy_budget_j(self, k: int) -> float:
         """E_com^max of UAV k in C11: e_max_j, unless a re-plan gave each UAV its own."""
@@ -153,8 +155,9 @@ def check_value(spec: ParamSpec, value: Any) -> tuple[Any, str | None]:
         if not isinstance(value, str) or (spec.choices and value not in spec.choices):
             return value, bad
         return value, None
-    if spec.length:
-        if not isinstance(value, (list, tuple)) or len(value) != spec.length:
+    if spec.length or spec.per_uav:
+        lengths = range(MIN_UAVS, MAX_UAVS + 1) if spec.per_uav else (spec.length,)
+        if not isinstance(value, (list, tuple)) or len(value) not in lengths:
             return value, bad
         items = []
         for item in value:
@@ -227,6 +230,7 @@ def validate(values: Mapping[str, Any]) -> tuple[dict[str, Any], list[str]]:
     if bad & {"z_min_m", "z_max_m", "slave_look_angle_min_deg", "slave_look_angle_max_deg",
               "radar_bandwidth_hz", "center_frequency_hz"}:
         return clean, problems
+    problems += per_uav_problems(clean, bad)
     if clean["z_min_m"] >= clean["z_max_m"]:
         problems.append(f"z_min_m: value {clean['z_min_m']!r} is not allowed; expected less "
                         f"than z_max_m ({clean['z_max_m']!r})")
@@ -256,6 +260,17 @@ def validate(values: Mapping[str, Any]) -> tuple[dict[str, Any], list[str]]:
     return clean, problems
 
 
+def per_uav_problems(clean: Mapping[str, Any], bad: set[str]) -> list[str]:
+    """Every per-UAV list holds num_uavs values, one per UAV (U0 first)."""
+    if "num_uavs" in bad:
+        return []
+    n = clean["num_uavs"]
+    return [f"{spec.name}: value {shown(clean[spec.name])} is not allowed with num_uavs {n}; "
+            f"expected a list of {n} numbers, one per UAV (U0..U{n - 1})"
+            for spec in PARAM_SPECS
+            if spec.per_uav and spec.name not in bad and len(clean[spec.name]) != n]
+
+
 def objective_problems(objective: Any, solver: Any) -> list[str]:
     """The objective's cross-field rule: `multilook` runs on the global solver only (its looks
     bound is the one of `looks`)."""
@@ -273,6 +288,7 @@ def params_from_mapping(values: Mapping[str, Any]) -> Params:
     deg = math.radians
     return Params(
         raw=dict(v),
+        num_uavs=v["num_uavs"],
         num_slots=v["num_slots"],
         slot_duration_s=v["slot_duration_s"],
         z_min=v["z_min_m"],

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from uav_insar_planner.swarm import UAV_NAMES, UAVS
+from uav_insar_planner.swarm import uav_name
 
 # Two UAVs planned closer than this may touch once each flies with its own position error:
 # standard GNSS (single frequency, SBAS) is good to about 1.5-3 m horizontally (95 %), RTK to
@@ -44,9 +44,9 @@ class ConstraintStatus:
 class Plan:
     """A solved (or infeasible) instance of problem (P).
 
-    formation: (NUM_UAVS, 2) array of (x_k, z_k) in metres, row k = U_k; a row is NaN when
-      the scheme does not fly that UAV (single-baseline has no U_2).
-    p_com_w: (NUM_UAVS, N) communication power in watts, P_com[k][n]; zeros for a UAV not flown.
+    formation: (num_uavs, 2) array of (x_k, z_k) in metres, row k = U_k; a row is NaN when
+      the scheme does not fly that UAV (single-baseline flies U_0 and U_1 only).
+    p_com_w: (num_uavs, N) communication power in watts, P_com[k][n]; zeros for a UAV not flown.
     """
 
     feasible: bool
@@ -68,8 +68,13 @@ class Plan:
     message: str = ""
 
     @property
+    def num_uavs(self) -> int:
+        """N_UAV, the swarm's size: one formation row per UAV."""
+        return len(self.formation)
+
+    @property
     def active_uavs(self) -> list[int]:
-        return [k for k in UAVS if np.all(np.isfinite(self.formation[k]))]
+        return [k for k in range(self.num_uavs) if np.all(np.isfinite(self.formation[k]))]
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary (docs/cli.md, 'uav-insar solve --json')."""
@@ -78,7 +83,8 @@ class Plan:
             return None if v is None or not np.isfinite(v) else float(v)
 
         formation = {}
-        for k, name in enumerate(UAV_NAMES):
+        for k in range(self.num_uavs):
+            name = uav_name(k)
             x, z = self.formation[k]
             formation[name] = None if not np.isfinite(x) else {"x_m": float(x), "z_m": float(z)}
         return {

@@ -2,16 +2,19 @@
 saturates, and its answer mapped back onto the whole mission (no ROS; the planner node calls it).
 
 Lost slave (`remaining_problem`, `full_plan`): from slot n0 on, the master U0 and the
-surviving slave U_s fly the single-baseline problem (benchmark 1, `schemes.active_uavs`) over
-the N - n0 slots left, each within the energy it has left. The reduced problem is Params with
+surviving slaves U_s1 < U_s2 < ... fly an (N_UAV - 1)-UAV problem over the N - n0 slots left,
+each within the energy it has left. The reduced problem is Params with
 
+    num_uavs' = 1 + #survivors,  reduced row i is mission UAV rows[i] = (0, s1, s2, ...)
     num_slots N' = N - n0,  g_y' = g_y - y[n0]  (the along-track origin moved to slot n0: only
                                                  y[n] - g_y enters the model, so this is exact)
-    scheme single-baseline,  R_min,1' = R_min,s  (the survivor plays U1's part)
-    energy_budget_uav_j = (E_left,0, E_left,s, 0 ...)  (C11 per UAV, `Params.energy_budget_j`)
+    R_min' = (R_min,0, R_min,s1, ...)  (each survivor keeps its own rate)
+    energy_budget_uav_j = (E_left,0, E_left,s1, ...)  (C11 per UAV, `Params.energy_budget_j`)
 
-and the objective and solver of the scenario. `full_plan` maps its answer back: formation
-rows 0 and s, the lost slave NaN (as in every Plan, a NaN row is a UAV not flown);
+and the objective and solver of the scenario. Its scheme is the mission's (`reduced_scheme`):
+a fixed master stays fixed and a static schedule static; `proposed` with one survivor left is
+benchmark 1, single-baseline. `full_plan` maps its answer back: formation rows of the
+survivors, the lost slave NaN (as in every Plan, a NaN row is a UAV not flown);
 P_com[k][:n0] keeps the schedule flown so far, P_com[k][n0:] is the new one, the lost UAV's row
 is zero. The plan's metrics and constraint report are the reduced problem's (the remaining
 slots).
@@ -32,7 +35,7 @@ mid-mission holds where it is, and the MAVLink bridge commands LOITER.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -42,89 +45,97 @@ from uav_insar_planner.params import Params
 from uav_insar_planner.plan import Plan
 from uav_insar_planner.solver import solve
 from uav_insar_planner.solver.power import power_schedule
-from uav_insar_planner.swarm import MASTER, NUM_UAVS, SLAVES, UAV_NAMES, uav_name
-
-REDUCED_SCHEME = "single-baseline"
+from uav_insar_planner.swarm import MASTER, slaves, uav_name
 
 
 @dataclass(frozen=True)
 class ReducedProblem:
     """The problem left after UAV `lost` was lost at slot `first_slot`: `params` (SI, its
     slot 0 is the mission's slot first_slot), flown by the mission's UAVs `rows` (reduced
-    row i is UAV rows[i])."""
+    row i is UAV rows[i]), in a swarm of `num_uavs` (the mission's)."""
 
     params: Params
-    rows: tuple[int, int]
+    rows: tuple[int, ...]
     first_slot: int
     lost: int
+    num_uavs: int
 
 
 def energy_left_j(params: Params, power_w: np.ndarray, k: int, first_slot: int) -> float:
     """E_com^max - sum_{n < first_slot} P_com[k][n] delta_t: what UAV k has left when it flew
-    the schedule `power_w` (NUM_UAVS, N) up to slot first_slot."""
+    the schedule `power_w` (num_uavs, N) up to slot first_slot."""
     used = float(np.sum(np.asarray(power_w, dtype=float)[k, :first_slot]))
     return params.e_max_j - used * params.slot_duration_s
 
 
-def surviving_slave(flown: list[int], lost: int) -> int | None:
-    """The slave still flying when `lost` is lost from the UAVs `flown`, or None if none is."""
-    left = [k for k in flown if k != MASTER and k != lost]
-    return left[0] if len(left) == 1 else None
+def surviving_slaves(flown: Sequence[int], lost: int) -> tuple[int, ...]:
+    """The slaves still flying when `lost` is lost from the UAVs `flown` (empty: none)."""
+    return tuple(sorted(k for k in flown if k != MASTER and k != lost))
 
 
-def remaining_problem(params: Params, lost: int, survivor: int, first_slot: int,
+def reduced_scheme(scheme: str, survivors: Sequence[int]) -> str:
+    """The scheme of the problem left: the mission's, `proposed` with one slave left being
+    benchmark 1 (single-baseline), the problem it then is."""
+    return "single-baseline" if scheme == "proposed" and len(survivors) == 1 else scheme
+
+
+def remaining_problem(params: Params, lost: int, survivors: Sequence[int], first_slot: int,
                       energy_left: Mapping[int, float]) -> ReducedProblem:
     """The reduced problem of the module doc. ValueError for the master, a slot outside
     0..N-1 or a negative energy (one line naming the value)."""
-    if lost not in SLAVES or survivor not in SLAVES or survivor == lost:
-        raise ValueError(f"lost: value {lost!r} is not allowed; expected a slave "
-                         f"({' or '.join(map(str, SLAVES))}) other than the survivor "
-                         f"{uav_name(survivor)}")
+    team = tuple(slaves(params.num_uavs))
+    survivors = tuple(sorted(survivors))
+    if lost not in team or not survivors or lost in survivors or any(
+            s not in team for s in survivors) or len(set(survivors)) != len(survivors):
+        raise ValueError(f"lost: value {lost!r} is not allowed with survivors "
+                         f"{list(survivors)!r}; expected a slave ({', '.join(map(str, team))}) "
+                         "that is not among the survivors, and at least one survivor")
     if not 0 <= first_slot < params.num_slots:
         raise ValueError(f"first_slot: value {first_slot!r} is not allowed; expected 0.."
                          f"{params.num_slots - 1}")
-    budgets = (float(energy_left[MASTER]), float(energy_left[survivor]))
+    rows = (MASTER, *survivors)
+    budgets = tuple(float(energy_left[k]) for k in rows)
     if not all(np.isfinite(e) and e > 0.0 for e in budgets):
         raise ValueError(f"energy_left: value {list(budgets)!r} is not allowed; expected "
-                         "finite energies > 0 for the master and the survivor")
+                         "finite energies > 0 for the master and the survivors")
     gx, gy, gz = params.ground_station
     y0 = first_slot * params.speed * params.slot_duration_s  # y[first_slot], equation (1)
-    rate = list(params.raw["rate_min_mbps"])
-    rate[1] = rate[survivor]
-    reduced = params.replace(num_slots=params.num_slots - first_slot, scheme=REDUCED_SCHEME,
+    rate = [params.raw["rate_min_mbps"][k] for k in rows]
+    reduced = params.replace(num_uavs=len(rows), num_slots=params.num_slots - first_slot,
+                             scheme=reduced_scheme(params.scheme, survivors),
                              ground_station_m=[gx, gy - y0, gz], rate_min_mbps=rate)
-    unflown = (0.0,) * (NUM_UAVS - len(budgets))
-    reduced = dataclasses.replace(reduced, energy_budget_uav_j=budgets + unflown)
-    return ReducedProblem(reduced, (MASTER, survivor), first_slot, lost)
+    reduced = dataclasses.replace(reduced, energy_budget_uav_j=budgets)
+    return ReducedProblem(reduced, rows, first_slot, lost, params.num_uavs)
 
 
 def full_plan(problem: ReducedProblem, answer: Plan, flown_power_w: np.ndarray) -> Plan:
     """`answer` to `problem` as a plan of the whole mission (see the module doc)."""
     n0, rows = problem.first_slot, problem.rows
     power = np.array(flown_power_w, dtype=float, copy=True)
-    formation = np.full((NUM_UAVS, 2), np.nan)
+    formation = np.full((problem.num_uavs, 2), np.nan)
     power[:, n0:] = 0.0
     for i, k in enumerate(rows):
         formation[k] = answer.formation[i]
         power[k, n0:] = answer.p_com_w[i]
     power[problem.lost] = 0.0
-    names = {UAV_NAMES[i]: UAV_NAMES[k] for i, k in enumerate(rows)}
+    names = {uav_name(i): uav_name(k) for i, k in enumerate(rows)}
     metrics = {key: ({names.get(n, n): v for n, v in value.items()}
                      if isinstance(value, dict) else value)
                for key, value in answer.metrics.items()}
-    note = (f"re-planned from slot {n0} without {UAV_NAMES[problem.lost]}: "
-            f"{REDUCED_SCHEME} for {UAV_NAMES[MASTER]} and {UAV_NAMES[rows[1]]}")
+    flyers = [uav_name(k) for k in rows]
+    note = (f"re-planned from slot {n0} without {uav_name(problem.lost)}: "
+            f"{problem.params.scheme} for {', '.join(flyers[:-1])} and {flyers[-1]}")
     return dataclasses.replace(answer, formation=formation, p_com_w=power, metrics=metrics,
                                message=note + ("; " + answer.message if answer.message else ""))
 
 
-def replan_without(params: Params, flown_power_w: np.ndarray, lost: int, survivor: int,
-                   first_slot: int, energy_left: Mapping[int, float]
+def replan_without(params: Params, flown_power_w: np.ndarray, lost: int,
+                   survivors: Sequence[int], first_slot: int, energy_left: Mapping[int, float]
                    ) -> tuple[Plan, ReducedProblem]:
     """Solve the problem left after slave `lost` was lost at `first_slot` (`solver.solve`,
     checked by the independent evaluator) and map it onto the whole mission."""
-    problem = remaining_problem(params, lost, survivor, first_slot, energy_left)
-    answer = solve(problem.params, REDUCED_SCHEME)
+    problem = remaining_problem(params, lost, survivors, first_slot, energy_left)
+    answer = solve(problem.params)
     return full_plan(problem, answer, flown_power_w), problem
 
 
@@ -151,7 +162,7 @@ def power_replan(params: Params, plan: Plan, k: int, first_slot: int, energy_lef
         need *= max(energy_left, 0.0) / total_j
     power = np.array(plan.p_com_w, dtype=float, copy=True)
     power[k, first_slot:] = need
-    note = (f"power of {UAV_NAMES[k]} re-planned from slot {first_slot} with "
+    note = (f"power of {uav_name(k)} re-planned from slot {first_slot} with "
             f"{energy_left:.1f} J left, link gain {10 * np.log10(gain):+.1f} dB")
     return dataclasses.replace(plan, p_com_w=power, message=note)
 
@@ -159,7 +170,7 @@ def power_replan(params: Params, plan: Plan, k: int, first_slot: int, energy_lef
 def hold_plan(params: Params, why: str) -> Plan:
     """The plan of a mission that cannot continue: every pose NaN (hold), every power zero."""
     return Plan(feasible=False, scheme=params.scheme, objective=params.objective,
-                solver=params.solver, formation=np.full((NUM_UAVS, 2), np.nan),
-                p_com_w=np.zeros((NUM_UAVS, params.num_slots)), sigma_h_m=float("nan"),
+                solver=params.solver, formation=np.full((params.num_uavs, 2), np.nan),
+                p_com_w=np.zeros((params.num_uavs, params.num_slots)), sigma_h_m=float("nan"),
                 sigma_h_bound_m=float("nan"), iterations=0, solve_time_s=0.0,
                 constraints={}, message=why)

@@ -12,6 +12,7 @@ import numpy as np
 from uav_insar_planner.params import SPEC_BY_NAME, ParamError, Params, shown
 from uav_insar_planner.solver import solve
 from uav_insar_planner.study.executors import Runner, run_serial
+from uav_insar_planner.swarm import MAX_UAVS
 
 _INDEXED = re.compile(r"^(?P<name>[a-z_0-9]+)(?:\[(?P<index>\d+)\])?$")
 
@@ -49,11 +50,10 @@ def parse_sweep_name(text: str, field: str = "sweep NAME") -> tuple[str, int | N
                           "parameter of config/params.yaml, e.g. h_amb_min_m or "
                           "rate_min_mbps[1]"])
     index = m.group("index")
-    if (index is None) != (spec.length == 0) or (index is not None and
-                                                 int(index) >= spec.length):
+    items = MAX_UAVS if spec.per_uav else spec.length  # num_uavs is checked by with_value
+    if (index is None) != (items == 0) or (index is not None and int(index) >= items):
         raise ParamError([f"{field}: value {shown(text)} is not allowed; {spec.name} "
-                          + (f"needs an index 0..{spec.length - 1}" if spec.length
-                             else "takes no index")])
+                          + (f"needs an index 0..{items - 1}" if items else "takes no index")])
     return spec.name, None if index is None else int(index)
 
 
@@ -62,6 +62,9 @@ def with_value(params: Params, name: str, index: int | None, value: float) -> Pa
     if index is None:
         return params.replace(**{name: value})
     items = list(params.raw[name])
+    if index >= len(items):
+        raise ParamError([f"{name}[{index}]: index {index} is not allowed; expected 0.."
+                          f"{len(items) - 1} (one per UAV of num_uavs {params.num_uavs})"])
     items[index] = value
     return params.replace(**{name: items})
 

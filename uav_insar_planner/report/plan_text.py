@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from uav_insar_planner.plan import UAV_NAMES, Plan
+from uav_insar_planner.plan import Plan
+from uav_insar_planner.swarm import uav_name
 
 CONSTRAINT_TEXT = {
     "C1": "altitude z_min <= z_k <= z_max",
@@ -37,7 +38,7 @@ def format_plan(plan: Plan) -> str:
     lines += ["", "formation (across-track plane, metres; target line at x_t, z = 0):",
               "  uav    role      x_m       z_m   range_m  look_deg  swath_m  "
               "P_com min/mean/max W   energy_J"]
-    for k, name in enumerate(UAV_NAMES):
+    for k, name in enumerate(map(uav_name, range(plan.num_uavs))):
         x, z = plan.formation[k]
         if not np.isfinite(x):
             lines.append(f"  {name}  (not flown by this scheme)")

@@ -56,7 +56,7 @@ class LostSlaveReplan:
     params: Params
     plan: Plan
     lost: Lost
-    survivor: int
+    survivors: tuple[int, ...]
     energy_left: dict[int, float]
 
 
@@ -162,8 +162,8 @@ class SwarmWatch:
             log.warning(f"{name} lost at slot {lost.slot}: {lost.why}")
         if plan is None or lost.uav not in plan.active_uavs:
             return  # not flown by the plan: nothing to re-plan
-        survivor = replan.surviving_slave(plan.active_uavs, lost.uav)
-        if lost.uav == MASTER or survivor is None:
+        survivors = replan.surviving_slaves(plan.active_uavs, lost.uav)
+        if lost.uav == MASTER or not survivors:
             who = f"master {name}" if lost.uav == MASTER else f"{name}, the last slave,"
             self._hold(params, lost, f"mission cannot continue: {who} lost at slot "
                                      f"{lost.slot} ({lost.why}); every UAV holds position")
@@ -172,8 +172,8 @@ class SwarmWatch:
             log.info(f"{name} lost after the last slot: nothing left to re-plan")
             return
         with self._lock:
-            energy = {k: self.monitor.energy_left_j(k, lost.slot) for k in (0, survivor)}
-        self._worker.request(LostSlaveReplan(params, plan, lost, survivor, energy),
+            energy = {k: self.monitor.energy_left_j(k, lost.slot) for k in (MASTER, *survivors)}
+        self._worker.request(LostSlaveReplan(params, plan, lost, survivors, energy),
                              f"{name} lost")
 
     def _hold(self, params: Params, lost: Lost, why: str) -> None:
@@ -188,7 +188,7 @@ class SwarmWatch:
     def _solve(self, request: LostSlaveReplan) -> Plan:
         lost = request.lost
         plan, _ = replan.replan_without(request.params, request.plan.p_com_w, lost.uav,
-                                        request.survivor, lost.slot, request.energy_left)
+                                        request.survivors, lost.slot, request.energy_left)
         return plan
 
     def _on_solved(self, request: LostSlaveReplan, plan: Plan | None, error: str | None,

@@ -33,7 +33,7 @@ from uav_insar_planner import model
 from uav_insar_planner.params import Params
 from uav_insar_planner.schemes import slave_uavs
 from uav_insar_planner.solver.power import station_radius_sq
-from uav_insar_planner.swarm import UAVS
+from uav_insar_planner.swarm import uavs
 
 HALF_PI = 0.5 * math.pi
 # Look angles are kept strictly inside (-pi/2, pi/2) so that z = r cos(theta) > 0.
@@ -71,9 +71,9 @@ def make_scenario(p: Params, scheme: str, objective: str,
     th0 = p.theta0
     bp = p.radar_bandwidth_hz / p.center_frequency_hz
     ox, oz = p.ground_station[0] - p.x_t, p.ground_station[2]
-    disk = tuple(station_radius_sq(p, k, scheme, off) for k in UAVS)
+    disk = tuple(station_radius_sq(p, k, scheme, off) for k in uavs(p.num_uavs))
     sc = Scenario(p=p, scheme=scheme, objective=objective, off=off,
-                  slaves=slave_uavs(scheme),
+                  slaves=slave_uavs(scheme, p.num_uavs),
                   gm=model.gamma_m(p), th0=th0, sin0=math.sin(th0), bp=bp, disk_r2=disk,
                   station_dist=math.hypot(ox, oz), station_angle=math.atan2(-ox, oz),
                   r0_lo=0.0, r0_hi=0.0, th_lo=0.0, th_hi=0.0,

@@ -8,8 +8,8 @@ import numpy as np
 
 @dataclass
 class SolverResult:
-    """formation: (NUM_UAVS, 2) rows (x_k, z_k), NaN for a UAV the scheme does not fly; p_com:
-    (NUM_UAVS, N) W.
+    """formation: (num_uavs, 2) rows (x_k, z_k), NaN for a UAV the scheme does not fly; p_com:
+    (num_uavs, N) W.
 
     feasible False means the back end proved (global) or concluded (paper-ao) that no point
     satisfies C1..C11; `blocking` then names the constraints that block it, e.g. ["C8", "C10"].

@@ -37,7 +37,7 @@ from uav_insar_planner.schemes import slave_uavs
 from uav_insar_planner.solver import rays
 from uav_insar_planner.solver.blocking import ALL_FAMILIES
 from uav_insar_planner.solver.power import station_radius_sq
-from uav_insar_planner.swarm import MASTER, NUM_UAVS
+from uav_insar_planner.swarm import MASTER
 
 Z_GRID = 801
 THETA_GRID = 181
@@ -46,7 +46,7 @@ RAY_WINDOW = 1000.0  # metres searched along a ray beyond its lower limit
 
 @dataclass
 class Start:
-    """A feasible formation ((NUM_UAVS, 2), NaN row for an unflown UAV)."""
+    """A feasible formation ((num_uavs, 2), NaN row for an unflown UAV)."""
 
     formation: np.ndarray
 
@@ -173,11 +173,12 @@ def _middle(indices: np.ndarray) -> int:
 
 def _pick_slaves(p: Params, slaves: tuple[int, ...], q0: np.ndarray,
                  candidates: dict) -> dict | None:
-    """Slave positions for master q0, or None. Preferred sides: U1 in I_a, U2 in I_b."""
+    """Slave positions for master q0, or None. Preferred sides alternate: U1, U3, U5 in I_a,
+    U2, U4 in I_b."""
     chosen: dict[int, np.ndarray] = {}
     for k in slaves:
         thetas, pts, ok = candidates[k]
-        side = (thetas < p.theta0) if k == 1 else (thetas > p.theta0)
+        side = (thetas < p.theta0) if k % 2 else (thetas > p.theta0)
         pool = np.flatnonzero(ok & side)
         if pool.size == 0:
             pool = np.flatnonzero(ok)
@@ -202,7 +203,7 @@ def find_start(p: Params, scheme: str, families: Iterable[str] = ALL_FAMILIES,
     `first` stops at the first feasible master altitude (an existence test)."""
     fam = frozenset(families)
     masters, mok = _master_grid(p, scheme, fam)
-    slaves = slave_uavs(scheme)
+    slaves = slave_uavs(scheme, p.num_uavs)
     if "C4" not in fam:
         p = p.replace(d_min_m=0.0)
     feasible: list[tuple[int, dict]] = []
@@ -221,7 +222,7 @@ def find_start(p: Params, scheme: str, families: Iterable[str] = ALL_FAMILIES,
     if not feasible:
         return None
     i, chosen = feasible[_middle(np.arange(len(feasible)))]
-    formation = np.full((NUM_UAVS, 2), np.nan)
+    formation = np.full((p.num_uavs, 2), np.nan)
     formation[MASTER] = masters[i]
     for k, q in chosen.items():
         formation[k] = q

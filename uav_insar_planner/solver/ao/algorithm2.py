@@ -37,7 +37,6 @@ from uav_insar_planner.solver.ao.slave import SlaveProblem
 from uav_insar_planner.solver.power import schedules
 from uav_insar_planner.solver.result import SolverResult
 from uav_insar_planner.solver.start_grid import find_start
-from uav_insar_planner.swarm import NUM_UAVS
 
 MAX_OUTER = 50
 
@@ -53,14 +52,14 @@ def blocking_families(p: Params, scheme: str) -> list[str]:
 
 def solve_ao(p: Params, scheme: str, objective: str) -> SolverResult:
     """Algorithm 2 for `scheme`; see the module docstring. Deterministic."""
-    slaves = list(slave_uavs(scheme))
+    slaves = list(slave_uavs(scheme, p.num_uavs))
     note = ("objective 'exact' requested: paper-ao minimises Proposition 1's bound, as the paper "
             "does; " if objective == "exact" else "")
     start = find_start(p, scheme)
     if start is None:
         blocking = blocking_families(p, scheme)
-        return SolverResult(False, np.full((NUM_UAVS, 2), np.nan),
-                            np.zeros((NUM_UAVS, p.num_slots)), 0,
+        return SolverResult(False, np.full((p.num_uavs, 2), np.nan),
+                            np.zeros((p.num_uavs, p.num_slots)), 0,
                             blocking=blocking,
                             message=note + "no feasible start: constraint families "
                             + ", ".join(blocking) + " cannot hold together")

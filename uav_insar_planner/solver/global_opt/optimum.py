@@ -20,7 +20,7 @@ from uav_insar_planner.params import Params
 from uav_insar_planner.solver import power, rays
 from uav_insar_planner.solver.global_opt import branch_bound, infeasibility
 from uav_insar_planner.solver.result import SolverResult
-from uav_insar_planner.swarm import MASTER, NUM_UAVS
+from uav_insar_planner.swarm import MASTER
 
 # Branch and bound closes a box when its bound is within REL_GAP of the incumbent, so the
 # reported relative gap is at most REL_GAP (the target is 1e-4).
@@ -28,8 +28,8 @@ REL_GAP = 5e-5
 
 
 def _nan_result(p: Params, nodes: int, **kw) -> SolverResult:
-    return SolverResult(feasible=False, formation=np.full((NUM_UAVS, 2), np.nan),
-                        p_com=np.zeros((NUM_UAVS, p.num_slots)), iterations=nodes, **kw)
+    return SolverResult(feasible=False, formation=np.full((p.num_uavs, 2), np.nan),
+                        p_com=np.zeros((p.num_uavs, p.num_slots)), iterations=nodes, **kw)
 
 
 def master_on_c2(p: Params) -> bool:
@@ -39,11 +39,11 @@ def master_on_c2(p: Params) -> bool:
 
 
 def formation_of(sc: rays.Scenario, point) -> np.ndarray:
-    """(NUM_UAVS, 2) formation from (r0, theta1, theta2, r1, r2), the dual-baseline point of
+    """(num_uavs, 2) formation from (r0, theta1, theta2, r1, r2), the dual-baseline point of
     the search (the second slave's part unused when the scheme flies one); NaN row for a UAV
     not flown."""
     r0, t1, t2, r1, r2 = point
-    q = np.full((NUM_UAVS, 2), np.nan)
+    q = np.full((sc.p.num_uavs, 2), np.nan)
     if sc.scheme == "fixed-master":
         q[MASTER] = sc.p.master_fixed
     else:
@@ -62,6 +62,8 @@ def solve_global(p: Params, scheme: str, objective: str) -> SolverResult:
                            certificate="q0_fixed violates C2", message="q0_fixed is off the "
                            "master's look-angle line x0 = x_t - z0 tan(theta_0)")
     sc = rays.make_scenario(p, scheme, objective)
+    if len(sc.slaves) > 2:
+        raise NotImplementedError("the branch and bound searches one or two slaves")
     res = branch_bound.search(sc, rel_gap=REL_GAP)
     if res.point is None:
         block = infeasibility.irreducible_set(p, scheme)
