@@ -8,18 +8,18 @@
 from __future__ import annotations
 
 from uav_insar_planner.params import Params
-from uav_insar_planner.swarm import MASTER, SLAVES, UAVS
+from uav_insar_planner.swarm import MASTER, NUM_UAVS, SLAVES
 
 
-def active_uavs(scheme: str) -> tuple[int, ...]:
-    """The UAVs a scheme flies: benchmark 1 (single-baseline) flies the master and its first
-    slave only."""
-    return (MASTER, SLAVES[0]) if scheme == "single-baseline" else tuple(UAVS)
+def active_uavs(scheme: str, num_uavs: int = NUM_UAVS) -> tuple[int, ...]:
+    """The UAVs a scheme flies out of a swarm of `num_uavs`: benchmark 1 (single-baseline)
+    flies the master and its first slave only."""
+    return (MASTER, SLAVES[0]) if scheme == "single-baseline" else tuple(range(num_uavs))
 
 
-def slave_uavs(scheme: str) -> tuple[int, ...]:
+def slave_uavs(scheme: str, num_uavs: int = NUM_UAVS) -> tuple[int, ...]:
     """The slaves a scheme flies: (1,) for single-baseline, else every slave."""
-    return tuple(k for k in active_uavs(scheme) if k != MASTER)
+    return tuple(k for k in active_uavs(scheme, num_uavs) if k != MASTER)
 
 
 def static_power_w(p: Params) -> float:

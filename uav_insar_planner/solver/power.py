@@ -17,7 +17,6 @@ import numpy as np
 from uav_insar_planner import model
 from uav_insar_planner.params import Params
 from uav_insar_planner.schemes import static_power_w
-from uav_insar_planner.swarm import NUM_UAVS, UAVS
 
 
 def rate_cost(p: Params, k: int) -> float:
@@ -61,9 +60,9 @@ def power_schedule(p: Params, k: int, x: float, z: float, scheme: str) -> np.nda
 
 
 def schedules(p: Params, formation: np.ndarray, scheme: str) -> np.ndarray:
-    """(NUM_UAVS, N) schedules for a formation; zero rows for UAVs not flown (NaN rows)."""
-    out = np.zeros((NUM_UAVS, p.num_slots))
-    for k in UAVS:
+    """(n, N) schedules for an n-UAV formation; zero rows for UAVs not flown (NaN rows)."""
+    out = np.zeros((len(formation), p.num_slots))
+    for k in range(len(formation)):
         x, z = formation[k]
         if np.isfinite(x):
             out[k] = power_schedule(p, k, x, z, scheme)

@@ -33,7 +33,6 @@ from uav_insar_planner import model
 from uav_insar_planner.params import Params
 from uav_insar_planner.schemes import slave_uavs
 from uav_insar_planner.solver.power import station_radius_sq
-from uav_insar_planner.swarm import UAVS
 
 HALF_PI = 0.5 * math.pi
 # Look angles are kept strictly inside (-pi/2, pi/2) so that z = r cos(theta) > 0.
@@ -71,9 +70,11 @@ def make_scenario(p: Params, scheme: str, objective: str,
     th0 = p.theta0
     bp = p.radar_bandwidth_hz / p.center_frequency_hz
     ox, oz = p.ground_station[0] - p.x_t, p.ground_station[2]
-    disk = tuple(station_radius_sq(p, k, scheme, off) for k in UAVS)
+    # The per-UAV rate list sets the swarm's size (Params.num_uavs is its length).
+    n_uavs = len(p.rate_min_bps)
+    disk = tuple(station_radius_sq(p, k, scheme, off) for k in range(n_uavs))
     sc = Scenario(p=p, scheme=scheme, objective=objective, off=off,
-                  slaves=slave_uavs(scheme),
+                  slaves=slave_uavs(scheme, n_uavs),
                   gm=model.gamma_m(p), th0=th0, sin0=math.sin(th0), bp=bp, disk_r2=disk,
                   station_dist=math.hypot(ox, oz), station_angle=math.atan2(-ox, oz),
                   r0_lo=0.0, r0_hi=0.0, th_lo=0.0, th_hi=0.0,
@@ -222,7 +223,7 @@ def weight(sc: Scenario, b_perp, g_rg, g_snr):
 
 
 def objective_from_weights(sc: Scenario, r0, wsum):
-    """sigma_h (or its bound) = lambda r0 sin(theta_0) / (2 pi sqrt(w_1 + w_2))."""
+    """sigma_h (or its bound) = lambda r0 sin(theta_0) / (2 pi sqrt(sum_k w_k))."""
     with np.errstate(divide="ignore"):
         return sc.p.wavelength * np.asarray(r0) * sc.sin0 / (2.0 * math.pi * np.sqrt(wsum))
 

@@ -20,7 +20,7 @@ from uav_insar_planner.params import Params
 from uav_insar_planner.solver import power, rays
 from uav_insar_planner.solver.global_opt import branch_bound, infeasibility
 from uav_insar_planner.solver.result import SolverResult
-from uav_insar_planner.swarm import MASTER, NUM_UAVS
+from uav_insar_planner.swarm import MASTER
 
 # Branch and bound closes a box when its bound is within REL_GAP of the incumbent, so the
 # reported relative gap is at most REL_GAP (the target is 1e-4).
@@ -28,8 +28,9 @@ REL_GAP = 5e-5
 
 
 def _nan_result(p: Params, nodes: int, **kw) -> SolverResult:
-    return SolverResult(feasible=False, formation=np.full((NUM_UAVS, 2), np.nan),
-                        p_com=np.zeros((NUM_UAVS, p.num_slots)), iterations=nodes, **kw)
+    n_uavs = len(p.rate_min_bps)
+    return SolverResult(feasible=False, formation=np.full((n_uavs, 2), np.nan),
+                        p_com=np.zeros((n_uavs, p.num_slots)), iterations=nodes, **kw)
 
 
 def master_on_c2(p: Params) -> bool:
@@ -39,16 +40,16 @@ def master_on_c2(p: Params) -> bool:
 
 
 def formation_of(sc: rays.Scenario, point) -> np.ndarray:
-    """(NUM_UAVS, 2) formation from (r0, theta1, theta2, r1, r2), the dual-baseline point of
-    the search (the second slave's part unused when the scheme flies one); NaN row for a UAV
-    not flown."""
-    r0, t1, t2, r1, r2 = point
-    q = np.full((NUM_UAVS, 2), np.nan)
+    """(n, 2) formation for the scenario's n UAVs (len(p.rate_min_bps)) from the search point
+    (r0, slave angles, slave ranges), one angle and range per slave of sc.slaves; NaN row for
+    a UAV not flown."""
+    r0, thetas, ranges = point
+    q = np.full((len(sc.p.rate_min_bps), 2), np.nan)
     if sc.scheme == "fixed-master":
         q[MASTER] = sc.p.master_fixed
     else:
         q[MASTER] = rays.position(sc, r0, sc.th0)
-    for k, r, t in zip(sc.slaves, (r1, r2), (t1, t2), strict=False):  # one or two slaves
+    for k, r, t in zip(sc.slaves, ranges, thetas, strict=True):
         q[k] = rays.position(sc, r, t)
     return q
 
@@ -75,17 +76,18 @@ def solve_global(p: Params, scheme: str, objective: str) -> SolverResult:
                                message="no feasible point found and infeasibility not proven "
                                f"within {res.nodes} boxes; " + together)
         return _nan_result(p, res.nodes, blocking=block, lower_bound=math.inf,
-                           certificate="infeasible: every box of (r0, theta1, theta2) proven "
-                           "empty by interval bounds of the C1-C11 range limits",
+                           certificate="infeasible: every box of ("
+                           + ", ".join(["r0"] + [f"theta{k}" for k in sc.slaves])
+                           + ") proven empty by interval bounds of the C1-C11 range limits",
                            message=together)
     # The search's incumbent is a box centre within REL_GAP of the optimum; a local compass
     # search takes it to the optimum to machine-level accuracy (value <= the incumbent's).
-    widths = (sc.r0_hi - sc.r0_lo, sc.th_hi - sc.th_lo, sc.th_hi - sc.th_lo)
+    widths = (sc.r0_hi - sc.r0_lo,) + (sc.th_hi - sc.th_lo,) * len(sc.slaves)
     value, point = branch_bound.polish(sc, res.point, [1e-3 * w for w in widths])
     lower = min(res.lower_bound, value)
     q = formation_of(sc, point)
     gap = (value - lower) / value
-    dims = "r0, theta1, theta2" if len(sc.slaves) == 2 else "r0, theta1"
+    dims = ", ".join(["r0"] + [f"theta{k}" for k in sc.slaves])
     return SolverResult(
         feasible=True, formation=q, p_com=power.schedules(p, q, scheme), iterations=res.nodes,
         lower_bound=lower, gap=gap,

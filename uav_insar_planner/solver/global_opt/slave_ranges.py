@@ -1,6 +1,6 @@
 """The slaves' best ranges for given look angles, and interval bounds over boxes of angles.
 
-All three objectives are sigma = lambda r0 sin(theta_0) / (2 pi sqrt(w_1 + w_2)) with
+All three objectives are sigma = lambda r0 sin(theta_0) / (2 pi sqrt(sum_k w_k)) with
 w_k = b_perp,k^2 / sigma_Phi,k^2 (rays.weight). For fixed (r0, theta_k), w_k is increasing in
 the slave range r: b_perp = r |sin(theta - theta_0)| grows linearly, and for `exact`, with
 s = r0^2 r / gamma_m and gamma = K / sqrt(1 + s) (K < 1 collects gamma_Rg, the master's SNR
@@ -74,7 +74,7 @@ def best_ranges(sc: Scenario, r0, th1, th2=None):
         f = np.where(np.isfinite(r1) & (w > 0) & (r0 > 0), _from_normalised(sc, w), np.inf)
         return f, r1, np.full_like(r1, np.nan)
     th2 = np.asarray(th2, dtype=float)
-    comps2 = _components(sc, 2, r0, th2)
+    comps2 = _components(sc, sc.slaves[1], r0, th2)
     c = np.cos(th1 - th2)
     d2 = sc.p.d_min**2 if sc.on("C4") else 0.0
     best_w = np.full(np.broadcast(r0, th1, th2).shape, -np.inf)
@@ -170,35 +170,32 @@ def weight_bound(sc: Scenario, r0a, rho, smax, g_rg):
     return np.where(np.isnan(w), np.inf, w)
 
 
-def box_lower_bound(sc: Scenario, r0a, r0b, t1a, t1b, t2a=None, t2b=None):
-    """A lower bound on the objective over every feasible point of the boxes
-    (+inf: the box holds no feasible point). C4 between slave and master is relaxed away;
-    C4 between the slaves is kept through the ellipse with c_max = cos of the box's largest
-    angle difference, which contains the true exclusion ellipse of every angle pair in it."""
-    lo1, up1, s1, g1 = slave_box(sc, sc.slaves[0], r0a, r0b, t1a, t1b)
-    ok = lo1 <= up1
-    if len(sc.slaves) == 1:
-        w = weight_bound(sc, r0a, up1, s1, g1)
-        return np.where(ok, _from_normalised(sc, w), np.inf)
-    lo2, up2, s2, g2 = slave_box(sc, 2, r0a, r0b, t2a, t2b)
-    ok &= lo2 <= up2
+def pair_weight_bound(sc: Scenario, r0a, one, two):
+    """Upper bound on w_i / r0^2 + w_j / r0^2 over a box for two slaves kept d_min apart (C4),
+    -inf where the pair provably has no feasible point. `one` and `two` are
+    (lo, up, smax, g_rg, theta_a, theta_b): slave_box's pieces and the angle interval.
+
+    C4 is kept through the ellipse with c_max = cos of the box's largest angle difference,
+    which contains the true exclusion ellipse of every angle pair in it; by the Pareto argument
+    the pair's best is at (up_1, up_2) when that is outside, else at (up_1, y_lo(up_1)) or
+    (x_lo(up_2), up_2)."""
+    lo1, up1, s1, g1, t1a, t1b = one
+    lo2, up2, s2, g2, t2a, t2b = two
     w_top = weight_bound(sc, r0a, up1, s1, g1) + weight_bound(sc, r0a, up2, s2, g2)
     if not sc.on("C4"):
-        wbest = np.where(ok, w_top, -np.inf)
-    else:
-        dmax = np.minimum(np.maximum(np.abs(t1b - t2a), np.abs(t2b - t1a)), math.pi)
-        c = np.cos(dmax)
-        d2 = sc.p.d_min**2
-        with np.errstate(invalid="ignore"):
-            inside = up1 * up1 + up2 * up2 - 2.0 * c * up1 * up2 < d2
-            y = _lower_crossing(up1, c, d2)
-            x = _lower_crossing(up2, c, d2)
-            wa = np.where(y >= lo2, weight_bound(sc, r0a, up1, s1, g1)
-                          + weight_bound(sc, r0a, np.maximum(y, 0.0), s2, g2), -np.inf)
-            wb = np.where(x >= lo1, weight_bound(sc, r0a, np.maximum(x, 0.0), s1, g1)
-                          + weight_bound(sc, r0a, up2, s2, g2), -np.inf)
-        wbest = np.where(ok, np.where(inside, np.maximum(wa, wb), w_top), -np.inf)
-    return np.where(wbest > -np.inf, _from_normalised(sc, wbest), np.inf)
+        return w_top
+    dmax = np.minimum(np.maximum(np.abs(t1b - t2a), np.abs(t2b - t1a)), math.pi)
+    c = np.cos(dmax)
+    d2 = sc.p.d_min**2
+    with np.errstate(invalid="ignore"):
+        inside = up1 * up1 + up2 * up2 - 2.0 * c * up1 * up2 < d2
+        y = _lower_crossing(up1, c, d2)
+        x = _lower_crossing(up2, c, d2)
+        wa = np.where(y >= lo2, weight_bound(sc, r0a, up1, s1, g1)
+                      + weight_bound(sc, r0a, np.maximum(y, 0.0), s2, g2), -np.inf)
+        wb = np.where(x >= lo1, weight_bound(sc, r0a, np.maximum(x, 0.0), s1, g1)
+                      + weight_bound(sc, r0a, up2, s2, g2), -np.inf)
+    return np.where(inside, np.maximum(wa, wb), w_top)
 
 
 def _from_normalised(sc: Scenario, wn):
