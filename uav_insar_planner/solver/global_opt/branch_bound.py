@@ -29,7 +29,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from uav_insar_planner.solver.global_opt import slave_sets
+from uav_insar_planner.solver.global_opt import local_refine, slave_sets
 from uav_insar_planner.solver.rays import Scenario
 
 R0A, R0B = 0, 1
@@ -40,13 +40,14 @@ class SearchResult:
     """value: best objective found (+inf: none); point: (r0, slave angles, slave ranges), the
     angles and ranges one per slave of sc.slaves; lower_bound: proven bound on the optimum
     (+inf when infeasibility is proven); exhausted: every box was closed (the certificate is
-    complete)."""
+    complete); refined: the point is local_refine's (no better box centre turned up)."""
 
     value: float
     point: tuple[float, tuple[float, ...], tuple[float, ...]] | None
     lower_bound: float
     nodes: int
     exhausted: bool
+    refined: bool = False
 
 
 def interchangeable_pairs(sc: Scenario) -> list[tuple[int, int]]:
@@ -135,12 +136,14 @@ def _incumbent(sc: Scenario, boxes: np.ndarray):
 def _coarse_splits(k_count: int) -> int:
     """Bisections of the root before the first round: a few thousand boxes, so that the first
     incumbent is already good."""
-    return 7 if k_count == 1 else 10 if k_count == 2 else 4 * (k_count + 1)
+    return 7 if k_count == 1 else 10 if k_count == 2 else 12
 
 
 def search(sc: Scenario, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: int = 4096,
-           stop_when_feasible: bool = False) -> SearchResult:
-    """Best-first (in batches) branch and bound; see the module docstring."""
+           stop_when_feasible: bool = False, refine: bool = False) -> SearchResult:
+    """Best-first (in batches) branch and bound; see the module docstring. refine: take the
+    first incumbent to its local optimum (local_refine), which the optimisation wants and a
+    feasibility test does not."""
     if sc.r0_lo > sc.r0_hi or sc.th_lo > sc.th_hi:
         return SearchResult(math.inf, None, math.inf, 0, True)
     k_count = len(sc.slaves)
@@ -148,7 +151,7 @@ def search(sc: Scenario, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch:
     boxes = np.array([[sc.r0_lo, sc.r0_hi] + [sc.th_lo, sc.th_hi] * k_count])
     for _ in range(_coarse_splits(k_count)):
         boxes = _order(_split(sc, boxes), pairs)
-    best_val, best_pt = math.inf, None
+    best_val, best_pt, refined = math.inf, None, None
     closed_lb, nodes = math.inf, len(boxes)
     parked, parked_lb = boxes[:0], np.empty(0)
     while True:
@@ -157,6 +160,11 @@ def search(sc: Scenario, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch:
         keep = np.isfinite(lb)
         boxes, lb = boxes[keep], lb[keep]
         f, pt = _incumbent(sc, boxes)
+        if refine and best_pt is None and pt is not None:
+            # The first incumbent: take it to its local optimum at once, so that the boxes
+            # are closed against (usually) the optimum from then on.
+            f, pt, _ = local_refine.refine(sc, pt, f)
+            refined = pt
         if f < best_val:
             best_val, best_pt = f, pt
         if stop_when_feasible and best_pt is not None:
@@ -184,7 +192,8 @@ def search(sc: Scenario, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch:
         nodes += len(boxes)
     open_lb = float(lb.min()) if len(boxes) else math.inf
     lower = min(closed_lb, open_lb, best_val)
-    return SearchResult(best_val, best_pt, lower, nodes, not len(boxes))
+    return SearchResult(best_val, best_pt, lower, nodes, not len(boxes),
+                        refined=best_pt is not None and best_pt is refined)
 
 
 def polish(sc: Scenario, point, steps, iterations: int = 80):

@@ -18,13 +18,15 @@ import numpy as np
 from uav_insar_planner import model
 from uav_insar_planner.params import Params
 from uav_insar_planner.solver import power, rays
-from uav_insar_planner.solver.global_opt import branch_bound, infeasibility
+from uav_insar_planner.solver.global_opt import branch_bound, infeasibility, local_refine
 from uav_insar_planner.solver.result import SolverResult
 from uav_insar_planner.swarm import MASTER
 
 # Branch and bound closes a box when its bound is within REL_GAP of the incumbent, so the
 # reported relative gap is at most REL_GAP (the target is 1e-4).
 REL_GAP = 5e-5
+# The compass search after SLSQP starts at this fraction of the domain's widths.
+POLISH_STEP = 1e-3
 
 
 def _nan_result(p: Params, nodes: int, **kw) -> SolverResult:
@@ -63,7 +65,7 @@ def solve_global(p: Params, scheme: str, objective: str) -> SolverResult:
                            certificate="q0_fixed violates C2", message="q0_fixed is off the "
                            "master's look-angle line x0 = x_t - z0 tan(theta_0)")
     sc = rays.make_scenario(p, scheme, objective)
-    res = branch_bound.search(sc, rel_gap=REL_GAP)
+    res = branch_bound.search(sc, rel_gap=REL_GAP, refine=True)
     if res.point is None:
         block = infeasibility.irreducible_set(p, scheme)
         _, fixes = infeasibility.blocking_sets(p, scheme)
@@ -80,10 +82,15 @@ def solve_global(p: Params, scheme: str, objective: str) -> SolverResult:
                            + ", ".join(["r0"] + [f"theta{k}" for k in sc.slaves])
                            + ") proven empty by interval bounds of the C1-C11 range limits",
                            message=together)
-    # The search's incumbent is a box centre within REL_GAP of the optimum; a local compass
-    # search takes it to the optimum to machine-level accuracy (value <= the incumbent's).
-    widths = (sc.r0_hi - sc.r0_lo,) + (sc.th_hi - sc.th_lo,) * len(sc.slaves)
-    value, point = branch_bound.polish(sc, res.point, [1e-3 * w for w in widths])
+    # The search's incumbent is within REL_GAP of the optimum; SLSQP on the ray coordinates
+    # takes it to the optimum's vertex (value <= the incumbent's, re-checked on the ray model),
+    # and a compass search on the angles stands in when SLSQP ends off the feasible set.
+    value, point, landed = res.value, res.point, res.refined
+    if not landed:
+        value, point, landed = local_refine.refine(sc, point, value)
+    if not landed:
+        widths = (sc.r0_hi - sc.r0_lo,) + (sc.th_hi - sc.th_lo,) * len(sc.slaves)
+        value, point = branch_bound.polish(sc, point, [POLISH_STEP * w for w in widths])
     lower = min(res.lower_bound, value)
     q = formation_of(sc, point)
     gap = (value - lower) / value

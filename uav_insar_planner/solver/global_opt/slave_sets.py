@@ -100,18 +100,22 @@ def greedy_ranges(sc: Scenario, r0, thetas: np.ndarray, order) -> tuple[np.ndarr
                                                                 thetas[:, j])
         r = np.where(lo_b <= top_b, top_b, top_a)
         hole_top = np.where(lo_b <= top_b, lo_b, np.inf)  # above it lies the upper component
-        for _ in range(len(placed) + 1):  # each pass can only lower r; a clash per pass
-            for i in placed:
-                c = np.cos(thetas[:, i] - thetas[:, j])
+        cos = [np.cos(thetas[:, i] - thetas[:, j]) for i in placed]
+        for _ in range(len(placed) + 1):  # each pass only lowers r; stop when none clashes
+            moved = False
+            for i, c in zip(placed, cos, strict=True):
                 ri = ranges[:, i]
                 with np.errstate(invalid="ignore"):
                     clash = ri * ri + r * r - 2.0 * c * ri * r < d2
+                if clash.any():
+                    moved = True
                     r = np.where(clash, slave_ranges._lower_crossing(ri, c, d2), r)
             r = np.where((r < hole_top) & (r > top_a), top_a, r)
+            if not moved:
+                break
         with np.errstate(invalid="ignore"):
             fits = (r >= lo_a) & (r <= np.maximum(top_a, top_b)) & ((r <= top_a) | (r >= lo_b))
-        for i in placed:
-            c = np.cos(thetas[:, i] - thetas[:, j])
+        for i, c in zip(placed, cos, strict=True):
             ri = ranges[:, i]
             with np.errstate(invalid="ignore"):
                 fits &= ri * ri + r * r - 2.0 * c * ri * r >= d2 * (1.0 - 1e-12)
