@@ -108,6 +108,8 @@ def _split(sc: Scenario, b: np.ndarray) -> np.ndarray:
 
 
 PROJECT_AFTER = 20_000
+# A round bisects its boxes until there are about batch / ROUND_FILL of them (at most 16x).
+ROUND_FILL = 4
 
 
 def _a_slave_is_blocked(sc: Scenario) -> bool:
@@ -133,6 +135,18 @@ def _incumbent(sc: Scenario, boxes: np.ndarray):
     return float(f[i]), (float(r0[i]), tuple(map(float, th[i])), tuple(map(float, ranges[i])))
 
 
+# Local solves (SLSQP, some milliseconds each) of new incumbents per search.
+MAX_REFINES = 4
+# Box centres tried for a better incumbent per round: those of the smallest lower bounds.
+INCUMBENT_BOXES = 512
+
+
+def _most_promising(boxes: np.ndarray, lb: np.ndarray) -> np.ndarray:
+    if len(boxes) <= INCUMBENT_BOXES:
+        return boxes
+    return boxes[np.argpartition(lb, INCUMBENT_BOXES)[:INCUMBENT_BOXES]]
+
+
 def _coarse_splits(k_count: int) -> int:
     """Bisections of the root before the first round: a few thousand boxes, so that the first
     incumbent is already good."""
@@ -141,9 +155,9 @@ def _coarse_splits(k_count: int) -> int:
 
 def search(sc: Scenario, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: int = 4096,
            stop_when_feasible: bool = False, refine: bool = False) -> SearchResult:
-    """Best-first (in batches) branch and bound; see the module docstring. refine: take the
-    first incumbent to its local optimum (local_refine), which the optimisation wants and a
-    feasibility test does not."""
+    """Best-first (in batches) branch and bound; see the module docstring. refine: take
+    markedly better incumbents (up to MAX_REFINES) to their local optimum (local_refine),
+    which the optimisation wants and a feasibility test does not."""
     if sc.r0_lo > sc.r0_hi or sc.th_lo > sc.th_hi:
         return SearchResult(math.inf, None, math.inf, 0, True)
     k_count = len(sc.slaves)
@@ -151,7 +165,7 @@ def search(sc: Scenario, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch:
     boxes = np.array([[sc.r0_lo, sc.r0_hi] + [sc.th_lo, sc.th_hi] * k_count])
     for _ in range(_coarse_splits(k_count)):
         boxes = _order(_split(sc, boxes), pairs)
-    best_val, best_pt, refined = math.inf, None, None
+    best_val, best_pt, refined, refines = math.inf, None, None, 0
     closed_lb, nodes = math.inf, len(boxes)
     parked, parked_lb = boxes[:0], np.empty(0)
     while True:
@@ -159,12 +173,12 @@ def search(sc: Scenario, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch:
         lb = slave_sets.box_lower_bound(sc, boxes)
         keep = np.isfinite(lb)
         boxes, lb = boxes[keep], lb[keep]
-        f, pt = _incumbent(sc, boxes)
-        if refine and best_pt is None and pt is not None:
-            # The first incumbent: take it to its local optimum at once, so that the boxes
-            # are closed against (usually) the optimum from then on.
+        f, pt = _incumbent(sc, _most_promising(boxes, lb))
+        if refine and refines < MAX_REFINES and f < best_val * (1.0 - rel_gap):
+            # A markedly better incumbent: take it to its local optimum at once, so that the
+            # boxes are closed against (usually) the optimum from then on.
             f, pt, _ = local_refine.refine(sc, pt, f)
-            refined = pt
+            refined, refines = pt, refines + 1
         if f < best_val:
             best_val, best_pt = f, pt
         if stop_when_feasible and best_pt is not None:
@@ -187,7 +201,7 @@ def search(sc: Scenario, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch:
             parked, parked_lb = boxes[:0], lb[:0]
         # Few open boxes: bisect each several times per round (the cost of a round is mostly
         # fixed numpy overhead, so fewer, fuller rounds are faster).
-        for _ in range(max(1, min(4, int(math.log2(batch / 4 / len(boxes)))))):
+        for _ in range(max(1, min(4, int(math.log2(batch / ROUND_FILL / len(boxes)))))):
             boxes = _split(sc, boxes)
         nodes += len(boxes)
     open_lb = float(lb.min()) if len(boxes) else math.inf

@@ -87,31 +87,36 @@ def _with_jacobian(fun, v: np.ndarray):
 def refine(sc: Scenario, point, value: float):
     """(value, point, landed): the SLSQP optimum from `point` when the ray model confirms it
     feasible and it is better, else the input unchanged; landed: SLSQP ended at a point the
-    ray model accepts (no better one means `point` was already its local optimum)."""
+    ray model accepts (no better one means `point` was already its local optimum).
+
+    The angles are scaled by r0 (metres of arc) so that every variable is in metres, and the
+    objective by 1 / value, which lets SLSQP stop at ftol = 1e-12 within a few iterations."""
     k_count = len(sc.slaves)
     v0 = np.array([point[0], *point[1], *point[2]], dtype=float)
-    if not np.all(np.isfinite(v0)) or not math.isfinite(value):
+    if not np.all(np.isfinite(v0)) or not math.isfinite(value) or v0[0] <= 0:
         return value, point, False
-    scale = 1.0 / value
-    bounds = ([(sc.r0_lo, sc.r0_hi)] + [(sc.th_lo, sc.th_hi)] * k_count
+    scale = np.array([1.0] + [v0[0]] * k_count + [1.0] * k_count)
+    bounds = ([(sc.r0_lo, sc.r0_hi)] + [(sc.th_lo * v0[0], sc.th_hi * v0[0])] * k_count
               + [(0.0, None)] * k_count)
     cache: dict[bytes, tuple] = {}
 
-    def parts(v, which):
-        key = v.tobytes()
+    def parts(u):
+        key = u.tobytes()
         if key not in cache:
+            v = u / scale
+            f, df = _with_jacobian(lambda w: _objective(sc, w) / value, v)
+            g, dg = _with_jacobian(lambda w: _constraints(sc, w), v)
             cache.clear()
-            cache[key] = (_with_jacobian(lambda u: _objective(sc, u) * scale, v),
-                          _with_jacobian(lambda u: _constraints(sc, u), v))
-        return cache[key][which]
+            cache[key] = (float(f[0]), df[0] / scale, g, dg / scale)
+        return cache[key]
 
     with np.errstate(all="ignore"):
-        res = minimize(lambda v: float(parts(v, 0)[0][0]), v0, jac=lambda v: parts(v, 0)[1][0],
+        res = minimize(lambda u: parts(u)[0], v0 * scale, jac=lambda u: parts(u)[1],
                        method="SLSQP", bounds=bounds,
-                       constraints=[{"type": "ineq", "fun": lambda v: parts(v, 1)[0],
-                                     "jac": lambda v: parts(v, 1)[1]}],
-                       options={"maxiter": 100, "ftol": 1e-15})
-    cand = _checked(sc, res.x)
+                       constraints=[{"type": "ineq", "fun": lambda u: parts(u)[2],
+                                     "jac": lambda u: parts(u)[3]}],
+                       options={"maxiter": 100, "ftol": 1e-12})
+    cand = _checked(sc, res.x / scale)
     if cand is not None and cand[0] < value:
         return cand[0], cand[1], True
     return value, point, cand is not None

@@ -65,7 +65,8 @@ def solve_global(p: Params, scheme: str, objective: str) -> SolverResult:
                            certificate="q0_fixed violates C2", message="q0_fixed is off the "
                            "master's look-angle line x0 = x_t - z0 tan(theta_0)")
     sc = rays.make_scenario(p, scheme, objective)
-    res = branch_bound.search(sc, rel_gap=REL_GAP, refine=True)
+    # Two slaves or fewer: the exact inner solve already makes the incumbents good.
+    res = branch_bound.search(sc, rel_gap=REL_GAP, refine=len(sc.slaves) > 2)
     if res.point is None:
         block = infeasibility.irreducible_set(p, scheme)
         _, fixes = infeasibility.blocking_sets(p, scheme)

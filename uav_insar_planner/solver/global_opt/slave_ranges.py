@@ -170,10 +170,11 @@ def weight_bound(sc: Scenario, r0a, rho, smax, g_rg):
     return np.where(np.isnan(w), np.inf, w)
 
 
-def pair_weight_bound(sc: Scenario, r0a, one, two):
+def pair_weight_bound(sc: Scenario, r0a, one, two, w_one, w_two):
     """Upper bound on w_i / r0^2 + w_j / r0^2 over a box for two slaves kept d_min apart (C4),
     -inf where the pair provably has no feasible point. `one` and `two` are
-    (lo, up, smax, g_rg, theta_a, theta_b): slave_box's pieces and the angle interval.
+    (lo, up, smax, g_rg, theta_a, theta_b): slave_box's pieces and the angle interval; w_one
+    and w_two their weight_bound at `up` (the single-slave bounds, computed once).
 
     C4 is kept through the ellipse with c_max = cos of the box's largest angle difference,
     which contains the true exclusion ellipse of every angle pair in it; by the Pareto argument
@@ -181,7 +182,7 @@ def pair_weight_bound(sc: Scenario, r0a, one, two):
     (x_lo(up_2), up_2)."""
     lo1, up1, s1, g1, t1a, t1b = one
     lo2, up2, s2, g2, t2a, t2b = two
-    w_top = weight_bound(sc, r0a, up1, s1, g1) + weight_bound(sc, r0a, up2, s2, g2)
+    w_top = w_one + w_two
     if not sc.on("C4"):
         return w_top
     dmax = np.minimum(np.maximum(np.abs(t1b - t2a), np.abs(t2b - t1a)), math.pi)
@@ -191,10 +192,10 @@ def pair_weight_bound(sc: Scenario, r0a, one, two):
         inside = up1 * up1 + up2 * up2 - 2.0 * c * up1 * up2 < d2
         y = _lower_crossing(up1, c, d2)
         x = _lower_crossing(up2, c, d2)
-        wa = np.where(y >= lo2, weight_bound(sc, r0a, up1, s1, g1)
-                      + weight_bound(sc, r0a, np.maximum(y, 0.0), s2, g2), -np.inf)
-        wb = np.where(x >= lo1, weight_bound(sc, r0a, np.maximum(x, 0.0), s1, g1)
-                      + weight_bound(sc, r0a, up2, s2, g2), -np.inf)
+        wa = np.where(y >= lo2, w_one + weight_bound(sc, r0a, np.maximum(y, 0.0), s2, g2),
+                      -np.inf)
+        wb = np.where(x >= lo1, weight_bound(sc, r0a, np.maximum(x, 0.0), s1, g1) + w_two,
+                      -np.inf)
     return np.where(inside, np.maximum(wa, wb), w_top)
 
 

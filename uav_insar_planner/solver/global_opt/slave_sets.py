@@ -66,7 +66,8 @@ def _matching_bound(sc: Scenario, r0a, pieces: np.ndarray, single: np.ndarray) -
     single = np.take_along_axis(single, order, axis=0)
     prev2, prev1 = np.zeros_like(single[0]), single[0]
     for i in range(1, len(single)):
-        pair = slave_ranges.pair_weight_bound(sc, r0a, pieces[i - 1], pieces[i])
+        pair = slave_ranges.pair_weight_bound(sc, r0a, pieces[i - 1], pieces[i],
+                                              single[i - 1], single[i])
         prev2, prev1 = prev1, np.minimum(prev1 + single[i], prev2 + pair)
     return prev1
 
