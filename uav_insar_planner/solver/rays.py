@@ -112,8 +112,12 @@ def disk_interval(sc: Scenario, k: int, theta):
     theta = np.asarray(theta, dtype=float)
     if r2 == math.inf:
         return np.full(theta.shape, -math.inf), np.full(theta.shape, math.inf)
-    psi = np.abs(np.angle(np.exp(1j * (theta - sc.station_angle))))
-    return _disk_at_psi(sc, r2, psi)
+    return _disk_at_psi(sc, r2, angle_between(theta, sc.station_angle))
+
+
+def angle_between(a, b):
+    """|a - b| wrapped into [0, pi]."""
+    return np.abs(np.remainder(np.asarray(a) - b + math.pi, 2.0 * math.pi) - math.pi)
 
 
 def _disk_at_psi(sc: Scenario, r2: float, psi):

@@ -108,8 +108,10 @@ def _split(sc: Scenario, b: np.ndarray) -> np.ndarray:
 
 
 PROJECT_AFTER = 20_000
-# A round bisects its boxes until there are about batch / ROUND_FILL of them (at most 16x).
+# A round bisects its boxes until there are about batch / ROUND_FILL of them, each at most
+# ROUND_SPLITS times.
 ROUND_FILL = 4
+ROUND_SPLITS = 4
 
 
 def _a_slave_is_blocked(sc: Scenario) -> bool:
@@ -138,7 +140,7 @@ def _incumbent(sc: Scenario, boxes: np.ndarray):
 # Local solves (SLSQP, some milliseconds each) of new incumbents per search.
 MAX_REFINES = 4
 # Box centres tried for a better incumbent per round: those of the smallest lower bounds.
-INCUMBENT_BOXES = 512
+INCUMBENT_BOXES = 64
 
 
 def _most_promising(boxes: np.ndarray, lb: np.ndarray) -> np.ndarray:
@@ -201,7 +203,7 @@ def search(sc: Scenario, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch:
             parked, parked_lb = boxes[:0], lb[:0]
         # Few open boxes: bisect each several times per round (the cost of a round is mostly
         # fixed numpy overhead, so fewer, fuller rounds are faster).
-        for _ in range(max(1, min(4, int(math.log2(batch / ROUND_FILL / len(boxes)))))):
+        for _ in range(max(1, min(ROUND_SPLITS, int(math.log2(batch / ROUND_FILL / len(boxes)))))):
             boxes = _split(sc, boxes)
         nodes += len(boxes)
     open_lb = float(lb.min()) if len(boxes) else math.inf

@@ -32,13 +32,15 @@ from uav_insar_planner.solver import rays
 from uav_insar_planner.solver.rays import Scenario
 
 
-def _slave_weight(sc: Scenario, r0, theta, r):
+def _slave_weight(sc: Scenario, r0, theta, r, g_rg=None):
     """w / r0^2, the weight normalised by the master range (see _from_normalised): formed from
     b_perp / r0 so that centimetre ranges do not underflow b_perp^2 into denormals (which
-    once made a formation at r0 = 1e-161 look optimal). nan at r0 = 0."""
+    once made a formation at r0 = 1e-161 look optimal). nan at r0 = 0. g_rg: gamma_Rg(theta)
+    when the caller has it."""
     with np.errstate(divide="ignore", invalid="ignore"):
         b = r / r0 * np.abs(np.sin(theta - sc.th0))
-    return rays.weight(sc, b, rays.coherence_rg(sc, theta), rays.snr_factor(sc, r0, r))
+    g_rg = rays.coherence_rg(sc, theta) if g_rg is None else g_rg
+    return rays.weight(sc, b, g_rg, rays.snr_factor(sc, r0, r))
 
 
 def _components(sc: Scenario, k: int, r0, theta):
@@ -88,9 +90,10 @@ def best_ranges(sc: Scenario, r0, th1, th2=None):
         best_r1 = np.where(take, r1, best_r1)
         best_r2 = np.where(take, r2, best_r2)
 
+    g1, g2 = rays.coherence_rg(sc, th1), rays.coherence_rg(sc, th2)
     with np.errstate(invalid="ignore"):
-        tops1 = [(lo, t, _slave_weight(sc, r0, th1, t)) for lo, t in comps1]
-        tops2 = [(lo, t, _slave_weight(sc, r0, th2, t)) for lo, t in comps2]
+        tops1 = [(lo, t, _slave_weight(sc, r0, th1, t, g1)) for lo, t in comps1]
+        tops2 = [(lo, t, _slave_weight(sc, r0, th2, t, g2)) for lo, t in comps2]
         for lo1, t1, w1 in tops1:
             for lo2, t2, w2 in tops2:
                 valid = (lo1 <= t1) & (lo2 <= t2)
@@ -101,10 +104,10 @@ def best_ranges(sc: Scenario, r0, th1, th2=None):
                     continue
                 y = _lower_crossing(t1, c, d2)
                 ok = crowded & (y >= lo2)
-                consider(ok, w1 + _slave_weight(sc, r0, th2, np.where(ok, y, t2)), t1, y)
+                consider(ok, w1 + _slave_weight(sc, r0, th2, np.where(ok, y, t2), g2), t1, y)
                 x = _lower_crossing(t2, c, d2)
                 ok = crowded & (x >= lo1)
-                consider(ok, _slave_weight(sc, r0, th1, np.where(ok, x, t1)) + w2, x, t2)
+                consider(ok, _slave_weight(sc, r0, th1, np.where(ok, x, t1), g1) + w2, x, t2)
     f = np.where((best_w > 0) & (r0 > 0), _from_normalised(sc, best_w), np.inf)
     return f, best_r1, best_r2
 
@@ -133,7 +136,7 @@ def slave_box(sc: Scenario, k: int, r0a, r0b, ta, tb):
     p = sc.p
     abs_lo = np.where((ta <= 0) & (tb >= 0), 0.0, np.minimum(np.abs(ta), np.abs(tb)))
     abs_hi = np.maximum(np.abs(ta), np.abs(tb))
-    dist = np.abs(np.angle(np.exp(1j * (_nearest(sc.station_angle, ta, tb) - sc.station_angle))))
+    dist = rays.angle_between(_nearest(sc.station_angle, ta, tb), sc.station_angle)
     lo, up = np.zeros_like(ta), np.full_like(ta, math.inf)
     if sc.disk_r2[k] != math.inf:
         ra, rb = rays._disk_at_psi(sc, sc.disk_r2[k], dist)
@@ -164,8 +167,9 @@ def weight_bound(sc: Scenario, r0a, rho, smax, g_rg):
         bn = np.where(smax > 0, np.minimum(r * smax / r0a, cap), 0.0)
         w = rays.weight(sc, bn, g_rg, rays.snr_factor(sc, r0a, r))
         # A box reaching r0 = 0: b_perp / r0 <= cap (C8) and gamma_SNR <= 1 still bound it.
-        w = np.where(np.asarray(r0a) > 0, w,
-                     rays.weight(sc, np.where(smax > 0, cap, 0.0), g_rg, 1.0))
+        at_zero = np.asarray(r0a) <= 0
+        if at_zero.any():
+            w = np.where(at_zero, rays.weight(sc, np.where(smax > 0, cap, 0.0), g_rg, 1.0), w)
     # An unbounded range (only with constraint families switched off) has unbounded weight.
     return np.where(np.isnan(w), np.inf, w)
 

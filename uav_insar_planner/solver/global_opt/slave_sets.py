@@ -47,10 +47,12 @@ def box_lower_bound(sc: Scenario, boxes: np.ndarray) -> np.ndarray:
         ta, tb = (boxes[:, c] for c in angle_cols(j))
         lo, up, smax, g_rg = slave_ranges.slave_box(sc, k, r0a, r0b, ta, tb)
         ok &= lo <= up
-        pieces.append(np.stack([lo, up, smax, g_rg, ta, tb]))
+        pieces.append((lo, up, smax, g_rg, ta, tb))
         single.append(slave_ranges.weight_bound(sc, r0a, up, smax, g_rg))
     if len(single) == 1 or not sc.on("C4"):
         w = np.sum(single, axis=0)
+    elif len(single) == 2:  # one matching: the pair (its bound never exceeds W_1 + W_2)
+        w = slave_ranges.pair_weight_bound(sc, r0a, *pieces, *single)
     else:
         w = _matching_bound(sc, r0a, np.stack(pieces), np.stack(single))
     w = np.where(ok, w, -np.inf)
