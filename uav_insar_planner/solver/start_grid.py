@@ -25,6 +25,7 @@ the swath's altitude.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass
@@ -37,7 +38,7 @@ from uav_insar_planner.schemes import slave_uavs
 from uav_insar_planner.solver import rays
 from uav_insar_planner.solver.blocking import ALL_FAMILIES
 from uav_insar_planner.solver.power import station_radius_sq
-from uav_insar_planner.swarm import MASTER, NUM_UAVS
+from uav_insar_planner.swarm import MASTER
 
 Z_GRID = 801
 THETA_GRID = 181
@@ -46,7 +47,7 @@ RAY_WINDOW = 1000.0  # metres searched along a ray beyond its lower limit
 
 @dataclass
 class Start:
-    """A feasible formation ((NUM_UAVS, 2), NaN row for an unflown UAV)."""
+    """A feasible formation ((n, 2) for n UAVs, NaN row for an unflown UAV)."""
 
     formation: np.ndarray
 
@@ -202,9 +203,10 @@ def find_start(p: Params, scheme: str, families: Iterable[str] = ALL_FAMILIES,
     `first` stops at the first feasible master altitude (an existence test)."""
     fam = frozenset(families)
     masters, mok = _master_grid(p, scheme, fam)
-    slaves = slave_uavs(scheme)
+    n_uavs = len(p.rate_min_bps)  # the swarm's size (Params.num_uavs)
+    slaves = slave_uavs(scheme, n_uavs)
     if "C4" not in fam:
-        p = p.replace(d_min_m=0.0)
+        p = dataclasses.replace(p, d_min=0.0)  # keeps the swarm size, which raw may not
     feasible: list[tuple[int, dict]] = []
     for i in np.flatnonzero(mok):
         cands = {}
@@ -221,7 +223,7 @@ def find_start(p: Params, scheme: str, families: Iterable[str] = ALL_FAMILIES,
     if not feasible:
         return None
     i, chosen = feasible[_middle(np.arange(len(feasible)))]
-    formation = np.full((NUM_UAVS, 2), np.nan)
+    formation = np.full((n_uavs, 2), np.nan)
     formation[MASTER] = masters[i]
     for k, q in chosen.items():
         formation[k] = q

@@ -70,7 +70,9 @@ def _matching_bound(sc: Scenario, r0a, pieces: np.ndarray, single: np.ndarray) -
     for i in range(1, len(single)):
         pair = slave_ranges.pair_weight_bound(sc, r0a, pieces[i - 1], pieces[i],
                                               single[i - 1], single[i])
-        prev2, prev1 = prev1, np.minimum(prev1 + single[i], prev2 + pair)
+        with np.errstate(invalid="ignore"):  # -inf (an empty pair) + inf: the box is empty
+            step = np.minimum(prev1 + single[i], prev2 + pair)
+        prev2, prev1 = prev1, np.where(np.isnan(step), -np.inf, step)
     return prev1
 
 
