@@ -150,8 +150,32 @@ def slave_box(sc: Scenario, k: int, r0a, r0b, ta, tb):
     smin, smax = _abs_sin_range(ta - sc.th0, tb - sc.th0)
     with np.errstate(divide="ignore", invalid="ignore"):
         up = np.minimum(up, np.where(smin > 0, rays.baseline_limit(sc, r0b) / smin, math.inf))
+    if sc.on("C4"):
+        up = _below_master_hole(sc, r0a, r0b, ta, tb, lo, up)
     g_rg = rays.coherence_rg(sc, _nearest(sc.th0, ta, tb))
     return lo, up, smax, g_rg
+
+
+def _below_master_hole(sc: Scenario, r0a, r0b, ta, tb, lo, up):
+    """The range limit `up` lowered past the master's C4 hole where the hole covers it for every
+    point of the box (-inf: the slave cannot be there at all).
+
+    On ray theta the hole is (h1, h2) = r0 cos(delta) -/+ sqrt(d_min^2 - r0^2 sin^2(delta)),
+    delta = theta - theta_0. Over the box, with |delta| < pi/2, h1 <= H1 = r0b cos(delta_min) -
+    sqrt(d_min^2 - (r0b sin(delta_max))^2) and h2 >= H2 = r0a cos(delta_max) +
+    sqrt(d_min^2 - (r0b sin(delta_max))^2) (each term at its extreme; h1 grows with r0), and
+    the hole exists everywhere when r0b sin(delta_max) < d_min. So ranges in (H1, H2) are
+    excluded throughout, and a top inside it drops to H1."""
+    dlo = np.where((ta <= sc.th0) & (tb >= sc.th0), 0.0,
+                   np.minimum(np.abs(ta - sc.th0), np.abs(tb - sc.th0)))
+    dhi = np.maximum(np.abs(ta - sc.th0), np.abs(tb - sc.th0))
+    d2 = sc.p.d_min**2
+    disc = d2 - (r0b * np.sin(np.minimum(dhi, rays.HALF_PI))) ** 2
+    root = np.sqrt(np.maximum(disc, 0.0))
+    h1 = r0b * np.cos(dlo) - root
+    h2 = r0a * np.cos(dhi) + root
+    covered = (disc > 0.0) & (dhi < rays.HALF_PI) & (up > h1) & (up < h2)
+    return np.where(covered, np.where(h1 >= lo, h1, -np.inf), up)
 
 
 def weight_bound(sc: Scenario, r0a, rho, smax, g_rg):

@@ -4,19 +4,12 @@ A box is one row [r0_a, r0_b, theta_1a, theta_1b, ..., theta_Ka, theta_Kb] (colu
 `angle_cols`). The objective is lambda r0 sin(theta_0) / (2 pi sqrt(sum_k w_k)), so a lower
 bound on it over a box is an upper bound on sum_k w_k / r0^2 (slave_ranges.py).
 
-Bound. The slaves interact only through C4 between themselves. Dropping C4 for every pair but
-those of a matching M (disjoint pairs) relaxes the problem, so
-
-    sum_k w_k <= sum_{(i,j) in M} W_ij + sum_{k unmatched} W_k
-
-with W_k the one-slave bound and W_ij the pair bound (slave_ranges.pair_weight_bound, which
-keeps C4 of the pair). Every matching gives a valid bound, so the least is taken over the
-matchings of neighbours in the order of the boxes' angle midpoints (neighbours in angle are
-the pairs that C4 couples) by the recursion
-
-    B(0) = 0, B(1) = W_(1), B(i) = min(B(i-1) + W_(i), B(i-2) + W_(i-1)(i)).
-
-With K = 2 this is the pair bound itself (W_12 <= W_1 + W_2).
+Bound. The slaves interact only through C4 between themselves (C4 to the master is kept
+through slave_ranges.slave_box, which lowers a top that the master's hole covers throughout
+the box). One slave: its weight bound W_k. Two: the pair bound (slave_ranges.pair_weight_bound,
+exact for the relaxation that keeps their C4 through the box's smallest cos). Three or more:
+chain_bound.py keeps C4 between every pair of neighbours in angle and solves that relaxation
+exactly by a dynamic programme over candidate ranges.
 
 Ranges. For K <= 2 slave_ranges.best_ranges is exact. For K >= 3 `greedy_ranges` gives a
 feasible, not necessarily optimal, assignment (an incumbent: any feasible point is a valid
@@ -28,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from uav_insar_planner.solver.global_opt import slave_ranges
+from uav_insar_planner.solver.global_opt import chain_bound, slave_ranges
 from uav_insar_planner.solver.rays import Scenario
 
 
@@ -39,7 +32,7 @@ def angle_cols(j: int) -> tuple[int, int]:
 
 def box_lower_bound(sc: Scenario, boxes: np.ndarray) -> np.ndarray:
     """Lower bound on the objective over every feasible point of each box (+inf: the box
-    provably holds none). C4 between a slave and the master is relaxed away."""
+    provably holds none); see the module docstring."""
     r0a, r0b = boxes[:, 0], boxes[:, 1]
     pieces, single = [], []
     ok = np.ones(len(boxes), dtype=bool)
@@ -54,26 +47,9 @@ def box_lower_bound(sc: Scenario, boxes: np.ndarray) -> np.ndarray:
     elif len(single) == 2:  # one matching: the pair (its bound never exceeds W_1 + W_2)
         w = slave_ranges.pair_weight_bound(sc, r0a, *pieces, *single)
     else:
-        w = _matching_bound(sc, r0a, np.stack(pieces), np.stack(single))
+        w = chain_bound.chain_weight_bound(sc, r0a, np.stack([np.stack(x) for x in pieces]))
     w = np.where(ok, w, -np.inf)
     return np.where(w > -np.inf, slave_ranges._from_normalised(sc, w), np.inf)
-
-
-def _matching_bound(sc: Scenario, r0a, pieces: np.ndarray, single: np.ndarray) -> np.ndarray:
-    """The recursion of the module docstring over neighbours in angle order; pieces is
-    (K, 6, n) of slave_box's pieces and the angle interval, single (K, n)."""
-    mid = pieces[:, 4] + pieces[:, 5]                     # (K, n): twice the angle midpoint
-    order = np.argsort(mid, axis=0, kind="stable")
-    pieces = np.take_along_axis(pieces, order[:, None, :], axis=0)
-    single = np.take_along_axis(single, order, axis=0)
-    prev2, prev1 = np.zeros_like(single[0]), single[0]
-    for i in range(1, len(single)):
-        pair = slave_ranges.pair_weight_bound(sc, r0a, pieces[i - 1], pieces[i],
-                                              single[i - 1], single[i])
-        with np.errstate(invalid="ignore"):  # -inf (an empty pair) + inf: the box is empty
-            step = np.minimum(prev1 + single[i], prev2 + pair)
-        prev2, prev1 = prev1, np.where(np.isnan(step), -np.inf, step)
-    return prev1
 
 
 def ranges_for(sc: Scenario, r0, thetas: np.ndarray):

@@ -1,0 +1,86 @@
+"""The box bound for K >= 3 slaves with C4 kept between every pair of neighbours in angle.
+
+Relaxation (R) of a box: order the slaves by their angle intervals' midpoints, keep C4 only
+between neighbours i, i+1 in that order, as the ellipse E_i = {r_i^2 + r_(i+1)^2 -
+2 c_i r_i r_(i+1) < d_min^2} with c_i = cos of the largest angle difference in the box (it lies
+inside every true exclusion ellipse of the pair), bound each slave's range by
+[lo_k, up_k] and its weight by the non-decreasing W_k(r_k) (slave_ranges.slave_box and
+weight_bound). Every feasible point of the box gives a feasible point of (R) with at least its
+sum of weights, so max (R) bounds sum_k w_k / r0^2.
+
+(R) is solved exactly. Each E_i is convex and contains the origin, so scaling a point of (R)
+by t >= 1 keeps every pair outside its ellipse: some optimum has a slave at its top up_j.
+Fixing it splits the chain; scaling one side alone by t >= 1 ends with a member at its top or
+the member next to the fixed slave at its lower crossing y_lo of that slave's ellipse (from
+below: above the upper crossing it could rise freely). By induction some optimum has every
+slave i at a candidate: up_i, or the lower crossing propagated from some up_j along the chain
+j -> ... -> i. So max (R) = max over candidate assignments with every neighbour pair outside
+its ellipse of sum_k W_k, a dynamic programme over the chain with K states per slave:
+
+    B_0(m) = W_0(cand_0m),  B_i(n) = W_i(cand_in) + max_{m compatible with n} B_(i-1)(m).
+
+Compatibility is tested with a relative slack of 1e-9 on d_min^2: candidates sit on ellipse
+boundaries, and rounding must not make (R) look smaller than it is. No compatible assignment
+proves the box empty.
+
+Limit: non-neighbouring pairs are relaxed away. Where they conflict at the optimum (d_min
+comparable with the spacing of three slaves' rays, e.g. d_min = 12 m with three or more
+slaves on Table I) the bound stays valid but does not converge as the boxes shrink, and the
+search ends at its node limit with an honest, larger gap.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from uav_insar_planner.solver.global_opt import slave_ranges
+from uav_insar_planner.solver.rays import Scenario
+
+COMPAT_SLACK = 1e-9
+
+
+def chain_weight_bound(sc: Scenario, r0a, pieces: np.ndarray) -> np.ndarray:
+    """max (R) for each box: pieces is (K, 6, n), per slave (lo, up, smax, g_rg, theta_a,
+    theta_b); -inf where (R) is infeasible."""
+    order = np.argsort(pieces[:, 4] + pieces[:, 5], axis=0, kind="stable")
+    lo, up, smax, g_rg, ta, tb = np.take_along_axis(pieces, order[:, None, :], axis=0) \
+        .transpose(1, 0, 2)
+    k_count = len(lo)
+    d2 = sc.p.d_min**2
+    # c_i of the neighbour pair (i, i+1): cos of the largest angle difference in the box
+    dmax = np.minimum(np.maximum(np.abs(tb[1:] - ta[:-1]), np.abs(tb[:-1] - ta[1:])), np.pi)
+    c = np.cos(dmax)
+    cand = _candidates(up, c, d2)                       # (K slaves, K sources, n)
+    valid = (cand >= lo[:, None]) & (cand <= up[:, None])
+    with np.errstate(invalid="ignore"):
+        w = slave_ranges.weight_bound(sc, r0a, np.where(valid, cand, 0.0), smax[:, None],
+                                      g_rg[:, None])
+    w = np.where(valid, w, -np.inf)
+    best = w[0]
+    for i in range(1, k_count):
+        a, b = cand[i - 1][:, None], cand[i][None, :]   # (K, 1, n) x (1, K, n)
+        with np.errstate(invalid="ignore"):
+            ok = a * a + b * b - 2.0 * c[i - 1] * a * b >= d2 * (1.0 - COMPAT_SLACK)
+        reach = np.max(np.where(ok, best[:, None], -np.inf), axis=0)
+        with np.errstate(invalid="ignore"):
+            best = np.where(np.isnan(reach + w[i]), -np.inf, reach + w[i])
+    return np.max(best, axis=0)
+
+
+def _candidates(up: np.ndarray, c: np.ndarray, d2: float) -> np.ndarray:
+    """cand[i, j]: slave i's candidate started from up_j (cand[i, i] = up_i), the lower
+    crossing passed along the chain; nan where a crossing does not exist."""
+    k_count = len(up)
+    cand = np.full((k_count, k_count) + up.shape[1:], np.nan)
+    with np.errstate(invalid="ignore"):  # an unbounded top (families off) has no crossing
+        _propagate(cand, up, c, d2)
+    return cand
+
+
+def _propagate(cand: np.ndarray, up: np.ndarray, c: np.ndarray, d2: float) -> None:
+    k_count = len(up)
+    for j in range(k_count):
+        cand[j, j] = up[j]
+        for i in range(j + 1, k_count):                  # rightwards from j
+            cand[i, j] = slave_ranges._lower_crossing(cand[i - 1, j], c[i - 1], d2)
+        for i in range(j - 1, -1, -1):                   # leftwards from j
+            cand[i, j] = slave_ranges._lower_crossing(cand[i + 1, j], c[i], d2)
