@@ -291,3 +291,19 @@ def test_agrees_with_cartesian_multistart(k_slaves, scheme):
     assert all(ours <= f * (1 + 1e-6) for f in found), (ours, min(found))
     assert min(found) <= ours * (1 + 1e-4)
     assert res.lower_bound <= min(found)
+
+
+def test_k_slave_infeasibility_is_proven_with_blocking_constraints():
+    p = default_params()
+    # static power above P_max: C9 fails for every UAV wherever it flies
+    res = solve_global(with_slaves(dataclasses.replace(p, p_max_w=3.0), 4), "static-power",
+                       "exact")
+    assert not res.feasible and res.blocking == ["C9"] and res.lower_bound == math.inf
+    assert res.formation.shape == (5, 2) and np.isnan(res.formation).all()
+    # one added slave needs a rate its station disk cannot carry: C9 + C10 block it
+    hard = dataclasses.replace(with_slaves(p, 3), rate_min_bps=p.rate_min_bps + (40e6,))
+    res = solve_global(hard, "proposed", "exact")
+    assert not res.feasible and res.lower_bound == math.inf and res.certificate
+    assert "C10" in res.blocking and "theta3" in res.certificate
+    # and it is that slave: with its rate back at 1 Mbit/s the swarm is feasible again
+    assert solve_global(with_slaves(p, 3), "proposed", "exact").feasible
