@@ -103,11 +103,13 @@ def refine(sc: Scenario, point, value: float):
     def parts(u):
         key = u.tobytes()
         if key not in cache:
-            v = u / scale
-            f, df = _with_jacobian(lambda w: _objective(sc, w) / value, v)
-            g, dg = _with_jacobian(lambda w: _constraints(sc, w), v)
+            # objective (column 0) and constraints in one vectorised call with their Jacobian
+            fg, dfg = _with_jacobian(lambda w: np.concatenate(
+                [_objective(sc, w) / value, _constraints(sc, w)], axis=1), u / scale)
+            dfg = dfg / scale
             cache.clear()
-            cache[key] = (float(f[0]), df[0] / scale, g, dg / scale)
+            # copies: SLSQP may write into the arrays it is handed
+            cache[key] = (float(fg[0]), dfg[0].copy(), fg[1:].copy(), dfg[1:].copy())
         return cache[key]
 
     with np.errstate(all="ignore"):
