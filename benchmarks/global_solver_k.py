@@ -11,13 +11,20 @@ the certified lower bound and gap; then per K the slowest of the twelve scheme x
 solves and the largest gap among them; and the targets (K = 2 median <= 10 ms through the
 public `solve` with the Table I plan unchanged, K = 5 median <= 1 s, every gap <= 1e-4).
 
+--baseline SRC also times Table I (K = 2) with the package found under SRC (e.g. an export of
+main: git archive main | tar -x -C /tmp/main) in a subprocess and prints the ratio.
+
 Run: .venv/bin/python benchmarks/global_solver_k.py [--repeats 9] [--max-k 5] [--no-grid]
+     [--baseline SRC]
 """
 from __future__ import annotations
 
 import argparse
 import dataclasses
+import os
 import statistics
+import subprocess
+import sys
 import time
 
 from uav_insar_planner.params import SCHEMES, Params, default_params
@@ -43,12 +50,37 @@ def median_time(fn, repeats: int):
     return statistics.median(times), out
 
 
+BASELINE_SNIPPET = """
+import statistics, time
+from uav_insar_planner.params import default_params
+from uav_insar_planner.solver import solve
+p = default_params()
+solve(p, solver="global")
+times = []
+for _ in range({repeats}):
+    start = time.perf_counter()
+    plan = solve(p, solver="global")
+    times.append(time.perf_counter() - start)
+print(statistics.median(times), plan.sigma_h_m)
+"""
+
+
+def baseline_time(src: str, repeats: int) -> tuple[float, float]:
+    """(median seconds, sigma_h) of Table I solved by the package under `src`."""
+    env = dict(os.environ, PYTHONPATH=src, PYTHONDONTWRITEBYTECODE="1")
+    out = subprocess.run([sys.executable, "-c", BASELINE_SNIPPET.format(repeats=repeats)],
+                         env=env, cwd=src, capture_output=True, text=True, check=True)
+    t, sigma = out.stdout.split()
+    return float(t), float(sigma)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=9)
     ap.add_argument("--max-k", type=int, default=5)
     ap.add_argument("--no-grid", action="store_true",
                     help="skip the scheme x objective grid per K")
+    ap.add_argument("--baseline", metavar="SRC", help="time Table I with the package in SRC")
     args = ap.parse_args()
     base = default_params()
     solve(base, solver="global")  # warm up imports
@@ -69,6 +101,10 @@ def main() -> None:
     print(f"\nTable I through solve (K = 2, {3 * args.repeats} runs): median "
           f"{t_solve * 1e3:.1f} ms, sigma_h {plan.sigma_h_m:.6f} m, gap "
           f"{plan.optimality_gap:.2e}")
+    if args.baseline:
+        t_base, sigma_base = baseline_time(args.baseline, 3 * args.repeats)
+        print(f"baseline {args.baseline} (same runs): median {t_base * 1e3:.1f} ms, sigma_h "
+              f"{sigma_base:.6f} m; baseline / this = {t_base / t_solve:.1f}x")
     if not args.no_grid:
         print("\nall schemes x objectives (one solve each):")
         for k in range(1, args.max_k + 1):
