@@ -139,6 +139,8 @@ def _incumbent(sc: Scenario, boxes: np.ndarray):
 
 # Local solves (SLSQP, some milliseconds each) of new incumbents per search.
 MAX_REFINES = 4
+# SLSQP runs from the most promising box while no feasible point is known.
+MAX_RESCUES = 4
 # Box centres tried for a better incumbent per round: those of the smallest lower bounds.
 INCUMBENT_BOXES = 64
 
@@ -167,7 +169,7 @@ def search(sc: Scenario, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch:
     boxes = np.array([[sc.r0_lo, sc.r0_hi] + [sc.th_lo, sc.th_hi] * k_count])
     for _ in range(_coarse_splits(k_count)):
         boxes = _order(_split(sc, boxes), pairs)
-    best_val, best_pt, refined, refines = math.inf, None, None, 0
+    best_val, best_pt, refined, refines, rescues = math.inf, None, None, 0, 0
     closed_lb, nodes = math.inf, len(boxes)
     parked, parked_lb = boxes[:0], np.empty(0)
     while True:
@@ -181,6 +183,11 @@ def search(sc: Scenario, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch:
             # boxes are closed against (usually) the optimum from then on.
             f, pt, _ = local_refine.refine(sc, pt, f)
             refined, refines = pt, refines + 1
+        elif refine and best_pt is None and not f < math.inf and len(lb) and rescues < MAX_RESCUES:
+            # No box centre is feasible (a tight packing of slaves in small station disks):
+            # let SLSQP look for a feasible point from the most promising box.
+            f, pt = local_refine.from_box(sc, boxes[int(np.argmin(lb))])
+            refined, rescues = pt, rescues + 1
         if f < best_val:
             best_val, best_pt = f, pt
         if stop_when_feasible and best_pt is not None:

@@ -24,9 +24,11 @@ boundaries, and rounding must not make (R) look smaller than it is. No compatibl
 proves the box empty.
 
 Limit: non-neighbouring pairs are relaxed away. Where they conflict at the optimum (d_min
-comparable with the spacing of three slaves' rays, e.g. d_min = 12 m with three or more
-slaves on Table I) the bound stays valid but does not converge as the boxes shrink, and the
-search ends at its node limit with an honest, larger gap.
+comparable with the spacing of three slaves' rays: found with d_min = 6 and 12 m and three
+slaves, e.g. two slaves on one ray d_min apart and a third beside them) the bound stays valid
+but does not converge as the boxes shrink, and the search ends at its node limit with an
+honest, larger gap. Keeping every pair exactly would need all rooted forests of "who is
+pressed by whom" ((K + 1)^(K - 1) of them) instead of this chain.
 """
 from __future__ import annotations
 

@@ -93,7 +93,9 @@ def refine(sc: Scenario, point, value: float):
     objective by 1 / value, which lets SLSQP stop at ftol = 1e-12 within a few iterations."""
     k_count = len(sc.slaves)
     v0 = np.array([point[0], *point[1], *point[2]], dtype=float)
-    if not np.all(np.isfinite(v0)) or not math.isfinite(value) or v0[0] <= 0:
+    # an infeasible start (value inf) is scaled by its objective ignoring the constraints
+    norm = value if math.isfinite(value) else float(_objective(sc, v0[None])[0, 0])
+    if not np.all(np.isfinite(v0)) or not math.isfinite(norm) or norm <= 0 or v0[0] <= 0:
         return value, point, False
     scale = np.array([1.0] + [v0[0]] * k_count + [1.0] * k_count)
     bounds = ([(sc.r0_lo, sc.r0_hi)] + [(sc.th_lo * v0[0], sc.th_hi * v0[0])] * k_count
@@ -105,7 +107,7 @@ def refine(sc: Scenario, point, value: float):
         if key not in cache:
             # objective (column 0) and constraints in one vectorised call with their Jacobian
             fg, dfg = _with_jacobian(lambda w: np.concatenate(
-                [_objective(sc, w) / value, _constraints(sc, w)], axis=1), u / scale)
+                [_objective(sc, w) / norm, _constraints(sc, w)], axis=1), u / scale)
             dfg = dfg / scale
             cache.clear()
             # copies: SLSQP may write into the arrays it is handed
@@ -122,6 +124,20 @@ def refine(sc: Scenario, point, value: float):
     if cand is not None and cand[0] < value:
         return cand[0], cand[1], True
     return value, point, cand is not None
+
+
+def from_box(sc: Scenario, box: np.ndarray):
+    """(value, point) of SLSQP started at the box's centre with every slave at the top of its
+    ray (C4 ignored), or (inf, None) when it ends at no point the ray model accepts."""
+    r0 = np.array([0.5 * (box[0] + box[1])])
+    th = 0.5 * (box[2::2] + box[3::2])
+    tops = []
+    for j, k in enumerate(sc.slaves):
+        lo, up = rays.ray_limits(sc, k, r0, th[j])
+        tops.append(float(up[0]) if math.isfinite(up[0]) else float(lo[0]))
+    start = (float(r0[0]), tuple(map(float, th)), tuple(tops))
+    value, point, landed = refine(sc, start, math.inf)
+    return (value, point) if landed and math.isfinite(value) else (math.inf, None)
 
 
 def _checked(sc: Scenario, v: np.ndarray):
