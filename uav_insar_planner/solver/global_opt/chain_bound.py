@@ -1,4 +1,5 @@
-"""The box bound for K >= 3 slaves with C4 kept between every pair of neighbours in angle.
+"""The box bound for K >= 3 slaves: C4 kept between every pair (K <= FOREST_MAX_K) or between
+every pair of neighbours in angle (more slaves).
 
 Relaxation (R) of a box: order the slaves by their angle intervals' midpoints, keep C4 only
 between neighbours i, i+1 in that order, as the ellipse E_i = {r_i^2 + r_(i+1)^2 -
@@ -23,14 +24,18 @@ Compatibility is tested with a relative slack of 1e-9 on d_min^2: candidates sit
 boundaries, and rounding must not make (R) look smaller than it is. No compatible assignment
 proves the box empty.
 
-Limit: non-neighbouring pairs are relaxed away. Where they conflict at the optimum (d_min
-comparable with the spacing of three slaves' rays: found with d_min = 6 and 12 m and three
-slaves, e.g. two slaves on one ray d_min apart and a third beside them) the bound stays valid
-but does not converge as the boxes shrink, and the search ends at its node limit with an
-honest, larger gap. Keeping every pair exactly would need all rooted forests of "who is
-pressed by whom" ((K + 1)^(K - 1) of them) instead of this chain.
+Limit of the chain: non-neighbouring pairs are relaxed away. Where they conflict at the
+optimum (d_min comparable with the spacing of three slaves' rays, e.g. two slaves on one ray
+d_min apart and a third beside them; found with d_min = 6 and 12 m) the chain bound stays
+valid but does not converge as the boxes shrink. forest_weight_bound keeps every pair exactly
+(the same argument, each slave at its top or at the lower crossing of any slave fixed before
+it: the values of a rooted forest of "who is pressed by whom") and is used up to
+FOREST_MAX_K slaves; with more, such a search ends at its node limit with an honest, larger gap.
 """
 from __future__ import annotations
+
+import functools
+import itertools
 
 import numpy as np
 
@@ -38,6 +43,10 @@ from uav_insar_planner.solver.global_opt import slave_ranges
 from uav_insar_planner.solver.rays import Scenario
 
 COMPAT_SLACK = 1e-9
+# Up to this many slaves every pair keeps C4 (forest_weight_bound: (K + 1)^(K - 1) forests, 16
+# for three slaves, 125 for four); beyond, the chain of angle neighbours (1296 forests for five
+# slaves made a Table I solve 40x slower).
+FOREST_MAX_K = 4
 
 
 def chain_weight_bound(sc: Scenario, r0a, pieces: np.ndarray) -> np.ndarray:
@@ -86,3 +95,63 @@ def _propagate(cand: np.ndarray, up: np.ndarray, c: np.ndarray, d2: float) -> No
             cand[i, j] = slave_ranges._lower_crossing(cand[i - 1, j], c[i - 1], d2)
         for i in range(j - 1, -1, -1):                   # leftwards from j
             cand[i, j] = slave_ranges._lower_crossing(cand[i + 1, j], c[i], d2)
+
+
+# --- every pair kept: rooted forests of "who is pressed by whom" -------------------------------
+
+@functools.cache
+def _forests(k_count: int):
+    """The rooted forests on K slaves as ancestor paths: paths[(root, ..., i)] index, and for
+    each forest the path index of every slave ((F, K) array). A slave is a root (at its top)
+    or pressed by its parent (at the lower crossing of the parent's ellipse)."""
+    paths: dict[tuple[int, ...], int] = {}
+    table = []
+    for parents in itertools.product(range(-1, k_count), repeat=k_count):
+        chains = []
+        for i in range(k_count):
+            chain, j = [i], parents[i]
+            while j != -1 and j not in chain:
+                chain.append(j)
+                j = parents[j]
+            if j != -1:
+                break  # a cycle: not a forest
+            chains.append(tuple(reversed(chain)))
+        else:
+            table.append([paths.setdefault(c, len(paths)) for c in chains])
+    return tuple(paths), np.array(table)
+
+
+def forest_weight_bound(sc: Scenario, r0a, pieces: np.ndarray) -> np.ndarray:
+    """max of the relaxation that keeps C4 between every pair of slaves (with each pair's
+    largest angle difference in the box): the argument of the module docstring, fixing one
+    slave at a time, ends with every slave at its top or at the lower crossing of an
+    already fixed slave, i.e. at the values of a rooted forest; -inf where none is
+    compatible. pieces as for chain_weight_bound."""
+    lo, up, smax, g_rg, ta, tb = pieces.transpose(1, 0, 2)
+    k_count = len(lo)
+    d2 = sc.p.d_min**2
+    dmax = np.minimum(np.maximum(np.abs(tb[:, None] - ta[None]), np.abs(tb[None] - ta[:, None])),
+                      np.pi)
+    c = np.cos(dmax)                                         # (K, K, n)
+    paths, table = _forests(k_count)
+    val = np.empty((len(paths),) + up.shape[1:])
+    with np.errstate(invalid="ignore"):
+        for p, path in enumerate(paths):
+            v = up[path[0]]
+            for a, b in zip(path[:-1], path[1:], strict=True):
+                v = slave_ranges._lower_crossing(v, c[a, b], d2)
+            val[p] = v
+        last = np.array([path[-1] for path in paths])
+        ok = (val >= lo[last]) & (val <= up[last])
+        w = slave_ranges.weight_bound(sc, r0a, np.where(ok, val, 0.0), smax[last], g_rg[last])
+    w = np.where(ok, w, -np.inf)
+    vals = val[table]                                        # (F, K, n)
+    total = np.sum(w[table], axis=1)                         # (F, n)
+    for i, j in itertools.combinations(range(k_count), 2):
+        a, b = vals[:, i], vals[:, j]
+        with np.errstate(invalid="ignore"):
+            fits = a * a + b * b - 2.0 * c[i, j] * a * b >= d2 * (1.0 - COMPAT_SLACK)
+        total = np.where(fits, total, -np.inf)
+    with np.errstate(invalid="ignore"):
+        total = np.where(np.isnan(total), -np.inf, total)
+    return np.max(total, axis=0)

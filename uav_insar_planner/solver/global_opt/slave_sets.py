@@ -7,9 +7,10 @@ bound on it over a box is an upper bound on sum_k w_k / r0^2 (slave_ranges.py).
 Bound. The slaves interact only through C4 between themselves (C4 to the master is kept
 through slave_ranges.slave_box, which lowers a top that the master's hole covers throughout
 the box). One slave: its weight bound W_k. Two: the pair bound (slave_ranges.pair_weight_bound,
-exact for the relaxation that keeps their C4 through the box's smallest cos). Three or more:
-chain_bound.py keeps C4 between every pair of neighbours in angle and solves that relaxation
-exactly by a dynamic programme over candidate ranges.
+exact for the relaxation that keeps their C4 through the box's smallest cos). Three or four:
+chain_bound.forest_weight_bound keeps C4 between every pair and solves that relaxation exactly
+over the rooted forests of "who is pressed by whom"; five or more: chain_weight_bound keeps it
+between neighbours in angle (a dynamic programme over candidate ranges).
 
 Ranges. For K <= 2 slave_ranges.best_ranges is exact. For K >= 3 `greedy_ranges` gives a
 feasible, not necessarily optimal, assignment (an incumbent: any feasible point is a valid
@@ -47,7 +48,10 @@ def box_lower_bound(sc: Scenario, boxes: np.ndarray) -> np.ndarray:
     elif len(single) == 2:  # one matching: the pair (its bound never exceeds W_1 + W_2)
         w = slave_ranges.pair_weight_bound(sc, r0a, *pieces, *single)
     else:
-        w = chain_bound.chain_weight_bound(sc, r0a, np.stack([np.stack(x) for x in pieces]))
+        stacked = np.stack([np.stack(x) for x in pieces])
+        exact_pairs = len(single) <= chain_bound.FOREST_MAX_K
+        w = (chain_bound.forest_weight_bound if exact_pairs
+             else chain_bound.chain_weight_bound)(sc, r0a, stacked)
     w = np.where(ok, w, -np.inf)
     return np.where(w > -np.inf, slave_ranges._from_normalised(sc, w), np.inf)
 
