@@ -278,15 +278,21 @@ def _starts(p, scheme, q_opt, rng, perturbed, random):
     return out
 
 
-@pytest.mark.parametrize("k_slaves,scheme", [(1, "proposed"), (2, "proposed"),
-                                             (3, "proposed"), (3, "static-power"),
-                                             (4, "proposed")])
-def test_agrees_with_cartesian_multistart(k_slaves, scheme):
+@pytest.mark.parametrize("k_slaves,scheme,d_min", [
+    (1, "proposed", None), (2, "proposed", None), (3, "proposed", None),
+    (3, "static-power", None), (4, "proposed", None),
+    # d_min comparable with the rays' spacing: C4 couples slaves that are not angle neighbours
+    (3, "proposed", 12.0), (4, "proposed", 6.0)])
+def test_agrees_with_cartesian_multistart(k_slaves, scheme, d_min):
     p = with_slaves(default_params(), k_slaves)
+    if d_min is not None:
+        p = dataclasses.replace(p, d_min=d_min)
     res = solve_global(p, scheme, "exact")
+    assert res.feasible and 0.0 <= res.gap <= 1e-4, res.message
     ours = fused_sigma(p, res.formation, scheme)
     rng = np.random.default_rng(k_slaves)
-    found = reference_optima(p, scheme, _starts(p, scheme, res.formation, rng, 4, 6))
+    found = reference_optima(p, scheme, _starts(p, scheme, res.formation, rng, 4,
+                                                6 if d_min is None else 16))
     assert found, "no reference run ended feasible"
     assert all(ours <= f * (1 + 1e-6) for f in found), (ours, min(found))
     assert min(found) <= ours * (1 + 1e-4)
