@@ -139,8 +139,10 @@ def _incumbent(sc: Scenario, boxes: np.ndarray):
 
 # Local solves (SLSQP, some milliseconds each) of new incumbents per search.
 MAX_REFINES = 4
-# SLSQP runs from the most promising box while no feasible point is known.
+# SLSQP runs from the most promising box: while no feasible point is known, and every
+# STALL_ROUNDS rounds.
 MAX_RESCUES = 4
+STALL_ROUNDS = 8
 # Box centres tried for a better incumbent per round: those of the smallest lower bounds.
 INCUMBENT_BOXES = 64
 
@@ -149,6 +151,33 @@ def _most_promising(boxes: np.ndarray, lb: np.ndarray) -> np.ndarray:
     if len(boxes) <= INCUMBENT_BOXES:
         return boxes
     return boxes[np.argpartition(lb, INCUMBENT_BOXES)[:INCUMBENT_BOXES]]
+
+
+@dataclass
+class _LocalSearch:
+    """The search's use of local_refine: SLSQP from a markedly better incumbent (so that
+    boxes close against, usually, the optimum from then on), and from the most promising box
+    every STALL_ROUNDS rounds (first, when no box centre is feasible at all: tight packings in
+    small station disks; then when the feasible points near the bound are too thin for box
+    centres to hit, e.g. slaves pressed against the master and each other)."""
+
+    refines: int = 0
+    rescues: int = 0
+    rounds: int = 0
+    last: tuple | None = None
+
+    def improve(self, sc: Scenario, f: float, pt, close_below: float, boxes, lb):
+        self.rounds += 1
+        if self.refines < MAX_REFINES and f < close_below:
+            f, pt, _ = local_refine.refine(sc, pt, f)
+            self.refines, self.last = self.refines + 1, pt
+        elif (self.rescues < MAX_RESCUES and len(lb)
+              and (not close_below < math.inf or self.rounds % STALL_ROUNDS == 0)):
+            f_box, pt_box = local_refine.from_box(sc, boxes[int(np.argmin(lb))])
+            self.rescues += 1
+            if f_box < f:
+                f, pt, self.last = f_box, pt_box, pt_box
+        return f, pt
 
 
 def _coarse_splits(k_count: int) -> int:
@@ -169,25 +198,17 @@ def search(sc: Scenario, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch:
     boxes = np.array([[sc.r0_lo, sc.r0_hi] + [sc.th_lo, sc.th_hi] * k_count])
     for _ in range(_coarse_splits(k_count)):
         boxes = _order(_split(sc, boxes), pairs)
-    best_val, best_pt, refined, refines, rescues = math.inf, None, None, 0, 0
+    best_val, best_pt, local = math.inf, None, _LocalSearch()
     closed_lb, nodes = math.inf, len(boxes)
     parked, parked_lb = boxes[:0], np.empty(0)
     while True:
         boxes = _order(boxes, pairs)
-        lb = slave_sets.box_lower_bound(sc, boxes)
+        lb = slave_sets.box_lower_bound(sc, boxes, close_at=best_val * (1.0 - rel_gap))
         keep = np.isfinite(lb)
         boxes, lb = boxes[keep], lb[keep]
         f, pt = _incumbent(sc, _most_promising(boxes, lb))
-        if refine and refines < MAX_REFINES and f < best_val * (1.0 - rel_gap):
-            # A markedly better incumbent: take it to its local optimum at once, so that the
-            # boxes are closed against (usually) the optimum from then on.
-            f, pt, _ = local_refine.refine(sc, pt, f)
-            refined, refines = pt, refines + 1
-        elif refine and best_pt is None and not f < math.inf and len(lb) and rescues < MAX_RESCUES:
-            # No box centre is feasible (a tight packing of slaves in small station disks):
-            # let SLSQP look for a feasible point from the most promising box.
-            f, pt = local_refine.from_box(sc, boxes[int(np.argmin(lb))])
-            refined, rescues = pt, rescues + 1
+        if refine:
+            f, pt = local.improve(sc, f, pt, best_val * (1.0 - rel_gap), boxes, lb)
         if f < best_val:
             best_val, best_pt = f, pt
         if stop_when_feasible and best_pt is not None:
@@ -216,7 +237,7 @@ def search(sc: Scenario, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch:
     open_lb = float(lb.min()) if len(boxes) else math.inf
     lower = min(closed_lb, open_lb, best_val)
     return SearchResult(best_val, best_pt, lower, nodes, not len(boxes),
-                        refined=best_pt is not None and best_pt is refined)
+                        refined=best_pt is not None and best_pt is local.last)
 
 
 def polish(sc: Scenario, point, steps, iterations: int = 80):

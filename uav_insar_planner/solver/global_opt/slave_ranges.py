@@ -158,24 +158,33 @@ def slave_box(sc: Scenario, k: int, r0a, r0b, ta, tb):
 
 def _below_master_hole(sc: Scenario, r0a, r0b, ta, tb, lo, up):
     """The range limit `up` lowered past the master's C4 hole where the hole covers it for every
-    point of the box (-inf: the slave cannot be there at all).
+    point of the box (-inf: the slave cannot be there at all); see master_hole_box."""
+    h1, h2 = master_hole_box(sc, r0a, r0b, ta, tb)
+    covered = (up > h1) & (up < h2)
+    return np.where(covered, np.where(h1 >= lo, h1, -np.inf), up)
+
+
+def master_hole_box(sc: Scenario, r0a, r0b, ta, tb):
+    """(H1, H2): ranges in (H1, H2) are closer than d_min to the master (C4) at every point of
+    the box; (inf, -inf) when no range is, or C4 is off.
 
     On ray theta the hole is (h1, h2) = r0 cos(delta) -/+ sqrt(d_min^2 - r0^2 sin^2(delta)),
     delta = theta - theta_0. Over the box, with |delta| < pi/2, h1 <= H1 = r0b cos(delta_min) -
     sqrt(d_min^2 - (r0b sin(delta_max))^2) and h2 >= H2 = r0a cos(delta_max) +
     sqrt(d_min^2 - (r0b sin(delta_max))^2) (each term at its extreme; h1 grows with r0), and
-    the hole exists everywhere when r0b sin(delta_max) < d_min. So ranges in (H1, H2) are
-    excluded throughout, and a top inside it drops to H1."""
+    the hole exists everywhere when r0b sin(delta_max) < d_min. At a point box H1, H2 are the
+    hole itself."""
+    ta, tb = np.asarray(ta, dtype=float), np.asarray(tb, dtype=float)
+    if not sc.on("C4"):
+        return np.full(ta.shape, np.inf), np.full(ta.shape, -np.inf)
     dlo = np.where((ta <= sc.th0) & (tb >= sc.th0), 0.0,
                    np.minimum(np.abs(ta - sc.th0), np.abs(tb - sc.th0)))
     dhi = np.maximum(np.abs(ta - sc.th0), np.abs(tb - sc.th0))
-    d2 = sc.p.d_min**2
-    disc = d2 - (r0b * np.sin(np.minimum(dhi, rays.HALF_PI))) ** 2
+    disc = sc.p.d_min**2 - (r0b * np.sin(np.minimum(dhi, rays.HALF_PI))) ** 2
     root = np.sqrt(np.maximum(disc, 0.0))
-    h1 = r0b * np.cos(dlo) - root
-    h2 = r0a * np.cos(dhi) + root
-    covered = (disc > 0.0) & (dhi < rays.HALF_PI) & (up > h1) & (up < h2)
-    return np.where(covered, np.where(h1 >= lo, h1, -np.inf), up)
+    exists = (disc > 0.0) & (dhi < rays.HALF_PI)
+    return (np.where(exists, r0b * np.cos(dlo) - root, np.inf),
+            np.where(exists, r0a * np.cos(dhi) + root, -np.inf))
 
 
 def weight_bound(sc: Scenario, r0a, rho, smax, g_rg):

@@ -31,9 +31,10 @@ def angle_cols(j: int) -> tuple[int, int]:
     return 2 + 2 * j, 3 + 2 * j
 
 
-def box_lower_bound(sc: Scenario, boxes: np.ndarray) -> np.ndarray:
+def box_lower_bound(sc: Scenario, boxes: np.ndarray, close_at: float = np.inf) -> np.ndarray:
     """Lower bound on the objective over every feasible point of each box (+inf: the box
-    provably holds none); see the module docstring."""
+    provably holds none); see the module docstring. close_at: bounds at or above it close the
+    box anyway, so the costlier forest bound is spent only on boxes below it."""
     r0a, r0b = boxes[:, 0], boxes[:, 1]
     pieces, single = [], []
     ok = np.ones(len(boxes), dtype=bool)
@@ -48,10 +49,16 @@ def box_lower_bound(sc: Scenario, boxes: np.ndarray) -> np.ndarray:
     elif len(single) == 2:  # one matching: the pair (its bound never exceeds W_1 + W_2)
         w = slave_ranges.pair_weight_bound(sc, r0a, *pieces, *single)
     else:
-        stacked = np.stack([np.stack(x) for x in pieces])
-        exact_pairs = len(single) <= chain_bound.FOREST_MAX_K
-        w = (chain_bound.forest_weight_bound if exact_pairs
-             else chain_bound.chain_weight_bound)(sc, r0a, stacked)
+        holes = [slave_ranges.master_hole_box(sc, r0a, r0b, x[4], x[5]) for x in pieces]
+        stacked = np.stack([np.stack(x + h) for x, h in zip(pieces, holes, strict=True)])
+        w = chain_bound.chain_weight_bound(sc, r0a, stacked)
+        if len(single) <= chain_bound.FOREST_MAX_K:
+            # the forest keeps every pair and the master's hole: never looser than the chain
+            with np.errstate(divide="ignore"):
+                open_ = ok & (slave_ranges._from_normalised(sc, np.maximum(w, 0.0)) < close_at)
+            if open_.any():
+                w[open_] = np.minimum(w[open_], chain_bound.forest_weight_bound(
+                    sc, r0a[open_], stacked[:, :, open_]))
     w = np.where(ok, w, -np.inf)
     return np.where(w > -np.inf, slave_ranges._from_normalised(sc, w), np.inf)
 
@@ -64,10 +71,50 @@ def ranges_for(sc: Scenario, r0, thetas: np.ndarray):
         cols = [thetas[:, j] for j in range(thetas.shape[1])]
         f, r1, r2 = slave_ranges.best_ranges(sc, r0, *cols)
         return f, np.stack([r1, r2][:len(cols)], axis=1)
-    f1, r1 = greedy_ranges(sc, r0, thetas, range(len(sc.slaves)))
-    f2, r2 = greedy_ranges(sc, r0, thetas, range(len(sc.slaves) - 1, -1, -1))
-    take = f2 < f1
-    return np.where(take, f2, f1), np.where(take[:, None], r2, r1)
+    k_count = len(sc.slaves)
+    tries = [greedy_ranges(sc, r0, thetas, range(k_count)),
+             greedy_ranges(sc, r0, thetas, range(k_count - 1, -1, -1))]
+    if k_count <= chain_bound.FOREST_MAX_K:
+        tries.append(_forest_point(sc, r0, thetas))
+    f, ranges = tries[0]
+    for f_try, r_try in tries[1:]:
+        take = f_try < f
+        f, ranges = np.where(take, f_try, f), np.where(take[:, None], r_try, ranges)
+    return f, ranges
+
+
+def _forest_point(sc: Scenario, r0, thetas: np.ndarray):
+    """The best forest of chain_bound at fixed angles (the inner optimum up to the master's
+    hole), kept where it passes the feasibility check of `_objective_if_feasible`."""
+    r0 = np.asarray(r0, dtype=float)
+    pieces = np.stack([np.stack(slave_ranges.slave_box(sc, k, r0, r0, th, th) + (th, th)
+                                + slave_ranges.master_hole_box(sc, r0, r0, th, th))
+                       for j, k in enumerate(sc.slaves) for th in [thetas[:, j]]])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ranges = chain_bound.forest_ranges(sc, r0, pieces)
+    return _objective_if_feasible(sc, r0, thetas, ranges)
+
+
+def _objective_if_feasible(sc: Scenario, r0, thetas: np.ndarray, ranges: np.ndarray):
+    """(objective, ranges) with +inf / nan rows where the ranges break a ray limit, the
+    master's hole or C4 between slaves."""
+    d2 = sc.p.d_min**2 if sc.on("C4") else 0.0
+    ok = np.all(np.isfinite(ranges), axis=1) & (r0 > 0)
+    with np.errstate(invalid="ignore"):
+        for j, k in enumerate(sc.slaves):
+            (lo_a, top_a), (lo_b, top_b) = slave_ranges._components(sc, k, r0, thetas[:, j])
+            r = ranges[:, j]
+            ok &= ((r >= lo_a) & (r <= top_a)) | ((r >= lo_b) & (r <= top_b))
+            for i in range(j):
+                c = np.cos(thetas[:, i] - thetas[:, j])
+                ri = ranges[:, i]
+                ok &= ri * ri + r * r - 2.0 * c * ri * r >= d2 * (1.0 - 1e-12)
+    ranges = np.where(ok[:, None], ranges, np.nan)
+    w = np.zeros(len(ranges))
+    for j in range(ranges.shape[1]):
+        w = w + slave_ranges._slave_weight(sc, r0, thetas[:, j], ranges[:, j])
+    f = np.where(ok & (w > 0), slave_ranges._from_normalised(sc, np.where(ok, w, 0.0)), np.inf)
+    return f, ranges
 
 
 def greedy_ranges(sc: Scenario, r0, thetas: np.ndarray, order) -> tuple[np.ndarray,
