@@ -30,7 +30,8 @@ d_min apart and a third beside them; found with d_min = 6 and 12 m) the chain bo
 valid but does not converge as the boxes shrink. forest_weight_bound keeps every pair exactly
 (the same argument, each slave at its top or at the lower crossing of any slave fixed before
 it: the values of a rooted forest of "who is pressed by whom") and is used up to
-FOREST_MAX_K slaves; with more, such a search ends at its node limit with an honest, larger gap.
+FOREST_MAX_K slaves, with the master's hole as a further root (a slave pressed against the
+master); with more, such a search ends at its node limit with an honest, larger gap.
 """
 from __future__ import annotations
 
