@@ -38,7 +38,8 @@ def with_slaves(p: Params, k_slaves: int) -> Params:
     """Table I with K slaves: the per-UAV rate list sets the swarm's size."""
     rates = tuple(p.rate_min_bps[:k_slaves + 1])
     rates += (p.rate_min_bps[-1],) * (k_slaves + 1 - len(rates))
-    return dataclasses.replace(p, rate_min_bps=rates)
+    size = {"num_uavs": k_slaves + 1} if hasattr(p, "num_uavs") else {}  # once Params has it
+    return dataclasses.replace(p, rate_min_bps=rates, **size)
 
 
 def median_time(fn, repeats: int):

@@ -29,7 +29,8 @@ def with_slaves(p, k_slaves, rate_bps=1e6):
     """Table I grown or shrunk to K slaves; added slaves need `rate_bps`."""
     rates = tuple(p.rate_min_bps[:k_slaves + 1])
     rates += (rate_bps,) * (k_slaves + 1 - len(rates))
-    return dataclasses.replace(p, rate_min_bps=rates)
+    size = {"num_uavs": k_slaves + 1} if hasattr(p, "num_uavs") else {}  # once Params has it
+    return dataclasses.replace(p, rate_min_bps=rates, **size)
 
 
 def flown(p, scheme):
