@@ -159,7 +159,9 @@ def slave_box(sc: Scenario, k: int, r0a, r0b, ta, tb):
 def _below_master_hole(sc: Scenario, r0a, r0b, ta, tb, lo, up):
     """The range limit `up` lowered past the master's C4 hole where the hole covers it for every
     point of the box (-inf: the slave cannot be there at all); see master_hole_box."""
-    h1, h2 = master_hole_box(sc, r0a, r0b, ta, tb)
+    h1, h2 = _master_hole_box(sc, r0a, r0b, ta, tb)
+    if h1 is None:
+        return up
     covered = (up > h1) & (up < h2)
     return np.where(covered, np.where(h1 >= lo, h1, -np.inf), up)
 
@@ -174,15 +176,26 @@ def master_hole_box(sc: Scenario, r0a, r0b, ta, tb):
     sqrt(d_min^2 - (r0b sin(delta_max))^2) (each term at its extreme; h1 grows with r0), and
     the hole exists everywhere when r0b sin(delta_max) < d_min. At a point box H1, H2 are the
     hole itself."""
-    ta, tb = np.asarray(ta, dtype=float), np.asarray(tb, dtype=float)
+    h1, h2 = _master_hole_box(sc, r0a, r0b, ta, tb)
+    if h1 is None:
+        shape = np.broadcast(r0a, ta).shape
+        return np.full(shape, np.inf), np.full(shape, -np.inf)
+    return h1, h2
+
+
+def _master_hole_box(sc: Scenario, r0a, r0b, ta, tb):
+    """master_hole_box, with (None, None) when no box has a hole (most, at small d_min)."""
     if not sc.on("C4"):
-        return np.full(ta.shape, np.inf), np.full(ta.shape, -np.inf)
-    dlo = np.where((ta <= sc.th0) & (tb >= sc.th0), 0.0,
-                   np.minimum(np.abs(ta - sc.th0), np.abs(tb - sc.th0)))
+        return None, None
+    ta, tb = np.asarray(ta, dtype=float), np.asarray(tb, dtype=float)
     dhi = np.maximum(np.abs(ta - sc.th0), np.abs(tb - sc.th0))
     disc = sc.p.d_min**2 - (r0b * np.sin(np.minimum(dhi, rays.HALF_PI))) ** 2
-    root = np.sqrt(np.maximum(disc, 0.0))
     exists = (disc > 0.0) & (dhi < rays.HALF_PI)
+    if not exists.any():
+        return None, None
+    dlo = np.where((ta <= sc.th0) & (tb >= sc.th0), 0.0,
+                   np.minimum(np.abs(ta - sc.th0), np.abs(tb - sc.th0)))
+    root = np.sqrt(np.maximum(disc, 0.0))
     return (np.where(exists, r0b * np.cos(dlo) - root, np.inf),
             np.where(exists, r0a * np.cos(dhi) + root, -np.inf))
 
