@@ -60,9 +60,9 @@ def power_schedule(p: Params, k: int, x: float, z: float, scheme: str) -> np.nda
 
 
 def schedules(p: Params, formation: np.ndarray, scheme: str) -> np.ndarray:
-    """(num_uavs, N) schedules for a formation; zero rows for UAVs not flown (NaN rows)."""
-    out = np.zeros((p.num_uavs, p.num_slots))
-    for k in range(p.num_uavs):
+    """(n, N) schedules for an n-UAV formation; zero rows for UAVs not flown (NaN rows)."""
+    out = np.zeros((len(formation), p.num_slots))
+    for k in range(len(formation)):
         x, z = formation[k]
         if np.isfinite(x):
             out[k] = power_schedule(p, k, x, z, scheme)

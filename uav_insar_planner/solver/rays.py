@@ -111,8 +111,12 @@ def disk_interval(sc: Scenario, k: int, theta):
     theta = np.asarray(theta, dtype=float)
     if r2 == math.inf:
         return np.full(theta.shape, -math.inf), np.full(theta.shape, math.inf)
-    psi = np.abs(np.angle(np.exp(1j * (theta - sc.station_angle))))
-    return _disk_at_psi(sc, r2, psi)
+    return _disk_at_psi(sc, r2, angle_between(theta, sc.station_angle))
+
+
+def angle_between(a, b):
+    """|a - b| wrapped into [0, pi]."""
+    return np.abs(np.remainder(np.asarray(a) - b + math.pi, 2.0 * math.pi) - math.pi)
 
 
 def _disk_at_psi(sc: Scenario, r2: float, psi):
@@ -222,7 +226,7 @@ def weight(sc: Scenario, b_perp, g_rg, g_snr):
 
 
 def objective_from_weights(sc: Scenario, r0, wsum):
-    """sigma_h (or its bound) = lambda r0 sin(theta_0) / (2 pi sqrt(w_1 + w_2))."""
+    """sigma_h (or its bound) = lambda r0 sin(theta_0) / (2 pi sqrt(sum_k w_k))."""
     with np.errstate(divide="ignore"):
         return sc.p.wavelength * np.asarray(r0) * sc.sin0 / (2.0 * math.pi * np.sqrt(wsum))
 

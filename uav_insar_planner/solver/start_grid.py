@@ -25,6 +25,7 @@ the swath's altitude.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass
@@ -205,7 +206,7 @@ def find_start(p: Params, scheme: str, families: Iterable[str] = ALL_FAMILIES,
     masters, mok = _master_grid(p, scheme, fam)
     slaves = slave_uavs(scheme, p.num_uavs)
     if "C4" not in fam:
-        p = p.replace(d_min_m=0.0)
+        p = dataclasses.replace(p, d_min=0.0)  # keeps energy_budget_uav_j (replace drops it)
     feasible: list[tuple[int, dict]] = []
     for i in np.flatnonzero(mok):
         cands = {}

@@ -28,7 +28,8 @@ def bound_minimizer_band(p: Params, scheme: str, samples: int = 160) -> tuple[fl
     and the figure sweeps), the minimisers are that whole set: each slave on the curve
     r_k = b_max(r0) / |sin(theta_k - theta_0)|, any r0 and angles keeping C1-C11. The band is
     sampled on a (r0, theta_1, theta_2) grid and polished; otherwise the minimiser found by
-    the global solver is reported as a zero-width band. (nan, nan) if infeasible.
+    the global solver is reported as a zero-width band, as it is with more than two slaves
+    (the grid spans two angles). (nan, nan) if infeasible.
     """
     res = solve_global(p, scheme, "bound")
     if not res.feasible:
@@ -38,7 +39,8 @@ def bound_minimizer_band(p: Params, scheme: str, samples: int = 160) -> tuple[fl
     sigma_phi_a = sc.sigma_phi_bound
     c8_value = p.h_amb_min * sigma_phi_a / (2.0 * math.pi * math.sqrt(n))
     bound_value = _objective(p, res, scheme)
-    if not (sc.on("C8") and bound_value <= c8_value * (1.0 + 1e-6)):
+    # The grid below spans at most two slave angles; with more slaves the band is not sampled.
+    if not (sc.on("C8") and bound_value <= c8_value * (1.0 + 1e-6)) or n > 2:
         s = _exact_sigma(p, res, scheme)
         return s, s
     r0s = (np.array([sc.r0_lo]) if sc.r0_lo == sc.r0_hi

@@ -1,20 +1,26 @@
-"""Branch and bound over boxes of (r0, theta_1, theta_2): the global optimum and its proof.
+"""Branch and bound over boxes of (r0, theta_1, ..., theta_K): the global optimum and its proof.
 
 After C2 (master on the ray theta_0) and the Pareto reduction of the slave ranges
-(slave_ranges.py), problem (P) is a minimisation over r0 in the master interval and the slave
+(slave_ranges.py), problem (P) is a minimisation over r0 in the master interval and the K slave
 look angles in the C3/C7 domain. Each box gets
 
-- an upper bound: the exact objective of a feasible point (slave_ranges.best_ranges at the
-  box's angle centre and smallest r0), which also supplies the returned plan;
-- a lower bound (slave_ranges.box_lower_bound): every factor of the objective is monotone in r0,
+- an upper bound: the objective of a feasible point (slave_sets.ranges_for at the box's angle
+  centre and smallest r0: exact for K <= 2, a feasible greedy placement beyond), which also
+  supplies the returned plan;
+- a lower bound (slave_sets.box_lower_bound): every factor of the objective is monotone in r0,
   in |theta - theta_0| or in the slave range, and every range limit is monotone in r0 and in
   an angle, so replacing each by its most favourable value over the box bounds the objective
   from below over all feasible points of the box (+inf proves the box empty).
 
 Boxes whose lower bound is within `rel_gap` of the incumbent are closed; the smallest lower
-bound of the closed and the still open boxes is a lower bound on the global optimum. When the
-scenario's slaves are interchangeable (equal station disks), boxes with theta_1 > theta_2 are
-dropped: swapping the slaves maps them onto kept points of equal objective.
+bound of the closed and the still open boxes is a lower bound on the global optimum.
+
+Symmetry: slaves with equal station disks (equal disk_r2: the same rate and energy budget)
+are interchangeable, since every other constraint treats the slaves alike. Permuting such
+slaves maps any point onto one whose angles are ordered (theta_i <= theta_j for i < j in the
+group) with the same objective, so only the ordered part of the space is searched: a box is
+cut to theta_j >= theta_i's lower end and theta_i <= theta_j's upper end (which keeps every
+ordered point) and dropped when that leaves nothing.
 """
 from __future__ import annotations
 
@@ -23,38 +29,67 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from uav_insar_planner.solver.global_opt import slave_ranges
+from uav_insar_planner.solver.global_opt import local_refine, slave_sets
 from uav_insar_planner.solver.rays import Scenario
 
-R0A, R0B, T1A, T1B, T2A, T2B = range(6)
+R0A, R0B = 0, 1
 
 
 @dataclass
 class SearchResult:
-    """value: best objective found (+inf: none); point: (r0, theta1, theta2, r1, r2);
-    lower_bound: proven bound on the optimum (+inf when infeasibility is proven);
-    exhausted: every box was closed (the certificate is complete)."""
+    """value: best objective found (+inf: none); point: (r0, slave angles, slave ranges), the
+    angles and ranges one per slave of sc.slaves; lower_bound: proven bound on the optimum
+    (+inf when infeasibility is proven); exhausted: every box was closed (the certificate is
+    complete); refined: the point is local_refine's (no better box centre turned up)."""
 
     value: float
-    point: tuple[float, float, float, float, float] | None
+    point: tuple[float, tuple[float, ...], tuple[float, ...]] | None
     lower_bound: float
     nodes: int
     exhausted: bool
+    refined: bool = False
 
 
-def _lower(sc: Scenario, b: np.ndarray) -> np.ndarray:
-    return slave_ranges.box_lower_bound(sc, b[:, R0A], b[:, R0B], b[:, T1A], b[:, T1B],
-                                 b[:, T2A], b[:, T2B])
+def interchangeable_pairs(sc: Scenario) -> list[tuple[int, int]]:
+    """(i, j), i < j positions in sc.slaves, consecutive members of a group of slaves with
+    equal station disks: ordering each such pair orders the whole group."""
+    pairs, last = [], {}
+    for j, k in enumerate(sc.slaves):
+        key = sc.disk_r2[k]
+        if key in last:
+            pairs.append((last[key], j))
+        last[key] = j
+    return pairs
+
+
+def _order(boxes: np.ndarray, pairs: list[tuple[int, int]]) -> np.ndarray:
+    """Cut the boxes to the ordered angles of the interchangeable slaves (module docstring)."""
+    if not pairs:
+        return boxes
+    boxes = boxes.copy()
+    for seq in (pairs, pairs[::-1]):  # forward and back, so a chain's cuts propagate
+        for i, j in seq:
+            ia, ib = slave_sets.angle_cols(i)
+            ja, jb = slave_sets.angle_cols(j)
+            boxes[:, ja] = np.maximum(boxes[:, ja], boxes[:, ia])
+            boxes[:, ib] = np.minimum(boxes[:, ib], boxes[:, jb])
+    keep = np.ones(len(boxes), dtype=bool)
+    for i, j in pairs:
+        keep &= boxes[:, slave_sets.angle_cols(i)[0]] <= boxes[:, slave_sets.angle_cols(i)[1]]
+        keep &= boxes[:, slave_sets.angle_cols(j)[0]] <= boxes[:, slave_sets.angle_cols(j)[1]]
+    return boxes[keep]
 
 
 def _split_dim(sc: Scenario, b: np.ndarray) -> np.ndarray:
-    """Which coordinate to halve: the one whose width most loosens the bound. The objective's
-    relative sensitivity is about 2 per relative change of r0 and about
-    1/|tan(theta - theta_0)| per radian of a slave angle (b_perp), plus the coherence terms."""
+    """Which coordinate to halve (0: r0, j + 1: slave j's angle): the one whose width most
+    loosens the bound. The objective's relative sensitivity is about 2 per relative change of
+    r0 and about 1/|tan(theta - theta_0)| per radian of a slave angle (b_perp), plus the
+    coherence terms."""
     with np.errstate(divide="ignore"):  # a box from r0 = 0 is infinitely wide: split r0
         r0w = 2.0 * (b[:, R0B] - b[:, R0A]) / b[:, R0A]
     scores = [r0w]
-    for a, z in ((T1A, T1B), (T2A, T2B))[:len(sc.slaves)]:
+    for j in range(len(sc.slaves)):
+        a, z = slave_sets.angle_cols(j)
         mid = 0.5 * (b[:, a] + b[:, z]) - sc.th0
         sens = 1.0 / np.maximum(np.abs(np.tan(mid)), 0.02) + 3.0
         scores.append((b[:, z] - b[:, a]) * sens)
@@ -62,8 +97,7 @@ def _split_dim(sc: Scenario, b: np.ndarray) -> np.ndarray:
 
 
 def _split(sc: Scenario, b: np.ndarray) -> np.ndarray:
-    dim = _split_dim(sc, b)
-    lo_col = np.array([R0A, T1A, T2A])[dim]
+    lo_col = 2 * _split_dim(sc, b)
     hi_col = lo_col + 1
     rows = np.arange(len(b))
     mid = 0.5 * (b[rows, lo_col] + b[rows, hi_col])
@@ -74,12 +108,16 @@ def _split(sc: Scenario, b: np.ndarray) -> np.ndarray:
 
 
 PROJECT_AFTER = 20_000
+# A round bisects its boxes until there are about batch / ROUND_FILL of them, each at most
+# ROUND_SPLITS times.
+ROUND_FILL = 4
+ROUND_SPLITS = 4
 
 
 def _a_slave_is_blocked(sc: Scenario) -> bool:
-    """Is some slave alone (the other dropped, a relaxation) provably without a feasible
-    position? Near a feasibility edge this 2-D proof is far cheaper than the 3-D one, which
-    would keep splitting the other slave's angle."""
+    """Is some slave alone (the others dropped, a relaxation) provably without a feasible
+    position? Near a feasibility edge this 2-D proof is far cheaper than the full one, which
+    would keep splitting the other slaves' angles."""
     for k in sc.slaves:
         res = search(replace(sc, slaves=(k,)), stop_when_feasible=True)
         if res.exhausted and res.point is None:
@@ -87,38 +125,92 @@ def _a_slave_is_blocked(sc: Scenario) -> bool:
     return False
 
 
+def _incumbent(sc: Scenario, boxes: np.ndarray):
+    """Objective and point at each box's angle centre and smallest r0 (the objective grows
+    with r0 for fixed slaves, so the optimum r0 is usually the smallest feasible one)."""
+    r0 = boxes[:, R0A]
+    th = 0.5 * (boxes[:, 2::2] + boxes[:, 3::2])
+    f, ranges = slave_sets.ranges_for(sc, r0, th)
+    if not len(f):
+        return math.inf, None
+    i = int(np.argmin(f))
+    return float(f[i]), (float(r0[i]), tuple(map(float, th[i])), tuple(map(float, ranges[i])))
+
+
+# Local solves (SLSQP, some milliseconds each) of new incumbents per search.
+MAX_REFINES = 4
+# SLSQP runs from the most promising box: while no feasible point is known, and every
+# STALL_ROUNDS rounds.
+MAX_RESCUES = 4
+STALL_ROUNDS = 8
+# Box centres tried for a better incumbent per round: those of the smallest lower bounds.
+INCUMBENT_BOXES = 64
+
+
+def _most_promising(boxes: np.ndarray, lb: np.ndarray) -> np.ndarray:
+    if len(boxes) <= INCUMBENT_BOXES:
+        return boxes
+    return boxes[np.argpartition(lb, INCUMBENT_BOXES)[:INCUMBENT_BOXES]]
+
+
+@dataclass
+class _LocalSearch:
+    """The search's use of local_refine: SLSQP from a markedly better incumbent (so that
+    boxes close against, usually, the optimum from then on), and from the most promising box
+    every STALL_ROUNDS rounds (first, when no box centre is feasible at all: tight packings in
+    small station disks; then when the feasible points near the bound are too thin for box
+    centres to hit, e.g. slaves pressed against the master and each other)."""
+
+    refines: int = 0
+    rescues: int = 0
+    rounds: int = 0
+    last: tuple | None = None
+
+    def improve(self, sc: Scenario, f: float, pt, close_below: float, boxes, lb):
+        self.rounds += 1
+        if self.refines < MAX_REFINES and f < close_below:
+            f, pt, _ = local_refine.refine(sc, pt, f)
+            self.refines, self.last = self.refines + 1, pt
+        elif (self.rescues < MAX_RESCUES and len(lb)
+              and (not close_below < math.inf or self.rounds % STALL_ROUNDS == 0)):
+            f_box, pt_box = local_refine.from_box(sc, boxes[int(np.argmin(lb))])
+            self.rescues += 1
+            if f_box < f:
+                f, pt, self.last = f_box, pt_box, pt_box
+        return f, pt
+
+
+def _coarse_splits(k_count: int) -> int:
+    """Bisections of the root before the first round: a few thousand boxes, so that the first
+    incumbent is already good."""
+    return 7 if k_count == 1 else 10 if k_count == 2 else 12
+
+
 def search(sc: Scenario, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: int = 4096,
-           stop_when_feasible: bool = False) -> SearchResult:
-    """Best-first (in batches) branch and bound; see the module docstring."""
+           stop_when_feasible: bool = False, refine: bool = False) -> SearchResult:
+    """Best-first (in batches) branch and bound; see the module docstring. refine: take
+    markedly better incumbents (up to MAX_REFINES) to their local optimum (local_refine),
+    which the optimisation wants and a feasibility test does not."""
     if sc.r0_lo > sc.r0_hi or sc.th_lo > sc.th_hi:
         return SearchResult(math.inf, None, math.inf, 0, True)
-    two = len(sc.slaves) == 2
-    symmetric = two and sc.disk_r2[1] == sc.disk_r2[2]
-    root = np.array([[sc.r0_lo, sc.r0_hi, sc.th_lo, sc.th_hi, sc.th_lo, sc.th_hi]])
-    # A coarse start: a few thousand boxes, so that the first incumbent is already good.
-    boxes = root
-    for _ in range(10 if two else 7):
-        boxes = _split(sc, boxes)
-    best_val, best_pt = math.inf, None
+    k_count = len(sc.slaves)
+    pairs = interchangeable_pairs(sc)
+    boxes = np.array([[sc.r0_lo, sc.r0_hi] + [sc.th_lo, sc.th_hi] * k_count])
+    for _ in range(_coarse_splits(k_count)):
+        boxes = _order(_split(sc, boxes), pairs)
+    best_val, best_pt, local = math.inf, None, _LocalSearch()
     closed_lb, nodes = math.inf, len(boxes)
     parked, parked_lb = boxes[:0], np.empty(0)
     while True:
-        if symmetric:
-            boxes = boxes[boxes[:, T1A] <= boxes[:, T2B]]
-        lb = _lower(sc, boxes)
+        boxes = _order(boxes, pairs)
+        lb = slave_sets.box_lower_bound(sc, boxes, close_at=best_val * (1.0 - rel_gap))
         keep = np.isfinite(lb)
         boxes, lb = boxes[keep], lb[keep]
-        # Incumbent: each new box's centre in angle at its smallest r0 (the objective grows
-        # with r0 for fixed slaves, so the optimum r0 is usually the smallest feasible one).
-        r0 = boxes[:, R0A]
-        t1 = 0.5 * (boxes[:, T1A] + boxes[:, T1B])
-        t2 = 0.5 * (boxes[:, T2A] + boxes[:, T2B])
-        f, r1, r2 = slave_ranges.best_ranges(sc, r0, t1, t2 if two else None)
-        if len(f) and f.min() < best_val:
-            i = int(np.argmin(f))
-            best_val = float(f[i])
-            best_pt = (float(r0[i]), float(t1[i]), float(t2[i]) if two else math.nan,
-                       float(r1[i]), float(r2[i]) if two else math.nan)
+        f, pt = _incumbent(sc, _most_promising(boxes, lb))
+        if refine:
+            f, pt = local.improve(sc, f, pt, best_val * (1.0 - rel_gap), boxes, lb)
+        if f < best_val:
+            best_val, best_pt = f, pt
         if stop_when_feasible and best_pt is not None:
             return SearchResult(best_val, best_pt, -math.inf, nodes, False)
         boxes, lb = np.concatenate([boxes, parked]), np.concatenate([lb, parked_lb])
@@ -128,7 +220,8 @@ def search(sc: Scenario, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch:
         boxes, lb = boxes[~done], lb[~done]
         if not len(boxes) or nodes >= max_nodes:
             break
-        if two and best_pt is None and nodes >= PROJECT_AFTER and _a_slave_is_blocked(sc):
+        if (k_count > 1 and best_pt is None and nodes >= PROJECT_AFTER
+                and _a_slave_is_blocked(sc)):
             return SearchResult(math.inf, None, math.inf, nodes, True)
         if len(boxes) > batch:
             order = np.argpartition(lb, batch)
@@ -138,42 +231,43 @@ def search(sc: Scenario, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch:
             parked, parked_lb = boxes[:0], lb[:0]
         # Few open boxes: bisect each several times per round (the cost of a round is mostly
         # fixed numpy overhead, so fewer, fuller rounds are faster).
-        for _ in range(max(1, min(4, int(math.log2(batch / 4 / len(boxes)))))):
+        for _ in range(max(1, min(ROUND_SPLITS, int(math.log2(batch / ROUND_FILL / len(boxes)))))):
             boxes = _split(sc, boxes)
         nodes += len(boxes)
     open_lb = float(lb.min()) if len(boxes) else math.inf
     lower = min(closed_lb, open_lb, best_val)
-    return SearchResult(best_val, best_pt, lower, nodes, not len(boxes))
+    return SearchResult(best_val, best_pt, lower, nodes, not len(boxes),
+                        refined=best_pt is not None and best_pt is local.last)
 
 
 def polish(sc: Scenario, point, steps, iterations: int = 80):
-    """Compass search from `point` on (r0, theta_1, theta_2) with the exact inner ranges: all
-    3^d stencil points at once, move to the best, halve the step when none improves. It only
-    ever returns feasible points no worse than `point` (the certificate is unaffected)."""
-    two = len(sc.slaves) == 2
-    lo = np.array([sc.r0_lo, sc.th_lo, sc.th_lo])
-    hi = np.array([sc.r0_hi, sc.th_hi, sc.th_hi])
-    x = np.array(point[:3] if two else (point[0], point[1], sc.th0))
+    """Compass search from `point` on (r0, theta_1, ..., theta_K) with the inner ranges of
+    slave_sets.ranges_for: all 3^d stencil points at once, move to the best, halve the step
+    when none improves. It only ever returns feasible points no worse than `point` (the
+    certificate is unaffected)."""
+    k_count = len(sc.slaves)
+    lo = np.array([sc.r0_lo] + [sc.th_lo] * k_count)
+    hi = np.array([sc.r0_hi] + [sc.th_hi] * k_count)
+    x = np.array((point[0], *point[1]))
     step = np.array(steps, dtype=float)
-    if not two:
-        step[2] = 0.0
     grid = np.array(np.meshgrid(*[[-1, 0, 1]] * x.size)).reshape(x.size, -1).T  # 3^d stencil
-    f0, r1, r2 = slave_ranges.best_ranges(sc, x[:1], x[1:2], x[2:3] if two else None)
-    best = (float(f0[0]), tuple(x) + (float(r1[0]), float(r2[0])))
+    best = (point_value(sc, point), point)
     for _ in range(iterations):
         cand = np.clip(x + grid * step, lo, hi)
-        f, r1, r2 = slave_ranges.best_ranges(sc, cand[:, 0], cand[:, 1],
-                                             cand[:, 2] if two else None)
+        f, ranges = slave_sets.ranges_for(sc, cand[:, 0], cand[:, 1:])
         i = int(np.argmin(f))
         if f[i] < best[0]:
             x = cand[i]
-            best = (float(f[i]), (float(x[0]), float(x[1]), float(x[2]), float(r1[i]),
-                                  float(r2[i])))
+            best = (float(f[i]), (float(x[0]), tuple(map(float, x[1:])),
+                                  tuple(map(float, ranges[i]))))
         else:
             step *= 0.5
             if np.all(step <= 1e-12 * np.maximum(np.abs(x), 1.0)):
                 break
-    value, pt = best
-    if not two:
-        pt = (pt[0], pt[1], math.nan, pt[3], math.nan)
-    return value, pt
+    return best
+
+
+def point_value(sc: Scenario, point) -> float:
+    """The objective of the search point (r0, angles, ranges) as its inner ranges give it."""
+    f, _ = slave_sets.ranges_for(sc, np.array([point[0]]), np.array([point[1]]))
+    return float(f[0])

@@ -18,13 +18,15 @@ import numpy as np
 from uav_insar_planner import model
 from uav_insar_planner.params import Params
 from uav_insar_planner.solver import power, rays
-from uav_insar_planner.solver.global_opt import branch_bound, infeasibility
+from uav_insar_planner.solver.global_opt import branch_bound, infeasibility, local_refine
 from uav_insar_planner.solver.result import SolverResult
 from uav_insar_planner.swarm import MASTER
 
 # Branch and bound closes a box when its bound is within REL_GAP of the incumbent, so the
 # reported relative gap is at most REL_GAP (the target is 1e-4).
 REL_GAP = 5e-5
+# The compass search after SLSQP starts at this fraction of the domain's widths.
+POLISH_STEP = 1e-3
 
 
 def _nan_result(p: Params, nodes: int, **kw) -> SolverResult:
@@ -39,16 +41,16 @@ def master_on_c2(p: Params) -> bool:
 
 
 def formation_of(sc: rays.Scenario, point) -> np.ndarray:
-    """(num_uavs, 2) formation from (r0, theta1, theta2, r1, r2), the dual-baseline point of
-    the search (the second slave's part unused when the scheme flies one); NaN row for a UAV
-    not flown."""
-    r0, t1, t2, r1, r2 = point
+    """(num_uavs, 2) formation from the search point
+    (r0, slave angles, slave ranges), one angle and range per slave of sc.slaves; NaN row for
+    a UAV not flown."""
+    r0, thetas, ranges = point
     q = np.full((sc.p.num_uavs, 2), np.nan)
     if sc.scheme == "fixed-master":
         q[MASTER] = sc.p.master_fixed
     else:
         q[MASTER] = rays.position(sc, r0, sc.th0)
-    for k, r, t in zip(sc.slaves, (r1, r2), (t1, t2), strict=False):  # one or two slaves
+    for k, r, t in zip(sc.slaves, ranges, thetas, strict=True):
         q[k] = rays.position(sc, r, t)
     return q
 
@@ -62,9 +64,8 @@ def solve_global(p: Params, scheme: str, objective: str) -> SolverResult:
                            certificate="q0_fixed violates C2", message="q0_fixed is off the "
                            "master's look-angle line x0 = x_t - z0 tan(theta_0)")
     sc = rays.make_scenario(p, scheme, objective)
-    if len(sc.slaves) > 2:
-        raise NotImplementedError("the branch and bound searches one or two slaves")
-    res = branch_bound.search(sc, rel_gap=REL_GAP)
+    # Two slaves or fewer: the exact inner solve already makes the incumbents good.
+    res = branch_bound.search(sc, rel_gap=REL_GAP, refine=len(sc.slaves) > 2)
     if res.point is None:
         block = infeasibility.irreducible_set(p, scheme)
         _, fixes = infeasibility.blocking_sets(p, scheme)
@@ -77,17 +78,23 @@ def solve_global(p: Params, scheme: str, objective: str) -> SolverResult:
                                message="no feasible point found and infeasibility not proven "
                                f"within {res.nodes} boxes; " + together)
         return _nan_result(p, res.nodes, blocking=block, lower_bound=math.inf,
-                           certificate="infeasible: every box of (r0, theta1, theta2) proven "
-                           "empty by interval bounds of the C1-C11 range limits",
+                           certificate="infeasible: every box of ("
+                           + ", ".join(["r0"] + [f"theta{k}" for k in sc.slaves])
+                           + ") proven empty by interval bounds of the C1-C11 range limits",
                            message=together)
-    # The search's incumbent is a box centre within REL_GAP of the optimum; a local compass
-    # search takes it to the optimum to machine-level accuracy (value <= the incumbent's).
-    widths = (sc.r0_hi - sc.r0_lo, sc.th_hi - sc.th_lo, sc.th_hi - sc.th_lo)
-    value, point = branch_bound.polish(sc, res.point, [1e-3 * w for w in widths])
+    # The search's incumbent is within REL_GAP of the optimum; SLSQP on the ray coordinates
+    # takes it to the optimum's vertex (value <= the incumbent's, re-checked on the ray model),
+    # and a compass search on the angles stands in when SLSQP ends off the feasible set.
+    value, point, landed = res.value, res.point, res.refined
+    if not landed:
+        value, point, landed = local_refine.refine(sc, point, value)
+    if not landed:
+        widths = (sc.r0_hi - sc.r0_lo,) + (sc.th_hi - sc.th_lo,) * len(sc.slaves)
+        value, point = branch_bound.polish(sc, point, [POLISH_STEP * w for w in widths])
     lower = min(res.lower_bound, value)
     q = formation_of(sc, point)
     gap = (value - lower) / value
-    dims = "r0, theta1, theta2" if len(sc.slaves) == 2 else "r0, theta1"
+    dims = ", ".join(["r0"] + [f"theta{k}" for k in sc.slaves])
     return SolverResult(
         feasible=True, formation=q, p_com=power.schedules(p, q, scheme), iterations=res.nodes,
         lower_bound=lower, gap=gap,

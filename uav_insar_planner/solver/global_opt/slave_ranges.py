@@ -1,6 +1,6 @@
 """The slaves' best ranges for given look angles, and interval bounds over boxes of angles.
 
-All three objectives are sigma = lambda r0 sin(theta_0) / (2 pi sqrt(w_1 + w_2)) with
+All three objectives are sigma = lambda r0 sin(theta_0) / (2 pi sqrt(sum_k w_k)) with
 w_k = b_perp,k^2 / sigma_Phi,k^2 (rays.weight). For fixed (r0, theta_k), w_k is increasing in
 the slave range r: b_perp = r |sin(theta - theta_0)| grows linearly, and for `exact`, with
 s = r0^2 r / gamma_m and gamma = K / sqrt(1 + s) (K < 1 collects gamma_Rg, the master's SNR
@@ -32,13 +32,15 @@ from uav_insar_planner.solver import rays
 from uav_insar_planner.solver.rays import Scenario
 
 
-def _slave_weight(sc: Scenario, r0, theta, r):
+def _slave_weight(sc: Scenario, r0, theta, r, g_rg=None):
     """w / r0^2, the weight normalised by the master range (see _from_normalised): formed from
     b_perp / r0 so that centimetre ranges do not underflow b_perp^2 into denormals (which
-    once made a formation at r0 = 1e-161 look optimal). nan at r0 = 0."""
+    once made a formation at r0 = 1e-161 look optimal). nan at r0 = 0. g_rg: gamma_Rg(theta)
+    when the caller has it."""
     with np.errstate(divide="ignore", invalid="ignore"):
         b = r / r0 * np.abs(np.sin(theta - sc.th0))
-    return rays.weight(sc, b, rays.coherence_rg(sc, theta), rays.snr_factor(sc, r0, r))
+    g_rg = rays.coherence_rg(sc, theta) if g_rg is None else g_rg
+    return rays.weight(sc, b, g_rg, rays.snr_factor(sc, r0, r))
 
 
 def _components(sc: Scenario, k: int, r0, theta):
@@ -74,7 +76,7 @@ def best_ranges(sc: Scenario, r0, th1, th2=None):
         f = np.where(np.isfinite(r1) & (w > 0) & (r0 > 0), _from_normalised(sc, w), np.inf)
         return f, r1, np.full_like(r1, np.nan)
     th2 = np.asarray(th2, dtype=float)
-    comps2 = _components(sc, 2, r0, th2)
+    comps2 = _components(sc, sc.slaves[1], r0, th2)
     c = np.cos(th1 - th2)
     d2 = sc.p.d_min**2 if sc.on("C4") else 0.0
     best_w = np.full(np.broadcast(r0, th1, th2).shape, -np.inf)
@@ -88,9 +90,10 @@ def best_ranges(sc: Scenario, r0, th1, th2=None):
         best_r1 = np.where(take, r1, best_r1)
         best_r2 = np.where(take, r2, best_r2)
 
+    g1, g2 = rays.coherence_rg(sc, th1), rays.coherence_rg(sc, th2)
     with np.errstate(invalid="ignore"):
-        tops1 = [(lo, t, _slave_weight(sc, r0, th1, t)) for lo, t in comps1]
-        tops2 = [(lo, t, _slave_weight(sc, r0, th2, t)) for lo, t in comps2]
+        tops1 = [(lo, t, _slave_weight(sc, r0, th1, t, g1)) for lo, t in comps1]
+        tops2 = [(lo, t, _slave_weight(sc, r0, th2, t, g2)) for lo, t in comps2]
         for lo1, t1, w1 in tops1:
             for lo2, t2, w2 in tops2:
                 valid = (lo1 <= t1) & (lo2 <= t2)
@@ -101,10 +104,10 @@ def best_ranges(sc: Scenario, r0, th1, th2=None):
                     continue
                 y = _lower_crossing(t1, c, d2)
                 ok = crowded & (y >= lo2)
-                consider(ok, w1 + _slave_weight(sc, r0, th2, np.where(ok, y, t2)), t1, y)
+                consider(ok, w1 + _slave_weight(sc, r0, th2, np.where(ok, y, t2), g2), t1, y)
                 x = _lower_crossing(t2, c, d2)
                 ok = crowded & (x >= lo1)
-                consider(ok, _slave_weight(sc, r0, th1, np.where(ok, x, t1)) + w2, x, t2)
+                consider(ok, _slave_weight(sc, r0, th1, np.where(ok, x, t1), g1) + w2, x, t2)
     f = np.where((best_w > 0) & (r0 > 0), _from_normalised(sc, best_w), np.inf)
     return f, best_r1, best_r2
 
@@ -133,7 +136,7 @@ def slave_box(sc: Scenario, k: int, r0a, r0b, ta, tb):
     p = sc.p
     abs_lo = np.where((ta <= 0) & (tb >= 0), 0.0, np.minimum(np.abs(ta), np.abs(tb)))
     abs_hi = np.maximum(np.abs(ta), np.abs(tb))
-    dist = np.abs(np.angle(np.exp(1j * (_nearest(sc.station_angle, ta, tb) - sc.station_angle))))
+    dist = rays.angle_between(_nearest(sc.station_angle, ta, tb), sc.station_angle)
     lo, up = np.zeros_like(ta), np.full_like(ta, math.inf)
     if sc.disk_r2[k] != math.inf:
         ra, rb = rays._disk_at_psi(sc, sc.disk_r2[k], dist)
@@ -147,8 +150,54 @@ def slave_box(sc: Scenario, k: int, r0a, r0b, ta, tb):
     smin, smax = _abs_sin_range(ta - sc.th0, tb - sc.th0)
     with np.errstate(divide="ignore", invalid="ignore"):
         up = np.minimum(up, np.where(smin > 0, rays.baseline_limit(sc, r0b) / smin, math.inf))
+    if sc.on("C4"):
+        up = _below_master_hole(sc, r0a, r0b, ta, tb, lo, up)
     g_rg = rays.coherence_rg(sc, _nearest(sc.th0, ta, tb))
     return lo, up, smax, g_rg
+
+
+def _below_master_hole(sc: Scenario, r0a, r0b, ta, tb, lo, up):
+    """The range limit `up` lowered past the master's C4 hole where the hole covers it for every
+    point of the box (-inf: the slave cannot be there at all); see master_hole_box."""
+    h1, h2 = _master_hole_box(sc, r0a, r0b, ta, tb)
+    if h1 is None:
+        return up
+    covered = (up > h1) & (up < h2)
+    return np.where(covered, np.where(h1 >= lo, h1, -np.inf), up)
+
+
+def master_hole_box(sc: Scenario, r0a, r0b, ta, tb):
+    """(H1, H2): ranges in (H1, H2) are closer than d_min to the master (C4) at every point of
+    the box; (inf, -inf) when no range is, or C4 is off.
+
+    On ray theta the hole is (h1, h2) = r0 cos(delta) -/+ sqrt(d_min^2 - r0^2 sin^2(delta)),
+    delta = theta - theta_0. Over the box, with |delta| < pi/2, h1 <= H1 = r0b cos(delta_min) -
+    sqrt(d_min^2 - (r0b sin(delta_max))^2) and h2 >= H2 = r0a cos(delta_max) +
+    sqrt(d_min^2 - (r0b sin(delta_max))^2) (each term at its extreme; h1 grows with r0), and
+    the hole exists everywhere when r0b sin(delta_max) < d_min. At a point box H1, H2 are the
+    hole itself."""
+    h1, h2 = _master_hole_box(sc, r0a, r0b, ta, tb)
+    if h1 is None:
+        shape = np.broadcast(r0a, ta).shape
+        return np.full(shape, np.inf), np.full(shape, -np.inf)
+    return h1, h2
+
+
+def _master_hole_box(sc: Scenario, r0a, r0b, ta, tb):
+    """master_hole_box, with (None, None) when no box has a hole (most, at small d_min)."""
+    if not sc.on("C4"):
+        return None, None
+    ta, tb = np.asarray(ta, dtype=float), np.asarray(tb, dtype=float)
+    dhi = np.maximum(np.abs(ta - sc.th0), np.abs(tb - sc.th0))
+    disc = sc.p.d_min**2 - (r0b * np.sin(np.minimum(dhi, rays.HALF_PI))) ** 2
+    exists = (disc > 0.0) & (dhi < rays.HALF_PI)
+    if not exists.any():
+        return None, None
+    dlo = np.where((ta <= sc.th0) & (tb >= sc.th0), 0.0,
+                   np.minimum(np.abs(ta - sc.th0), np.abs(tb - sc.th0)))
+    root = np.sqrt(np.maximum(disc, 0.0))
+    return (np.where(exists, r0b * np.cos(dlo) - root, np.inf),
+            np.where(exists, r0a * np.cos(dhi) + root, -np.inf))
 
 
 def weight_bound(sc: Scenario, r0a, rho, smax, g_rg):
@@ -164,41 +213,40 @@ def weight_bound(sc: Scenario, r0a, rho, smax, g_rg):
         bn = np.where(smax > 0, np.minimum(r * smax / r0a, cap), 0.0)
         w = rays.weight(sc, bn, g_rg, rays.snr_factor(sc, r0a, r))
         # A box reaching r0 = 0: b_perp / r0 <= cap (C8) and gamma_SNR <= 1 still bound it.
-        w = np.where(np.asarray(r0a) > 0, w,
-                     rays.weight(sc, np.where(smax > 0, cap, 0.0), g_rg, 1.0))
+        at_zero = np.asarray(r0a) <= 0
+        if at_zero.any():
+            w = np.where(at_zero, rays.weight(sc, np.where(smax > 0, cap, 0.0), g_rg, 1.0), w)
     # An unbounded range (only with constraint families switched off) has unbounded weight.
     return np.where(np.isnan(w), np.inf, w)
 
 
-def box_lower_bound(sc: Scenario, r0a, r0b, t1a, t1b, t2a=None, t2b=None):
-    """A lower bound on the objective over every feasible point of the boxes
-    (+inf: the box holds no feasible point). C4 between slave and master is relaxed away;
-    C4 between the slaves is kept through the ellipse with c_max = cos of the box's largest
-    angle difference, which contains the true exclusion ellipse of every angle pair in it."""
-    lo1, up1, s1, g1 = slave_box(sc, sc.slaves[0], r0a, r0b, t1a, t1b)
-    ok = lo1 <= up1
-    if len(sc.slaves) == 1:
-        w = weight_bound(sc, r0a, up1, s1, g1)
-        return np.where(ok, _from_normalised(sc, w), np.inf)
-    lo2, up2, s2, g2 = slave_box(sc, 2, r0a, r0b, t2a, t2b)
-    ok &= lo2 <= up2
-    w_top = weight_bound(sc, r0a, up1, s1, g1) + weight_bound(sc, r0a, up2, s2, g2)
+def pair_weight_bound(sc: Scenario, r0a, one, two, w_one, w_two):
+    """Upper bound on w_i / r0^2 + w_j / r0^2 over a box for two slaves kept d_min apart (C4),
+    -inf where the pair provably has no feasible point. `one` and `two` are
+    (lo, up, smax, g_rg, theta_a, theta_b): slave_box's pieces and the angle interval; w_one
+    and w_two their weight_bound at `up` (the single-slave bounds, computed once).
+
+    C4 is kept through the ellipse with c_max = cos of the box's largest angle difference,
+    which contains the true exclusion ellipse of every angle pair in it; by the Pareto argument
+    the pair's best is at (up_1, up_2) when that is outside, else at (up_1, y_lo(up_1)) or
+    (x_lo(up_2), up_2)."""
+    lo1, up1, s1, g1, t1a, t1b = one
+    lo2, up2, s2, g2, t2a, t2b = two
+    w_top = w_one + w_two
     if not sc.on("C4"):
-        wbest = np.where(ok, w_top, -np.inf)
-    else:
-        dmax = np.minimum(np.maximum(np.abs(t1b - t2a), np.abs(t2b - t1a)), math.pi)
-        c = np.cos(dmax)
-        d2 = sc.p.d_min**2
-        with np.errstate(invalid="ignore"):
-            inside = up1 * up1 + up2 * up2 - 2.0 * c * up1 * up2 < d2
-            y = _lower_crossing(up1, c, d2)
-            x = _lower_crossing(up2, c, d2)
-            wa = np.where(y >= lo2, weight_bound(sc, r0a, up1, s1, g1)
-                          + weight_bound(sc, r0a, np.maximum(y, 0.0), s2, g2), -np.inf)
-            wb = np.where(x >= lo1, weight_bound(sc, r0a, np.maximum(x, 0.0), s1, g1)
-                          + weight_bound(sc, r0a, up2, s2, g2), -np.inf)
-        wbest = np.where(ok, np.where(inside, np.maximum(wa, wb), w_top), -np.inf)
-    return np.where(wbest > -np.inf, _from_normalised(sc, wbest), np.inf)
+        return w_top
+    dmax = np.minimum(np.maximum(np.abs(t1b - t2a), np.abs(t2b - t1a)), math.pi)
+    c = np.cos(dmax)
+    d2 = sc.p.d_min**2
+    with np.errstate(invalid="ignore"):
+        inside = up1 * up1 + up2 * up2 - 2.0 * c * up1 * up2 < d2
+        y = _lower_crossing(up1, c, d2)
+        x = _lower_crossing(up2, c, d2)
+        wa = np.where(y >= lo2, w_one + weight_bound(sc, r0a, np.maximum(y, 0.0), s2, g2),
+                      -np.inf)
+        wb = np.where(x >= lo1, weight_bound(sc, r0a, np.maximum(x, 0.0), s1, g1) + w_two,
+                      -np.inf)
+    return np.where(inside, np.maximum(wa, wb), w_top)
 
 
 def _from_normalised(sc: Scenario, wn):

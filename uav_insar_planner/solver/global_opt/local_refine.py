@@ -1,0 +1,170 @@
+"""A local solve of (P) in ray coordinates from a search point: the incumbent made exact.
+
+The branch and bound's incumbents are box centres (or, for K >= 3 slaves, greedy placements),
+within the gap of the optimum but not at it. The optimum is a vertex of the constraints: a
+slave at theta_max, on the C8 line, at the edge of its station disk or d_min from a neighbour.
+SLSQP over v = (r0, theta_1..theta_K, r_1..r_K), with every constraint family written as its
+own smooth inequality, lands on such a vertex in a few iterations:
+
+- C1: z_k = r_k cos(theta_k) in [z_min, z_max];  C5: r_k >= S_min cos(theta_k) / Theta;
+- C6: r_k <= model.slave_range_max(r0);  C8: r_k |sin(theta_k - theta_0)| <= b_max(r0);
+- C9-C11: |q_k - g|^2 <= disk_r2[k] (power.station_radius_sq);
+- C4: |q_i - q_j|^2 >= d_min^2 for every pair, the master included;
+- C2, C3, C7 and the master's own limits: the bounds of r0 and theta (rays.make_scenario).
+
+The result is only a candidate: `refine` re-checks it against the ray model and returns it
+only when feasible there and better, so the certificate never depends on SLSQP.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.optimize import minimize
+
+from uav_insar_planner import model
+from uav_insar_planner.solver import rays
+from uav_insar_planner.solver.global_opt import slave_ranges, slave_sets
+from uav_insar_planner.solver.rays import Scenario
+
+# C4 may fall short by this fraction of d_min^2 in the re-check (a nanometre at d_min = 1.5 m,
+# far inside the independent checker's micrometre).
+C4_SLACK = 1e-9
+# A range may fall below its ray's lower limit by this fraction: SLSQP ends on vertices where
+# a ray's feasible interval shrinks to a point (a slave at a corner of its station disk and
+# the C8 line), and rounding can leave that interval empty by a few ulps.
+RANGE_SLACK = 1e-10
+FD_STEP = 1e-7
+
+
+def _split(sc: Scenario, v: np.ndarray):
+    k_count = len(sc.slaves)
+    return v[:, 0], v[:, 1:1 + k_count], v[:, 1 + k_count:]
+
+
+def _constraints(sc: Scenario, v: np.ndarray) -> np.ndarray:
+    """g(v) >= 0 for each row of v (m, 1 + 2K): (m, n_constraints), each scaled to metres."""
+    p = sc.p
+    r0, th, r = _split(sc, v)
+    x, z = -r * np.sin(th), r * np.cos(th)                    # relative to the target
+    pts = np.concatenate([np.stack([-r0 * sc.sin0, r0 * math.cos(sc.th0)], axis=1)[:, None],
+                          np.stack([x, z], axis=2)], axis=1)  # (m, 1 + K, 2), master first
+    out = [r]
+    if sc.on("C1"):
+        out += [z - p.z_min, p.z_max - z]
+    if sc.on("C5"):
+        out.append(r - p.swath_min * np.cos(th) / p.beamwidth)
+    if sc.on("C6"):
+        out.append(model.slave_range_max(p, r0)[:, None] - r)
+    if sc.on("C8"):
+        out.append(model.baseline_max(p, r0)[:, None] - r * np.abs(np.sin(th - sc.th0)))
+    gx, gz = p.ground_station[0] - p.x_t, p.ground_station[2]
+    for j, k in enumerate(sc.slaves):
+        if math.isfinite(sc.disk_r2[k]):
+            d2 = (x[:, j] - gx) ** 2 + (z[:, j] - gz) ** 2
+            out.append(((sc.disk_r2[k] - d2) / max(math.sqrt(abs(sc.disk_r2[k])), 1.0))[:, None])
+    if sc.on("C4"):
+        i, j = np.triu_indices(pts.shape[1], 1)
+        gap2 = np.sum((pts[:, i] - pts[:, j]) ** 2, axis=2) - p.d_min**2
+        out.append(gap2 / max(p.d_min, 1e-3))
+    return np.concatenate(out, axis=1)
+
+
+def _objective(sc: Scenario, v: np.ndarray) -> np.ndarray:
+    r0, th, r = _split(sc, v)
+    w = np.sum(slave_ranges._slave_weight(sc, r0[:, None], th, r), axis=1, keepdims=True)
+    return slave_ranges._from_normalised(sc, w)  # (m, 1): one "constraint" row per point
+
+
+def _with_jacobian(fun, v: np.ndarray):
+    """fun at v and its forward-difference Jacobian, all rows in one vectorised call."""
+    h = FD_STEP * np.maximum(np.abs(v), 1.0)
+    rows = np.vstack([v, v + np.diag(h)])
+    vals = fun(rows)
+    return vals[0], ((vals[1:] - vals[0]) / h[:, None]).T
+
+
+def refine(sc: Scenario, point, value: float):
+    """(value, point, landed): the SLSQP optimum from `point` when the ray model confirms it
+    feasible and it is better, else the input unchanged; landed: SLSQP ended at a point the
+    ray model accepts (no better one means `point` was already its local optimum).
+
+    The angles are scaled by r0 (metres of arc) so that every variable is in metres, and the
+    objective by 1 / value, which lets SLSQP stop at ftol = 1e-12 within a few iterations."""
+    k_count = len(sc.slaves)
+    v0 = np.array([point[0], *point[1], *point[2]], dtype=float)
+    # an infeasible start (value inf) is scaled by its objective ignoring the constraints
+    norm = value if math.isfinite(value) else float(_objective(sc, v0[None])[0, 0])
+    if not np.all(np.isfinite(v0)) or not math.isfinite(norm) or norm <= 0 or v0[0] <= 0:
+        return value, point, False
+    scale = np.array([1.0] + [v0[0]] * k_count + [1.0] * k_count)
+    bounds = ([(sc.r0_lo, sc.r0_hi)] + [(sc.th_lo * v0[0], sc.th_hi * v0[0])] * k_count
+              + [(0.0, None)] * k_count)
+    cache: dict[bytes, tuple] = {}
+
+    def parts(u):
+        key = u.tobytes()
+        if key not in cache:
+            # objective (column 0) and constraints in one vectorised call with their Jacobian
+            fg, dfg = _with_jacobian(lambda w: np.concatenate(
+                [_objective(sc, w) / norm, _constraints(sc, w)], axis=1), u / scale)
+            dfg = dfg / scale
+            cache.clear()
+            # copies: SLSQP may write into the arrays it is handed
+            cache[key] = (float(fg[0]), dfg[0].copy(), fg[1:].copy(), dfg[1:].copy())
+        return cache[key]
+
+    with np.errstate(all="ignore"):
+        res = minimize(lambda u: parts(u)[0], v0 * scale, jac=lambda u: parts(u)[1],
+                       method="SLSQP", bounds=bounds,
+                       constraints=[{"type": "ineq", "fun": lambda u: parts(u)[2],
+                                     "jac": lambda u: parts(u)[3]}],
+                       options={"maxiter": 100, "ftol": 1e-12})
+    cand = _checked(sc, res.x / scale)
+    if cand is not None and cand[0] < value:
+        return cand[0], cand[1], True
+    return value, point, cand is not None
+
+
+def from_box(sc: Scenario, box: np.ndarray):
+    """(value, point) of SLSQP started at the box's centre with every slave at the top of its
+    ray (C4 ignored), or (inf, None) when it ends at no point the ray model accepts."""
+    r0 = np.array([0.5 * (box[0] + box[1])])
+    th = 0.5 * (box[2::2] + box[3::2])
+    tops = []
+    for j, k in enumerate(sc.slaves):
+        lo, up = rays.ray_limits(sc, k, r0, th[j])
+        tops.append(float(up[0]) if math.isfinite(up[0]) else float(lo[0]))
+    start = (float(r0[0]), tuple(map(float, th)), tuple(tops))
+    value, point, landed = refine(sc, start, math.inf)
+    return (value, point) if landed and math.isfinite(value) else (math.inf, None)
+
+
+def _checked(sc: Scenario, v: np.ndarray):
+    """The ray model's verdict on an SLSQP point: (value, point), the ranges cut to the
+    ray's limits, or from the inner solve at its angles when that is better; None when
+    neither is feasible."""
+    k_count = len(sc.slaves)
+    r0 = float(np.clip(v[0], sc.r0_lo, sc.r0_hi))
+    th = np.clip(v[1:1 + k_count], sc.th_lo, sc.th_hi)
+    best = None
+    f, ranges = slave_sets.ranges_for(sc, np.array([r0]), th[None])
+    if np.isfinite(f[0]):
+        best = (float(f[0]), (r0, tuple(map(float, th)), tuple(map(float, ranges[0]))))
+    r = np.array(v[1 + k_count:], dtype=float)
+    for j, k in enumerate(sc.slaves):
+        lo, up = rays.ray_limits(sc, k, r0, th[j])
+        r[j] = min(r[j], float(up))
+        if r[j] < lo * (1.0 - RANGE_SLACK):
+            return best
+    rr, tt = np.concatenate([[r0], r]), np.concatenate([[sc.th0], th])
+    q = np.stack([-rr * np.sin(tt), rr * np.cos(tt)], axis=1)  # master first
+    if sc.on("C4"):
+        i, j = np.triu_indices(k_count + 1, 1)
+        if np.any(np.sum((q[i] - q[j]) ** 2, axis=1) < sc.p.d_min**2 * (1.0 - C4_SLACK)):
+            return best
+    w = np.sum(slave_ranges._slave_weight(sc, r0, th, r))
+    f_direct = float(slave_ranges._from_normalised(sc, w)) if w > 0 else math.inf
+    if best is None or f_direct < best[0]:
+        best = (f_direct, (r0, tuple(map(float, th)), tuple(map(float, r))))
+    return best

@@ -1,0 +1,162 @@
+"""Any number K of slaves: their ranges for given look angles, and the bound over a box.
+
+A box is one row [r0_a, r0_b, theta_1a, theta_1b, ..., theta_Ka, theta_Kb] (columns
+`angle_cols`). The objective is lambda r0 sin(theta_0) / (2 pi sqrt(sum_k w_k)), so a lower
+bound on it over a box is an upper bound on sum_k w_k / r0^2 (slave_ranges.py).
+
+Bound. The slaves interact only through C4 between themselves (C4 to the master is kept
+through slave_ranges.slave_box, which lowers a top that the master's hole covers throughout
+the box). One slave: its weight bound W_k. Two: the pair bound (slave_ranges.pair_weight_bound,
+exact for the relaxation that keeps their C4 through the box's smallest cos). Three or four:
+chain_bound.forest_weight_bound keeps C4 between every pair and solves that relaxation exactly
+over the rooted forests of "who is pressed by whom"; five or more: chain_weight_bound keeps it
+between neighbours in angle (a dynamic programme over candidate ranges).
+
+Ranges. For K <= 2 slave_ranges.best_ranges is exact. For K >= 3 `greedy_ranges` gives a
+feasible, not necessarily optimal, assignment (an incumbent: any feasible point is a valid
+upper bound): each slave in turn at the top of its ray, stepped down to the lower crossing of
+the C4 circle of every slave already placed that it would come too close to, and below the
+master's hole (C4 to the master) if it lands in it.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from uav_insar_planner.solver.global_opt import chain_bound, slave_ranges
+from uav_insar_planner.solver.rays import Scenario
+
+
+def angle_cols(j: int) -> tuple[int, int]:
+    """Columns (theta_a, theta_b) of slave j (0-based position in sc.slaves) in a box row."""
+    return 2 + 2 * j, 3 + 2 * j
+
+
+def box_lower_bound(sc: Scenario, boxes: np.ndarray, close_at: float = np.inf) -> np.ndarray:
+    """Lower bound on the objective over every feasible point of each box (+inf: the box
+    provably holds none); see the module docstring. close_at: bounds at or above it close the
+    box anyway, so the costlier forest bound is spent only on boxes below it."""
+    r0a, r0b = boxes[:, 0], boxes[:, 1]
+    pieces, single = [], []
+    ok = np.ones(len(boxes), dtype=bool)
+    for j, k in enumerate(sc.slaves):
+        ta, tb = (boxes[:, c] for c in angle_cols(j))
+        lo, up, smax, g_rg = slave_ranges.slave_box(sc, k, r0a, r0b, ta, tb)
+        ok &= lo <= up
+        pieces.append((lo, up, smax, g_rg, ta, tb))
+        single.append(slave_ranges.weight_bound(sc, r0a, up, smax, g_rg))
+    if len(single) == 1 or not sc.on("C4"):
+        w = np.sum(single, axis=0)
+    elif len(single) == 2:  # one matching: the pair (its bound never exceeds W_1 + W_2)
+        w = slave_ranges.pair_weight_bound(sc, r0a, *pieces, *single)
+    else:
+        holes = [slave_ranges.master_hole_box(sc, r0a, r0b, x[4], x[5]) for x in pieces]
+        stacked = np.stack([np.stack(x + h) for x, h in zip(pieces, holes, strict=True)])
+        w = chain_bound.chain_weight_bound(sc, r0a, stacked)
+        if len(single) <= chain_bound.FOREST_MAX_K:
+            # the forest keeps every pair and the master's hole: never looser than the chain
+            with np.errstate(divide="ignore"):
+                open_ = ok & (slave_ranges._from_normalised(sc, np.maximum(w, 0.0)) < close_at)
+            if open_.any():
+                w[open_] = np.minimum(w[open_], chain_bound.forest_weight_bound(
+                    sc, r0a[open_], stacked[:, :, open_]))
+    w = np.where(ok, w, -np.inf)
+    return np.where(w > -np.inf, slave_ranges._from_normalised(sc, w), np.inf)
+
+
+def ranges_for(sc: Scenario, r0, thetas: np.ndarray):
+    """(objective, ranges) for master ranges r0 (n,) and slave look angles thetas (n, K):
+    the exact optimum for K <= 2, greedy_ranges' feasible point for K >= 3; objective +inf and
+    ranges nan where none is found."""
+    if len(sc.slaves) <= 2:
+        cols = [thetas[:, j] for j in range(thetas.shape[1])]
+        f, r1, r2 = slave_ranges.best_ranges(sc, r0, *cols)
+        return f, np.stack([r1, r2][:len(cols)], axis=1)
+    k_count = len(sc.slaves)
+    tries = [greedy_ranges(sc, r0, thetas, range(k_count)),
+             greedy_ranges(sc, r0, thetas, range(k_count - 1, -1, -1))]
+    if k_count <= chain_bound.FOREST_MAX_K:
+        tries.append(_forest_point(sc, r0, thetas))
+    f, ranges = tries[0]
+    for f_try, r_try in tries[1:]:
+        take = f_try < f
+        f, ranges = np.where(take, f_try, f), np.where(take[:, None], r_try, ranges)
+    return f, ranges
+
+
+def _forest_point(sc: Scenario, r0, thetas: np.ndarray):
+    """The best forest of chain_bound at fixed angles (the inner optimum up to the master's
+    hole), kept where it passes the feasibility check of `_objective_if_feasible`."""
+    r0 = np.asarray(r0, dtype=float)
+    pieces = np.stack([np.stack(slave_ranges.slave_box(sc, k, r0, r0, th, th) + (th, th)
+                                + slave_ranges.master_hole_box(sc, r0, r0, th, th))
+                       for j, k in enumerate(sc.slaves) for th in [thetas[:, j]]])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ranges = chain_bound.forest_ranges(sc, r0, pieces)
+    return _objective_if_feasible(sc, r0, thetas, ranges)
+
+
+def _objective_if_feasible(sc: Scenario, r0, thetas: np.ndarray, ranges: np.ndarray):
+    """(objective, ranges) with +inf / nan rows where the ranges break a ray limit, the
+    master's hole or C4 between slaves."""
+    d2 = sc.p.d_min**2 if sc.on("C4") else 0.0
+    ok = np.all(np.isfinite(ranges), axis=1) & (r0 > 0)
+    with np.errstate(invalid="ignore"):
+        for j, k in enumerate(sc.slaves):
+            (lo_a, top_a), (lo_b, top_b) = slave_ranges._components(sc, k, r0, thetas[:, j])
+            r = ranges[:, j]
+            ok &= ((r >= lo_a) & (r <= top_a)) | ((r >= lo_b) & (r <= top_b))
+            for i in range(j):
+                c = np.cos(thetas[:, i] - thetas[:, j])
+                ri = ranges[:, i]
+                ok &= ri * ri + r * r - 2.0 * c * ri * r >= d2 * (1.0 - 1e-12)
+    ranges = np.where(ok[:, None], ranges, np.nan)
+    w = np.zeros(len(ranges))
+    for j in range(ranges.shape[1]):
+        w = w + slave_ranges._slave_weight(sc, r0, thetas[:, j], ranges[:, j])
+    f = np.where(ok & (w > 0), slave_ranges._from_normalised(sc, np.where(ok, w, 0.0)), np.inf)
+    return f, ranges
+
+
+def greedy_ranges(sc: Scenario, r0, thetas: np.ndarray, order) -> tuple[np.ndarray,
+                                                                         np.ndarray]:
+    """A feasible assignment of the slaves' ranges, placing them in `order` (module
+    docstring); (objective, ranges (n, K)), +inf / nan where it fails."""
+    r0 = np.asarray(r0, dtype=float)
+    d2 = sc.p.d_min**2 if sc.on("C4") else 0.0
+    n, k_count = thetas.shape
+    ranges = np.full((n, k_count), np.nan)
+    ok = r0 > 0
+    placed: list[int] = []
+    for j in order:
+        (lo_a, top_a), (lo_b, top_b) = slave_ranges._components(sc, sc.slaves[j], r0,
+                                                                thetas[:, j])
+        r = np.where(lo_b <= top_b, top_b, top_a)
+        hole_top = np.where(lo_b <= top_b, lo_b, np.inf)  # above it lies the upper component
+        cos = [np.cos(thetas[:, i] - thetas[:, j]) for i in placed]
+        for _ in range(len(placed) + 1):  # each pass only lowers r; stop when none clashes
+            moved = False
+            for i, c in zip(placed, cos, strict=True):
+                ri = ranges[:, i]
+                with np.errstate(invalid="ignore"):
+                    clash = ri * ri + r * r - 2.0 * c * ri * r < d2
+                if clash.any():
+                    moved = True
+                    r = np.where(clash, slave_ranges._lower_crossing(ri, c, d2), r)
+            r = np.where((r < hole_top) & (r > top_a), top_a, r)
+            if not moved:
+                break
+        with np.errstate(invalid="ignore"):
+            fits = (r >= lo_a) & (r <= np.maximum(top_a, top_b)) & ((r <= top_a) | (r >= lo_b))
+        for i, c in zip(placed, cos, strict=True):
+            ri = ranges[:, i]
+            with np.errstate(invalid="ignore"):
+                fits &= ri * ri + r * r - 2.0 * c * ri * r >= d2 * (1.0 - 1e-12)
+        ok &= fits
+        ranges[:, j] = r
+        placed.append(j)
+    ranges[~ok] = np.nan
+    w = np.zeros(n)
+    for j in range(k_count):
+        w = w + slave_ranges._slave_weight(sc, r0, thetas[:, j], ranges[:, j])
+    f = np.where(ok & (w > 0), slave_ranges._from_normalised(sc, np.where(ok, w, 0.0)), np.inf)
+    return f, ranges
