@@ -14,14 +14,13 @@ objective is lower, so the answer is never worse than DE's. Same seed, same answ
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import NonlinearConstraint, differential_evolution, minimize
 
 from uav_insar_planner.params import Params
 from uav_insar_planner.solver.evolution.problem import EvolutionProblem
-from uav_insar_planner.solver.evolution.result import to_solver_result
+from uav_insar_planner.solver.evolution.result import Outcome, to_solver_result
 from uav_insar_planner.solver.result import SolverResult
 
 SEED = 0
@@ -29,18 +28,6 @@ POPSIZE = 20  # candidates per decision variable
 MAX_GENERATIONS = 1000
 TOL = 1e-9  # relative spread of the population's objective at which DE stops
 POLISH_TOL = 1e-10
-
-
-@dataclass
-class Outcome:
-    """What the search found: the best vector, whether it meets every slack, DE's
-    generations and evaluations, and whether the polish improved it."""
-
-    x: np.ndarray
-    feasible: bool
-    generations: int
-    evaluations: int
-    polished: bool
 
 
 def search(problem: EvolutionProblem, seed: int = SEED) -> Outcome:

@@ -8,6 +8,7 @@ search box or the station disk before any search).
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -16,10 +17,21 @@ from uav_insar_planner.solver.power import schedules
 from uav_insar_planner.solver.result import SolverResult
 
 if TYPE_CHECKING:
-    from uav_insar_planner.solver.evolution.algorithm import Outcome
     from uav_insar_planner.solver.evolution.problem import EvolutionProblem
 
 NO_CERTIFICATE = "no certificate: a metaheuristic (lower bound NaN)"
+
+
+@dataclass
+class Outcome:
+    """What the search found: the best vector, whether it meets every slack, DE's
+    generations and evaluations, and whether the polish improved it."""
+
+    x: np.ndarray
+    feasible: bool
+    generations: int
+    evaluations: int
+    polished: bool
 
 
 def violated_families(problem: EvolutionProblem, x: np.ndarray) -> list[str]:
