@@ -84,7 +84,7 @@ def test_paper_ao_on_relaxations_of_table_one(overrides: dict) -> None:
     assert not plan.blocking_constraints
 
 
-@pytest.mark.parametrize("solver", ["global", "paper-ao"])
+@pytest.mark.parametrize("solver", ["global", "paper-ao", "evolution"])
 @pytest.mark.parametrize("overrides, blocking", [
     ({"comm_bandwidth_hz": 1e-300}, {"C9", "C10"}),      # 2^(R/B) beyond doubles: no power
     ({"speed_mps": 1000.0}, {"C6"}),                     # gamma_m ~ 1/v_y: no SNR left

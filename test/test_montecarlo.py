@@ -70,6 +70,47 @@ def test_a_coarse_coherent_second_pair_resolves_the_first_pairs_ambiguities():
     assert f["sigma_h_resolved_m"]["value"] < f["sigma_h_with_ambiguities_m"]["value"]
 
 
+def test_k_pairs_fuse_by_inverse_variance_when_gaussian():
+    pairs = {f"uav{k}": pair(g, h) for k, (g, h) in
+             enumerate([(0.7, 1.0), (0.5, 2.5), (0.8, 1.3), (0.6, 4.0), (0.9, 1.1)], 1)}
+    r = simulate(pairs, looks=4, samples=200_000, seed=8, gaussian=True)
+    sig = [r["pairs"][k]["sigma_h_model_m"] for k in pairs]
+    assert r["fused"]["sigma_h_model_m"] == pytest.approx(sum(s**-2 for s in sig) ** -0.5)
+    lo, hi = r["fused"]["sigma_h_mc_m"]["ci95"]
+    assert lo <= r["fused"]["sigma_h_model_m"] <= hi
+
+
+def test_a_single_pair_has_no_fused_row():
+    assert "fused" not in simulate({"uav1": pair(0.6, 1.0)}, 4, 1000, seed=0)
+
+
+def test_equal_heights_of_ambiguity_resolve_only_to_a_wrap_of_the_fused_phase():
+    # all h_amb equal: every integer shift of an agreeing vector agrees as well, so resolution
+    # can only align the pairs. It still fails when the fused height (truth uniform over one
+    # h_amb) wraps, with probability E|e_fused| / h_amb, and when one pair's error is more than
+    # h_amb / 2 from the others' mean (it is then nearer a wrong cycle): no more, no less.
+    pairs = {f"uav{k}": pair(0.55, 1.2) for k in range(1, 5)}
+    r = simulate(pairs, 4, 100_000, seed=4, keep_samples=True)
+    f, e = r["fused"], r["height_errors_m"]
+    wraps = float(np.mean(np.abs(e["fused"]))) / 1.2
+    each = np.stack([e[k] for k in pairs], axis=1)
+    others = (each.sum(axis=1, keepdims=True) - each) / (len(pairs) - 1)
+    outlier = float(np.mean(np.any(np.abs(each - others) > 0.6, axis=1)))
+    assert wraps - 0.003 <= f["ambiguity_rate_resolved"]["value"] <= wraps + outlier + 0.003
+    assert f["ambiguity_rate"]["value"] > 3 * f["ambiguity_rate_resolved"]["value"]
+
+
+def test_diverse_coherent_pairs_resolve_the_fine_pairs_cycles_across_k():
+    pairs = {"uav1": pair(0.5, 1.0), "uav2": pair(0.95, 3.0), "uav3": pair(0.95, 4.0),
+             "uav4": pair(0.6, 1.0)}
+    f = simulate(pairs, 4, 100_000, seed=2)["fused"]
+    assert f["ambiguity_rate"]["value"] > 0.12
+    assert f["ambiguity_rate_resolved"]["value"] < 0.1 * f["ambiguity_rate"]["value"]
+    # resolved, the DEM is about as good as if there were no ambiguities at all
+    assert f["sigma_h_resolved_m"]["value"] < 1.05 * f["sigma_h_mc_m"]["value"]
+    assert f["sigma_h_resolved_m"]["value"] < 0.6 * f["sigma_h_with_ambiguities_m"]["value"]
+
+
 def test_seeded_and_reproducible():
     pairs = {"uav1": pair(0.6, 1.0), "uav2": pair(0.6, 1.0)}
     a, b = simulate(pairs, 4, 1000, seed=9), simulate(pairs, 4, 1000, seed=9)
@@ -85,7 +126,8 @@ def run(*args):
     (("--samples", "1"), "--samples"), (("--samples", "1e5"), "--samples"),
     (("--seed", "-1"), "--seed"), (("--formation", "1,2,3"), "--formation"),
     (("--formation", "0,10,5,nan"), "--formation"), (("--formation", "0,10,5,-3"), "--formation"),
-    (("--formation", "0,10,0,10"), "--formation")])
+    (("--formation", "0,10,0,10"), "--formation"),
+    (("--formation", ",".join(["-30,40"] + [f"{-40 - k},50" for k in range(6)])), "--formation")])
 def test_bad_input_is_one_line_exit_2(args, field):
     proc = run("montecarlo", *args)
     assert proc.returncode == 2 and proc.stdout == ""
@@ -104,6 +146,19 @@ def test_cli_plans_simulates_and_plots(tmp_path):
     proc = run("montecarlo", "--formation=-27.118,47.118,-34.854,48.19", "--samples", "2000")
     assert proc.returncode == 0, proc.stderr
     assert "given formation" in proc.stdout and "U0-1" in proc.stdout and "fused" not in proc.stdout
+    six = "-27.5,47.5,-42.1,68.8,-51.0,64.3,-30.0,56.7,-36.1,49.4,-40,30"
+    proc = run("montecarlo", f"--formation={six}", "--samples", "2000", "--json")
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)["montecarlo"]
+    assert list(out["pairs"]) == [f"uav{k}" for k in range(1, 6)] and "fused" in out
+
+
+def test_cli_prints_the_table_for_four_slaves():
+    # until the global solver searches K slaves
+    proc = run("montecarlo", "--set", "num_uavs=5", "--set", "rate_min_mbps=[10,16.95,1,1,1]",
+               "--set", "solver=paper-ao", "--samples", "5000")
+    assert proc.returncode == 0, proc.stderr
+    assert "U0-4" in proc.stdout and "resolved across the 4 pairs" in proc.stdout
 
 
 def test_sweep_montecarlo_column_is_opt_in(tmp_path):

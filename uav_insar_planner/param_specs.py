@@ -22,7 +22,7 @@ OBJECTIVES = ("exact", "bound", "multilook")
 # 4 n_L normals (montecarlo.py; cli/montecarlo.py bounds samples x looks per pair).
 MULTILOOK_MAX_LOOKS = 1000
 _LOOKS_WHY = "beyond any UAV SAR product; the multilook objective and the Monte-Carlo cost O(n_L)"
-SOLVERS = ("global", "paper-ao")
+SOLVERS = ("global", "paper-ao", "evolution")
 
 
 @dataclass(frozen=True)
@@ -149,8 +149,8 @@ PARAM_SPECS: tuple[ParamSpec, ...] = (
     ParamSpec("scheme", str, "proposed", "which scheme to solve", choices=SCHEMES),
     ParamSpec("objective", str, "exact", "exact: minimise sigma_h; bound: Proposition 1; "
               "multilook: sigma_h with the exact multilook phase std", choices=OBJECTIVES),
-    ParamSpec("solver", str, "global", "global (certified) or paper-ao (Algorithm 2)",
-              choices=SOLVERS),
+    ParamSpec("solver", str, "global", "global (certified), paper-ao (Algorithm 2) or "
+              "evolution (differential evolution, no certificate)", choices=SOLVERS),
 )
 SPEC_BY_NAME: dict[str, ParamSpec] = {s.name: s for s in PARAM_SPECS}
 

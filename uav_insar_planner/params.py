@@ -277,6 +277,10 @@ def objective_problems(objective: Any, solver: Any) -> list[str]:
     if objective == "multilook" and solver == "paper-ao":
         return ["objective: value 'multilook' is not allowed with solver 'paper-ao'; expected "
                 "exact or bound (paper-ao minimises Proposition 1's bound), or solver global"]
+    if objective == "multilook" and solver == "evolution":
+        return ["objective: value 'multilook' is not allowed with solver 'evolution'; expected "
+                "exact or bound (its baseline searches the Cramer-Rao objectives), or solver "
+                "global"]
     return []
 
 

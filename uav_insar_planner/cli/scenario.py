@@ -16,7 +16,8 @@ def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--objective", choices=OBJECTIVES,
                         help="exact sigma_h, Prop. 1 bound, or sigma_h with the exact "
                         "multilook phase std")
-    parser.add_argument("--solver", choices=SOLVERS, help="global (certified) or paper-ao")
+    parser.add_argument("--solver", choices=SOLVERS,
+                        help="global (certified), paper-ao or evolution")
 
 
 def scenario_params(args: argparse.Namespace) -> Params:

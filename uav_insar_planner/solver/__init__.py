@@ -1,9 +1,9 @@
 """solve(params) -> Plan: run a back end, then check its answer independently.
 
 Back ends: `global` (solver/global_opt/, certified optimum of the exact, bound or multilook
-objective)
-and `paper-ao` (solver/ao/, Algorithm 2 of the paper with SCA on CVXPY + Clarabel). They never
-import each other; what both need (the station disk in power.py, the start grid, the deletion
+objective), `paper-ao` (solver/ao/, Algorithm 2 of the paper with SCA on CVXPY + Clarabel) and
+`evolution` (solver/evolution/, seeded differential evolution, no certificate). They never
+import each other; what they need (the station disk in power.py, the start grid, the deletion
 filter in blocking.py, SolverResult) lives here in solver/.
 """
 from __future__ import annotations
@@ -34,6 +34,10 @@ def _backend(name: str):
         from uav_insar_planner.solver.global_opt.optimum import solve_global
 
         return solve_global
+    if name == "evolution":
+        from uav_insar_planner.solver.evolution.algorithm import solve_evolution
+
+        return solve_evolution
     from uav_insar_planner.solver.ao.algorithm2 import solve_ao
 
     return solve_ao
