@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from uav_insar_planner import model, multilook
-from uav_insar_planner.swarm import MASTER, SLAVES, uav_name
+from uav_insar_planner.swarm import MASTER, slaves, uav_name
 
 Z95 = 1.959963984540054
 CHUNK = 1 << 16
@@ -161,11 +161,11 @@ def simulate(pairs: dict[str, dict[str, float]], looks: int, samples: int = 100_
 
 
 def pairs_of_formation(p, formation: np.ndarray) -> dict[str, dict[str, float]]:
-    """The checker's pair metrics for a (NUM_UAVS, 2) formation, NaN rows not flown."""
+    """The checker's pair metrics for a (num_uavs, 2) formation, NaN rows not flown."""
     from uav_insar_planner.evaluate import pair_metrics
 
     q = np.asarray(formation, dtype=float)
-    return {uav_name(k): pair_metrics(p, q[MASTER], q[k]) for k in SLAVES
+    return {uav_name(k): pair_metrics(p, q[MASTER], q[k]) for k in slaves(len(q))
             if np.all(np.isfinite(q[k]))}
 
 

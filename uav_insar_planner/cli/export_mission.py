@@ -34,7 +34,7 @@ from uav_insar_planner.mission_file.qgc_plan import (
     plan_document,
 )
 from uav_insar_planner.params import LENGTH_MAX_M, SCHEMES, ParamError, shown
-from uav_insar_planner.swarm import UAVS, uav_name
+from uav_insar_planner.swarm import uav_name
 
 HELP = "write a QGroundControl .plan per UAV (the pass without a companion computer)"
 HOME_ALT_MAX_M = 1.0e4
@@ -144,7 +144,7 @@ def main(args: argparse.Namespace) -> int:
     formation = _formation(args, params)
     if formation is None:
         return EXIT_INFEASIBLE
-    flown = {k: (float(formation[k, 0]), float(formation[k, 1])) for k in UAVS
+    flown = {k: (float(formation[k, 0]), float(formation[k, 1])) for k in range(len(formation))
              if np.all(np.isfinite(formation[k]))}
     if start is None:
         start = default_start(now, flown, run_up)

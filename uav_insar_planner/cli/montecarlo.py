@@ -16,7 +16,7 @@ from uav_insar_planner.cli.checks import check_output_path
 from uav_insar_planner.cli.scenario import add_scenario_arguments, scenario_params
 from uav_insar_planner.exit_codes import EXIT_INFEASIBLE, EXIT_OK
 from uav_insar_planner.params import LENGTH_MAX_M, SCHEMES, ParamError, Params, shown
-from uav_insar_planner.swarm import NUM_UAVS
+from uav_insar_planner.swarm import MAX_UAVS
 
 HELP = "Monte-Carlo of the InSAR measurement of a formation"
 # Memory: about 110 bytes per sample of a pair's run (both pairs, the fused figures and
@@ -26,9 +26,10 @@ MAX_SAMPLES = 10_000_000
 # to this per pair: about 15 s per pair on one core here (measured 140 s for two pairs of 1e9).
 MAX_DRAWS = 200_000_000
 SEED_MAX = 2**63 - 1
-FORMATION_HELP = "x0,z0,x1,z1" + "".join(f"[,x{k},z{k}]" for k in range(2, NUM_UAVS))
-# the master and the first slave, then any more slaves in order: 4 or 6 numbers for 3 UAVs
-FORMATION_COUNTS = tuple(range(4, 2 * NUM_UAVS + 1, 2))
+FORMATION_HELP = "x0,z0,x1,z1" + "".join(f"[,x{k},z{k}]" for k in range(2, MAX_UAVS))
+# the master and the first slave, then any more slaves in order: 2 to MAX_UAVS UAVs, 4 to 12
+# numbers
+FORMATION_COUNTS = tuple(range(4, 2 * MAX_UAVS + 1, 2))
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -64,8 +65,8 @@ def parse_samples(option: str, text: str, looks: int) -> int:
 
 
 def parse_formation(text: str) -> np.ndarray:
-    """`x0,z0,x1,z1[,x2,z2]` -> (NUM_UAVS, 2) rows, NaN for the UAVs not given; every number
-    within +-LENGTH_MAX_M (as every length parameter), altitudes > 0."""
+    """`x0,z0,x1,z1[,x2,z2...]` -> (K, 2) rows for the K = 2..MAX_UAVS UAVs given (the master
+    first); every number within +-LENGTH_MAX_M (as every length parameter), altitudes > 0."""
     counts = " or ".join(str(n) for n in FORMATION_COUNTS)
     bad = (f"--formation: value {shown(text)} is not allowed; expected {FORMATION_HELP}: "
            f"{counts} finite numbers in metres, each within +-{LENGTH_MAX_M:g} m as every length, "
@@ -77,9 +78,7 @@ def parse_formation(text: str) -> np.ndarray:
     if len(nums) not in FORMATION_COUNTS or not all(math.isfinite(v) and abs(v) <= LENGTH_MAX_M
                                           for v in nums) or not all(z > 0 for z in nums[1::2]):
         raise ParamError([bad])
-    q = np.full((NUM_UAVS, 2), np.nan)
-    q[: len(nums) // 2] = np.reshape(nums, (-1, 2))
-    return q
+    return np.reshape(nums, (-1, 2))
 
 
 def _pairs(params: Params, formation: np.ndarray, text: str) -> dict:
