@@ -169,7 +169,7 @@ def mission(tmp_path_factory):
                             env)
                  for k in range(3)]
         try:
-            assert w.spin_until(lambda: w.agents_matched() and recorder_ready(w.node), 30.0,
+            assert w.spin_until(lambda: w.agents_matched() and recorder_ready(w.node, w.uavs), 30.0,
                                 [*nodes, recorder]), "agents or recorder did not come up"
             nodes.append(start_node("planner", ["-p", f"num_slots:={MISSION_SLOTS}"], env))
             # the latched plan reaches the watcher whenever its discovery of the planner ends,

@@ -9,10 +9,10 @@ and --set as for `uav-insar solve`; num_slots and num_uavs are taken from the re
 /diagnostics). Prints report.recorded.report_table, writes report.recorded_plots.FILES into
 DIR (default BAG_report beside the bag) and names them, then the Foxglove layout to open the
 bag with (report/foxglove_layout.py): the shipped one for Table I's three UAVs, else one for
-the bag's number of UAVs, written into DIR. The parameters, DIR and the bag folder
-are checked first; then a progress bar on stderr follows the read. Exit codes (exit_codes.py): EXIT_OK written;
-EXIT_BAD_INPUT, one line on stderr and nothing written, for bad parameters, a DIR that cannot
-be written, no such bag, not a bag, a bag that cannot be read or holds no plan.
+the bag's number of UAVs, written into DIR. The parameters, DIR and the bag folder are
+checked first; then a progress bar on stderr follows the read. Exit codes (exit_codes.py):
+EXIT_OK written; EXIT_BAD_INPUT, one line on stderr and nothing written, for bad parameters,
+a DIR that cannot be written, no such bag, not a bag, a bag that cannot be read or holds no plan.
 """
 from __future__ import annotations
 

@@ -122,8 +122,7 @@ class Bridge:
                                          expected_source=self._links[address].peer_address)
                           for k, sysid, address
                           in zip(self.uavs, config.target_sysids, addresses, strict=True)]
-        # poses read: one per vehicle flown, or, for one UAV's bridge, every pose a plan may
-        # have (it checks its separation from the others)
+        # poses read: one per vehicle, or every pose a plan may have (separation from the others)
         self._count = max(self.uavs) + 1 if config.uav_id < 0 else MAX_UAVS
         self._separation = [""] * self._count
         self._sequences: dict[int, ArmingSequence] = {}  # per UAV, once arm_and_takeoff ran
