@@ -1,8 +1,8 @@
 """`make demo` / `python -m uav_insar_planner.demo`: one whole mission, every node a process.
 
-Starts one `agent` executable per UAV and the `planner` as separate processes, as `ros2 run`
-would, on a private ROS_DOMAIN_ID with discovery kept on this host; this process watches the
-topics like `ros2 topic echo` would. Unless `--no-mavlink`, the agents ride on MAVLink
+Starts one `agent` executable per UAV (`--uavs N`, 2..6, num_uavs; default the params
+file's, Table I's 3) and the `planner` as separate processes, as `ros2 run` would, on a
+private ROS_DOMAIN_ID with discovery kept on this host; this process watches the topics like `ros2 topic echo` would. Unless `--no-mavlink`, the agents ride on MAVLink
 vehicles: one `uav-insar-vehicle` process per UAV (SITL-style, sysid 2, 3, ..., airborne
 behind the track start, on free loopback UDP ports) and the `mavlink_bridge` node wired to
 them fly the planned formation through real MAVLink bytes; the vehicles' positions come back
@@ -41,7 +41,7 @@ import argparse
 import os
 import sys
 
-from uav_insar_planner.demo.options import parse_options
+from uav_insar_planner.demo.options import fit_swarm, parse_options
 from uav_insar_planner.demo.processes import random_domain_id, ros_env
 from uav_insar_planner.demo.steps import Mission, overridden_problems
 from uav_insar_planner.exit_codes import EXIT_BAD_INPUT, EXIT_CRASH, EXIT_OK
@@ -55,6 +55,8 @@ def run(args: argparse.Namespace) -> int:
         overrides = dict(parse_override(text) for text in args.param)
         if args.num_slots:
             overrides["num_slots"] = args.num_slots
+        if problems := fit_swarm(args, overrides):
+            raise ParamError(problems)
         params = load_params(args.params_file, overrides)
         if problems := overridden_problems(args, overrides):
             raise ParamError(problems)
