@@ -2,8 +2,8 @@
 
 Starts one `agent` executable per UAV (`--uavs N`, 2..6, num_uavs; default the params
 file's, Table I's 3) and the `planner` as separate processes, as `ros2 run` would, on a
-private ROS_DOMAIN_ID with discovery kept on this host; this process watches the topics like `ros2 topic echo` would. Unless `--no-mavlink`, the agents ride on MAVLink
-vehicles: one `uav-insar-vehicle` process per UAV (SITL-style, sysid 2, 3, ..., airborne
+private ROS_DOMAIN_ID with discovery kept on this host; this process watches the topics like
+`ros2 topic echo` would. Unless `--no-mavlink`, the agents ride on MAVLink vehicles: one `uav-insar-vehicle` process per UAV (SITL-style, sysid 2, 3, ..., airborne
 behind the track start, on free loopback UDP ports) and the `mavlink_bridge` node wired to
 them fly the planned formation through real MAVLink bytes; the vehicles' positions come back
 on /uavK/mavlink/pose, and the agents (`position_source:=autopilot`) run their slots on them
