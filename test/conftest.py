@@ -123,10 +123,11 @@ def watcher(ros_context):
 
 
 @contextmanager
-def private_graph():
+def private_graph(num_uavs: int = 3):
     """A private domain of its own for processes started with `env` (discovery on this host,
-    no static peers), and a TopicWatcher on it; both shut down on leaving, so nothing of it
-    stays on the graph for the tests that follow. Yields (env, watcher)."""
+    no static peers), and a TopicWatcher of `num_uavs` UAVs' topics on it; both shut down on
+    leaving, so nothing of it stays on the graph for the tests that follow. Yields (env,
+    watcher)."""
     import rclpy
 
     from uav_insar_planner.demo.processes import ros_env
@@ -137,7 +138,7 @@ def private_graph():
     env.pop("ROS_STATIC_PEERS", None)
     ctx = rclpy.Context()
     rclpy.init(args=["test"], context=ctx, domain_id=domain)
-    w = TopicWatcher(ctx)
+    w = TopicWatcher(ctx, num_uavs=num_uavs)
     try:
         yield env, w
     finally:
@@ -168,7 +169,7 @@ def mission(tmp_path_factory):
                             env)
                  for k in range(3)]
         try:
-            assert w.spin_until(lambda: w.agents_matched() and recorder_ready(w.node), 30.0,
+            assert w.spin_until(lambda: w.agents_matched() and recorder_ready(w.node, w.uavs), 30.0,
                                 [*nodes, recorder]), "agents or recorder did not come up"
             nodes.append(start_node("planner", ["-p", f"num_slots:={MISSION_SLOTS}"], env))
             # the latched plan reaches the watcher whenever its discovery of the planner ends,

@@ -106,7 +106,7 @@ def fly(wind_mps: float, turbulence: float, workdir: Path, domain: int,
         nodes += [start_node("agent", ["-p", f"uav_id:={k}", "-p", f"num_slots:={N_SLOTS}",
                                        "-p", "position_source:=autopilot",
                                        "-r", f"__node:=agent{k}"], env) for k in range(3)]
-        assert w.spin_until(lambda: w.agents_matched() and recorder_ready(w.node), 30.0,
+        assert w.spin_until(lambda: w.agents_matched() and recorder_ready(w.node, w.uavs), 30.0,
                             nodes), "agents or recorder did not come up"
         nodes.append(start_node("planner", ["-p", f"num_slots:={N_SLOTS}"], env))
         assert w.spin_until(lambda: w.formations and all(

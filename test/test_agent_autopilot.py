@@ -85,7 +85,7 @@ def flown(tmp_path_factory):
                              env)
                   for k in range(3)]
         try:
-            assert w.spin_until(lambda: w.agents_matched() and recorder_ready(w.node), 30.0,
+            assert w.spin_until(lambda: w.agents_matched() and recorder_ready(w.node, w.uavs), 30.0,
                                 procs), "agents or recorder did not come up"
             procs.append(start_node("planner", ["-p", f"num_slots:={N}"], env))
             assert w.spin_until(lambda: w.formations and all(len(w.rates[k]) >= N

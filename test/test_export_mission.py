@@ -28,7 +28,10 @@ from uav_insar_planner.exit_codes import EXIT_BAD_INPUT, EXIT_INFEASIBLE, EXIT_O
 from uav_insar_planner.mission_file.geodesy import WGS84_A, WGS84_E2, latlon_to_ned, ned_to_latlon
 from uav_insar_planner.mission_file.qgc_plan import PREFLIGHT_S, RUN_UP_S
 from uav_insar_planner.solver import solve
-from uav_insar_planner.swarm import UAVS, uav_name
+from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, uav_name, uavs
+
+# Table I's swarm: this test is of three UAVs (test_num_uavs.py flies others)
+UAVS = uavs(DEFAULT_NUM_UAVS)
 
 HOME = (-35.363261, 149.165230, 584.0)
 HOME_ARG = ",".join(str(v) for v in HOME)

@@ -16,7 +16,10 @@ import yaml
 from conftest import REPO
 
 from uav_insar_planner.report.foxglove_layout import SHIPPED, foxglove_layout, layout_json
-from uav_insar_planner.swarm import UAVS, uav_name
+from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, uav_name, uavs
+
+# Table I's swarm: this test is of three UAVs (test_num_uavs.py flies others)
+UAVS = uavs(DEFAULT_NUM_UAVS)
 
 pytestmark = pytest.mark.timeout(120)
 PANEL_TYPES = {"3D", "Plot", "DiagnosticSummary", "DiagnosticStatusPanel", "RawMessages"}

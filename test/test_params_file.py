@@ -41,8 +41,9 @@ CASES = {
     "misspelt under a wildcard": (BASE + "/**/planer:\n  ros__parameters:\n    looks: 3\n", "",
                                   "section '/**/planer' names no node of uav_insar_planner "
                                   "(did you mean planner?)"),
-    "agent beyond the swarm": (BASE + "agent3:\n  ros__parameters:\n    speed_mps: 4.0\n", "",
-                               "section 'agent3' names no node"),
+    "agent beyond the largest swarm": (
+        BASE + "agent6:\n  ros__parameters:\n    speed_mps: 4.0\n", "",
+        "section 'agent6' names no node"),
     "empty file": ("", "", "is empty; expected '/**:' or 'NODE:' sections"),
     "list at top level": ("- planner\n- agent\n", "", "must map node names to"),
     "no ros__parameters": ('"/**":\n  num_slots: 3\n', "",

@@ -25,7 +25,10 @@ from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.mavlink_bridge import POSE_PERIOD_S
 from uav_insar_planner.ros.start_msgs import decode_start
 from uav_insar_planner.solver import solve
-from uav_insar_planner.swarm import UAVS
+from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, uavs
+
+# Table I's swarm: this test is of three UAVs (test_num_uavs.py flies others)
+UAVS = uavs(DEFAULT_NUM_UAVS)
 
 pytestmark = pytest.mark.timeout(120)
 SPEED = 4.3  # the bridges' default speed_mps (Table I v_y)

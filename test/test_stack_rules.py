@@ -36,8 +36,18 @@ def test_a_uav_id_takes_that_uavs_default_entry_and_the_planners_start():
     assert own.pass_start == "capture"
 
 
+@pytest.mark.parametrize("k", [3, 5])
+def test_a_stack_of_a_larger_swarm_gets_its_own_default_vehicle(k):
+    """uav_id 3..5 (a swarm of 4 to 6) with the default wiring: that UAV's own port and sysid,
+    as uav-insar-vehicle --sysid 2+K --listen udpin:127.0.0.1:14552+10K serves it."""
+    config = from_parameters(dict(DEFAULTS, uav_id=k))
+    config.validate()
+    assert config.connections == (f"udpout:127.0.0.1:{14552 + 10 * k}",)
+    assert config.target_sysids == (2 + k,) and config.uavs() == (k,)
+
+
 @pytest.mark.parametrize("change,field", [
-    ({"uav_id": 3}, "uav_id"), ({"uav_id": -2}, "uav_id"),
+    ({"uav_id": 6}, "uav_id"), ({"uav_id": -2}, "uav_id"),
     ({"uav_id": 0, "target_sysids": [2, 3]}, "target_sysids"),
     ({"uav_id": 0, "target_sysids": [2], "connections": ["udpout:a:1", "udpout:b:2"]},
      "connections")])

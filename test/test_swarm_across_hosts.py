@@ -26,10 +26,14 @@ import yaml
 
 from uav_insar_planner.demo.processes import executable
 from uav_insar_planner.param_specs import FIRST_SYSID
-from uav_insar_planner.swarm import UAV_NAMES, UAVS, uav_name
+from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, uav_name, uav_names, uavs
 from uav_insar_sim.mission import home_position
 from uav_insar_sim.netlab.dds_env import dds_env
 from uav_insar_sim.netlab.lab import LabUnavailable, NetLab
+
+# Table I's swarm: this test is of three UAVs (test_num_uavs.py flies others)
+UAVS = uavs(DEFAULT_NUM_UAVS)
+UAV_NAMES = uav_names(DEFAULT_NUM_UAVS)
 
 pytestmark = pytest.mark.timeout(240)
 

@@ -14,7 +14,10 @@ from uav_insar_planner.demo.processes import free_udp_ports
 from uav_insar_planner.param_specs import NODE_SPECS
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.topics import INTERFACE, QOS_PROFILES, TopicSpec
-from uav_insar_planner.swarm import UAVS
+from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, uavs
+
+# Table I's swarm: this test is of three UAVs (test_num_uavs.py flies others)
+UAVS = uavs(DEFAULT_NUM_UAVS)
 
 pytestmark = pytest.mark.timeout(120)
 AGENT_UAV = 0
@@ -157,7 +160,7 @@ def test_the_running_nodes_create_exactly_the_registry(watcher, procs):
         problems = [p for node in NODE_UAVS for p in _qos_problems(w, node)]
         assert not problems, problems
         registry = {absolute(name, "planner"): spec.msg_type for spec in INTERFACE
-                    if not spec.is_service for name in spec.names()}
+                    if not spec.is_service for name in spec.names(UAVS)}
         on_graph = {t: types for t, types in w.node.get_topic_names_and_types()
                     if t not in RCLPY_TOPICS}
         assert {t: [registry.get(t)] for t in on_graph} == on_graph

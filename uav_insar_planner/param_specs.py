@@ -163,6 +163,11 @@ ORIGIN_LIMIT_M = 1e5
 # Vehicle k's default sysid and local UDP port: FIRST_SYSID + k, FIRST_PORT + PORT_STEP k.
 FIRST_SYSID = 2
 FIRST_PORT, PORT_STEP = 14552, 10
+
+
+def vehicle_connection(k: int) -> str:
+    """The bridge's default connection to vehicle k (`uav-insar-vehicle --listen` of it)."""
+    return f"udpout:127.0.0.1:{FIRST_PORT + PORT_STEP * k}"
 AUTOPILOTS = ("ardupilot", "px4")  # the flavours mavlink/autopilots.py knows the modes of
 PASS_STARTS = ("auto", "capture", "planner")  # who starts the bridge's pass
 POSITION_SOURCES = ("agent", "autopilot")  # where an agent takes its UAV's position from
@@ -251,12 +256,11 @@ BRIDGE_SPECS = (
               "every UAV it flies is captured, planner = at the planner's formation/start; "
               "auto = planner with uav_id, else capture", choices=PASS_STARTS),
     ParamSpec("connections", list,
-              [f"udpout:127.0.0.1:{FIRST_PORT + PORT_STEP * k}"
-               for k in uavs(DEFAULT_NUM_UAVS)],
+              [vehicle_connection(k) for k in uavs(DEFAULT_NUM_UAVS)],
               "pymavlink connection string per UAV (or one shared): udpout:HOST:PORT, "
               "udpin:HOST:PORT, tcp:HOST:PORT, /dev/ttyUSB0,57600"),
     ParamSpec("target_sysids", list, [FIRST_SYSID + k for k in uavs(DEFAULT_NUM_UAVS)],
-              "MAVLink system id of UAV 0, 1, 2 (1..255, distinct)"),
+              "MAVLink system id of UAV 0, 1, 2, ... (1..255, distinct; one per UAV flown)"),
     ParamSpec("source_sysid", int, 255, "our own system id (ArduPilot: match SYSID_MYGCS)",
               1, 255),
     ParamSpec("track_bearing_deg", float, 0.0, "bearing of the along-track axis y from north "

@@ -22,13 +22,14 @@ import yaml
 
 from uav_insar_planner.param_specs import SPEC_BY_NAME, SUITE_PARAMETER_NAMES
 from uav_insar_planner.params import ParamError, Params, params_from_mapping, shown
-from uav_insar_planner.swarm import UAVS, agent_name
+from uav_insar_planner.swarm import MASTER, MAX_UAVS, agent_name, uavs
 
 PARAMS_FILE_MAX_BYTES = 1 << 20
 #: The nodes a section may address: the executables' own names, and the agents as the demo
-#: starts them (`-r __node:=agentK`, one per UAV).
-SUITE_NODE_NAMES = ("planner", "agent", "mavlink_bridge", *(agent_name(k) for k in UAVS))
-SUITE_NODE_KINDS = ("planner", "agent", f"{agent_name(UAVS[0])}..{agent_name(UAVS[-1])}",
+#: starts them (`-r __node:=agentK`, one per UAV of the largest swarm).
+SUITE_NODE_NAMES = ("planner", "agent", "mavlink_bridge",
+                    *(agent_name(k) for k in uavs(MAX_UAVS)))
+SUITE_NODE_KINDS = ("planner", "agent", f"{agent_name(MASTER)}..{agent_name(MAX_UAVS - 1)}",
                     "mavlink_bridge")
 SECTIONS_EXPECTED = "expected '/**:' or 'NODE:' sections with ros__parameters"
 # One part of a section's node name as rcl's parser allows it: a ROS name token, * or **.

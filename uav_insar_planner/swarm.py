@@ -12,6 +12,9 @@ DEFAULT_NUM_UAVS = 3  # Table I: one master, two slaves (the paper's dual baseli
 MIN_UAVS = 2  # one interferogram: the single-baseline benchmark
 MAX_UAVS = 6  # five interferograms
 MASTER = 0
+# One colour per UAV in every plot (matplotlib's tab10; ros/markers.py has the same as RGB):
+# Table I's U0 red, U1 blue, U2 green, then the slaves of larger swarms.
+UAV_COLORS = ("tab:red", "tab:blue", "tab:green", "tab:orange", "tab:purple", "tab:brown")
 
 
 def uavs(num_uavs: int) -> range:
@@ -39,8 +42,17 @@ def uav_names(num_uavs: int) -> tuple[str, ...]:
     return tuple(uav_name(k) for k in uavs(num_uavs))
 
 
-# Table I's swarm, for the parts of the suite that do not yet take num_uavs from the scenario.
-NUM_UAVS = DEFAULT_NUM_UAVS
-UAVS = uavs(NUM_UAVS)
-SLAVES = slaves(NUM_UAVS)
-UAV_NAMES = uav_names(NUM_UAVS)
+def uav_index(name: str) -> int | None:
+    """K of the name `uavK` of a UAV any swarm may have (K in 0..MAX_UAVS - 1), else None."""
+    if name.startswith("uav") and name[3:].isdigit() and str(int(name[3:])) == name[3:]:
+        k = int(name[3:])
+        return k if k < MAX_UAVS else None
+    return None
+
+
+def count_problem(field: str, count: int) -> str | None:
+    """One line when `count` UAVs is not a swarm's size (MIN_UAVS..MAX_UAVS), else None."""
+    if MIN_UAVS <= count <= MAX_UAVS:
+        return None
+    return (f"{field}: value {count} UAVs is not allowed; expected {MIN_UAVS} to {MAX_UAVS} "
+            f"(the master and 1 to {MAX_UAVS - 1} slaves)")

@@ -31,7 +31,6 @@ import numpy as np
 from uav_insar_planner.evaluate import rate_tolerance_bps
 from uav_insar_planner.params import Params
 from uav_insar_planner.replan import measured_gain
-from uav_insar_planner.swarm import NUM_UAVS
 
 SATURATED_MISSES = 3
 SATURATION_RTOL = 1e-3
@@ -80,18 +79,23 @@ class UavState:
 class SwarmMonitor:
     """The state machine of the module doc for the scenario `params` (SI)."""
 
-    def __init__(self, params: Params, num_uavs: int = NUM_UAVS):
+    def __init__(self, params: Params, num_uavs: int | None = None):
         self.params = params
-        self.uavs = [UavState() for _ in range(num_uavs)]
+        self.uavs = [UavState() for _ in range(params.num_uavs if num_uavs is None
+                                                 else num_uavs)]
         self.lost: dict[int, Lost] = {}
         self.plan_power_w: np.ndarray | None = None
         self._saturated: list[Saturated] = []
         self._back: list[int] = []
         self._tol = rate_tolerance_bps(params.rate_min_bps)
 
+    def watch(self, n: int) -> None:
+        """Keep a state for UAVs 0..n-1 at least (a larger num_uavs set in flight)."""
+        self.uavs += [UavState() for _ in range(n - len(self.uavs))]
+
     # --- what is heard -------------------------------------------------------------------
     def set_plan(self, power_w: np.ndarray, params: Params | None = None) -> None:
-        """The schedule now flown (NUM_UAVS, N) [W]; saturation counts start again."""
+        """The schedule now flown (num_uavs, N) [W]; saturation counts start again."""
         if params is not None:
             self.params, self._tol = params, rate_tolerance_bps(params.rate_min_bps)
         self.plan_power_w = np.asarray(power_w, dtype=float)
@@ -182,6 +186,9 @@ class SwarmMonitor:
 
     def _slot_flown(self, k: int, rate: float, slot: int, power: float, left: float) -> None:
         p, u = self.params, self.uavs[k]
+        if k >= len(p.rate_min_bps) or (self.plan_power_w is not None
+                                         and k >= len(self.plan_power_w)):
+            return  # a UAV beyond the scenario (num_uavs made smaller): nothing to check
         at_p_max = power >= p.p_max_w * (1.0 - SATURATION_RTOL)
         still_needed = (0.0 if self.plan_power_w is None or slot + 1 > self.plan_power_w.shape[1]
                         else float(self.plan_power_w[k, slot + 1:].sum()) * p.slot_duration_s)

@@ -140,9 +140,10 @@ class AgentNode(Node):
     # --- plan ----------------------------------------------------------------------------
     def _adopt_plan(self, formation: Formation, power: PowerSchedule) -> None:
         """A matched, validated pair of the sole planner (ros/plan_gate.py)."""
-        if len(formation.points) <= self.k:
-            self.get_logger().error(f"{self.uav_name}: {power.plan_id} has no entry for this UAV; "
-                                    "ignored")
+        n_uavs = len(formation.points)
+        if n_uavs <= self.k:  # a plan of a smaller swarm: nothing to fly, the last plan stays
+            self.get_logger().error(f"{self.uav_name}: uav_id {self.k} is not in {power.plan_id}"
+                                    f", a plan of {n_uavs} UAVs (uav0..uav{n_uavs - 1}); ignored")
             return
         # None: not flown by this plan (single-baseline's U2); the NaN target holds it at home.
         x, y, z = formation.points[self.k] or (float("nan"), 0.0, float("nan"))

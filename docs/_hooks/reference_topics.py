@@ -7,7 +7,7 @@ import re
 import reference_md as md
 
 from uav_insar_planner.ros.topics import FRAME_ID, INTERFACE, TopicSpec
-from uav_insar_planner.swarm import UAVS
+from uav_insar_planner.swarm import MAX_UAVS, MIN_UAVS
 
 
 def topic_anchor(spec: TopicSpec) -> str:
@@ -40,15 +40,17 @@ def topics_page() -> str:
     """The Markdown of reference/topics.md."""
     topics = [s for s in INTERFACE if not s.is_service]
     services = [s for s in INTERFACE if s.is_service]
-    uavs = ", ".join(str(k) for k in UAVS)
     lines = ["# Topics and services", "",
              md.generated_from("uav_insar_planner/ros/topics.py"), "",
              "Every topic and service the nodes of the suite create. The names are relative "
              "but `/diagnostics`, shown here with the nodes in the root namespace: "
              "`-r __ns:=/swarm1` moves them all (give the planner and its agents the same "
-             f"namespace). `{{k}}` is a UAV, k = {uavs}; the agent of UAV k publishes only its "
-             "own. A node of one UAV may also run in that UAV's namespace (`-r __ns:=/uav1`, "
-             "as a stack on the UAV's computer): its topics stay the swarm's. Frame "
+             "namespace). `{k}` is a UAV, k = 0..num_uavs - 1 (the scenario parameter "
+             f"`num_uavs`, {MIN_UAVS} to {MAX_UAVS}; Table I's 3: k = 0, 1, 2); `/formation` "
+             "holds one pose and `/formation/power` one row per UAV; the agent of UAV k "
+             "publishes only its own. A node of one UAV may also run in that UAV's namespace "
+             "(`-r __ns:=/uav1`, as a stack on the UAV's computer): its topics stay the "
+             "swarm's. Frame "
              f"`{FRAME_ID}`: x = range / across-track, y = azimuth / along-track, z = up; SI "
              "units on every topic.", "",
              "QoS is the publishers' profile; each subscriber asks for the same reliability and "

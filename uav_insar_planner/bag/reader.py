@@ -4,8 +4,9 @@ ROS import: the message types come from the definitions stored in the bag.
 `read_mission(path)` -> MissionRecord, plain numpy data in SI units. Topics are matched by
 the suite's names (ros/topics.py; a namespace in front is allowed): the last `formation` and
 `formation/power` (the plan flown; a later plan replaces an earlier one), the planner's plan
-status on `/diagnostics`, and per UAV k `uav{k}/achieved_rate`, `uav{k}/offload` and
-`uav{k}/pose`, each with its receive time [s] in the bag.
+status and per-UAV statuses (`planner: uavK`) on `/diagnostics`, and per UAV k
+`uav{k}/achieved_rate`, `uav{k}/offload` and `uav{k}/pose`, each with its receive time [s]
+in the bag.
 """
 from __future__ import annotations
 
@@ -16,11 +17,12 @@ from pathlib import Path
 
 import numpy as np
 
-from uav_insar_planner.report.planner_messages import PLAN_STATUS_NAME
-from uav_insar_planner.swarm import UAV_NAMES
+from uav_insar_planner.report.planner_messages import PLAN_STATUS_NAME, uav_status_name
+from uav_insar_planner.swarm import MAX_UAVS, uav_index
 
-_UAV_TOPIC = re.compile(rf"(?:^|/)({'|'.join(map(re.escape, UAV_NAMES))})/"
-                        r"(achieved_rate|offload|pose)$")
+# uavK of any swarm (K < MAX_UAVS, checked by uav_index)
+_UAV_TOPIC = re.compile(r"(?:^|/)(uav\d+)/(achieved_rate|offload|pose)$")
+_UAV_STATUS = {uav_status_name(k): k for k in range(MAX_UAVS)}
 
 
 class BagError(ValueError):
@@ -31,13 +33,16 @@ class BagError(ValueError):
 class MissionRecord:
     """What a bag holds about one mission (see the module docstring). Per UAV k:
     `rates[k]` (t_s, rate_bps) rows, `offloads[k]` (t_s, slot, power_w, energy_used_j,
-    energy_left_j) rows, `poses[k]` (t_s, x, y, z) rows; `formation` (NUM_UAVS, 3) planned (x, y, z)
-    with NaN rows for UAVs not flown and `power` (NUM_UAVS, N) planned P_com [W], None when absent;
-    `plan_values` the plan status's key/values; `counts` messages per topic."""
+    energy_left_j) rows, `poses[k]` (t_s, x, y, z) rows; `formation` (num_uavs, 3) planned
+    (x, y, z) with NaN rows for UAVs not flown and `power` (num_uavs, N) planned P_com [W], None
+    when absent (num_uavs as the plan has it, checked by its reader); `plan_values` the plan
+    status's key/values, `uav_values[k]` the latest `planner: uavK` status's; `counts`
+    messages per topic."""
 
     formation: np.ndarray | None = None
     power: np.ndarray | None = None
     plan_values: dict[str, str] = field(default_factory=dict)
+    uav_values: dict[int, dict[str, str]] = field(default_factory=dict)
     rates: dict[int, np.ndarray] = field(default_factory=dict)
     offloads: dict[int, np.ndarray] = field(default_factory=dict)
     poses: dict[int, np.ndarray] = field(default_factory=dict)
@@ -46,8 +51,8 @@ class MissionRecord:
 
 def _kind(topic: str) -> tuple[str, int]:
     m = _UAV_TOPIC.search(topic)
-    if m:
-        return m[2], UAV_NAMES.index(m[1])
+    if m and (k := uav_index(m[1])) is not None:
+        return m[2], k
     if topic == "/diagnostics":
         return "diagnostics", -1
     for name in ("formation/power", "formation"):
@@ -124,6 +129,9 @@ def _take(record: MissionRecord, rows: dict, name: str, k: int, t: float, msg) -
         for status in msg.status:
             if status.name == PLAN_STATUS_NAME:
                 record.plan_values = {v.key: v.value for v in status.values}
+            elif status.name in _UAV_STATUS:
+                record.uav_values[_UAV_STATUS[status.name]] = {v.key: v.value
+                                                               for v in status.values}
     elif name == "achieved_rate":
         rows.setdefault((name, k), []).append((t, msg.data))
     elif name == "offload":

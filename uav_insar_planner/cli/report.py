@@ -4,13 +4,15 @@
 
 BAG is a rosbag2 folder (`uav-insar record`, `make demo`, `ros2 bag record`). The scenario
 (R_min, E_max, the radar, for sigma_h) is the one the mission flew with: Table I, or --params
-and --set as for `uav-insar solve`; num_slots is taken from the recorded plan. Prints
-report.recorded.report_table, writes report.recorded_plots.FILES into DIR (default BAG_report
-beside the bag) and names them, then the Foxglove layout to open the bag with
-(report/foxglove_layout.py). The parameters, DIR and the bag folder are checked first; then
-a progress bar on stderr follows the read. Exit codes (exit_codes.py): EXIT_OK written;
-EXIT_BAD_INPUT, one line on stderr and nothing written, for bad parameters, a DIR that cannot
-be written, no such bag, not a bag, a bag that cannot be read or holds no plan.
+and --set as for `uav-insar solve`; num_slots and num_uavs are taken from the recorded plan
+(with another num_uavs than the scenario's, R_min,k as the planner reported it on
+/diagnostics). Prints report.recorded.report_table, writes report.recorded_plots.FILES into
+DIR (default BAG_report beside the bag) and names them, then the Foxglove layout to open the
+bag with (report/foxglove_layout.py): the shipped one for Table I's three UAVs, else one for
+the bag's number of UAVs, written into DIR. The parameters, DIR and the bag folder are
+checked first; then a progress bar on stderr follows the read. Exit codes (exit_codes.py):
+EXIT_OK written; EXIT_BAD_INPUT, one line on stderr and nothing written, for bad parameters,
+a DIR that cannot be written, no such bag, not a bag, a bag that cannot be read or holds no plan.
 """
 from __future__ import annotations
 
@@ -62,14 +64,19 @@ def main(args: argparse.Namespace) -> int:
         figures = mission_figures(record, params)
     except (BagError, ReportError) as exc:
         raise CommandFailed(str(exc), EXIT_BAD_INPUT) from None
-    from uav_insar_planner.report.foxglove_layout import SHIPPED
+    from uav_insar_planner.report.foxglove_layout import LAYOUT_FILE, SHIPPED, layout_json
     from uav_insar_planner.report.recorded_plots import plot_report
 
     print(report_table(figures, params))
     for path in plot_report(figures, params, out):
         print(f"wrote {path}")
-    # the recorded plan has a row per UAV of swarm.py (mission_figures checks), so the
-    # shipped layout always fits it
+    # a plot series per UAV of the bag's plan (mission_figures checked it has num_uavs rows):
+    # the shipped layout is Table I's; another swarm's is written beside the plots
+    layout = SHIPPED
+    if layout_json(params.num_uavs) != SHIPPED.read_text():
+        layout = out / LAYOUT_FILE
+        layout.write_text(layout_json(params.num_uavs))
+        print(f"wrote {layout}")
     storage = sorted(args.bag.glob("*.mcap")) or [args.bag]
-    print(f"Foxglove: open {storage[0]}, then import the layout {SHIPPED}")
+    print(f"Foxglove: open {storage[0]}, then import the layout {layout}")
     return EXIT_OK

@@ -1,19 +1,19 @@
 """`make demo` / `python -m uav_insar_planner.demo`: one whole mission, every node a process.
 
-Starts one `agent` executable per UAV and the `planner` as separate processes, as `ros2 run`
-would, on a private ROS_DOMAIN_ID with discovery kept on this host; this process watches the
-topics like `ros2 topic echo` would. Unless `--no-mavlink`, the agents ride on MAVLink
-vehicles: one `uav-insar-vehicle` process per UAV (SITL-style, sysid 2, 3, ..., airborne
-behind the track start, on free loopback UDP ports) and the `mavlink_bridge` node wired to
-them fly the planned formation through real MAVLink bytes; the vehicles' positions come back
-on /uavK/mavlink/pose, and the agents (`position_source:=autopilot`) run their slots on them
-and republish them as /uavK/pose, so rates, offload, bag and report are the vehicles'. The
-vehicles fly in wall-clock time (no time_scale): they gather at their start points, then fly
-the pass, num_slots + 1 slots long (20 slots unless --num-slots), along the track at
-speed_mps. With `--per-uav-stacks` each UAV gets a stack of its own, as on its computer: a bridge
-/uavK/mavlink_bridge (uav_id K) for its vehicle and the agent /uavK/agent; the planner then
-starts every pass at one wall-clock instant (formation/start). With `--no-mavlink` the agents
-fly themselves on the mission clock.
+Starts one `agent` executable per UAV (`--uavs N`, 2..6, num_uavs; default the params file's,
+Table I's 3) and the `planner` as separate processes, as `ros2 run` would, on a private
+ROS_DOMAIN_ID with discovery kept on this host; this process watches the topics like `ros2
+topic echo` would. Unless `--no-mavlink`, the agents ride on MAVLink vehicles: one
+`uav-insar-vehicle` process per UAV (SITL-style, sysid 2, 3, ..., airborne behind the track
+start, on free loopback UDP ports) and the `mavlink_bridge` node wired to them fly the planned
+formation through real MAVLink bytes; the vehicles' positions come back on /uavK/mavlink/pose,
+and the agents (`position_source:=autopilot`) run their slots on them and republish them as
+/uavK/pose, so rates, offload, bag and report are the vehicles'. The vehicles fly in wall-clock
+time (no time_scale): they gather at their start points, then fly the pass, num_slots + 1 slots
+long (20 slots unless --num-slots), along the track at speed_mps. With `--per-uav-stacks` each
+UAV gets a stack of its own, as on its computer: a bridge /uavK/mavlink_bridge (uav_id K) for
+its vehicle and the agent /uavK/agent; the planner then starts every pass at one wall-clock
+instant (formation/start). With `--no-mavlink` the agents fly themselves on the mission clock.
 
 Unless `--no-bag`, `uav-insar record` runs beside the nodes from before the agents start to
 after they stop, so the whole mission lands in a rosbag2 MCAP bag (`--bag PATH`, default
@@ -41,7 +41,7 @@ import argparse
 import os
 import sys
 
-from uav_insar_planner.demo.options import parse_options
+from uav_insar_planner.demo.options import fit_swarm, parse_options
 from uav_insar_planner.demo.processes import random_domain_id, ros_env
 from uav_insar_planner.demo.steps import Mission, overridden_problems
 from uav_insar_planner.exit_codes import EXIT_BAD_INPUT, EXIT_CRASH, EXIT_OK
@@ -55,6 +55,8 @@ def run(args: argparse.Namespace) -> int:
         overrides = dict(parse_override(text) for text in args.param)
         if args.num_slots:
             overrides["num_slots"] = args.num_slots
+        if problems := fit_swarm(args, overrides):
+            raise ParamError(problems)
         params = load_params(args.params_file, overrides)
         if problems := overridden_problems(args, overrides):
             raise ParamError(problems)

@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import Any
 
 from uav_insar_planner.cli.parser import OneLineParser
 from uav_insar_planner.demo.recorder import default_bag_path
 from uav_insar_planner.param_specs import PORT_STEP
-from uav_insar_planner.swarm import NUM_UAVS, UAVS
+from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, MAX_UAVS, MIN_UAVS
 
 REPO_CONFIG = Path(__file__).resolve().parents[1] / "config" / "params.yaml"
 # --kill-uav: the agents' default time_scale, slow enough that the swarm flies on for a while
@@ -19,7 +20,7 @@ DEFAULT_TIME_SCALE = 20.0
 # second at Table I's delta_t): its default num_slots, unless --num-slots says otherwise.
 MAVLINK_NUM_SLOTS = 20
 # --mavlink-base-port: vehicle k listens on PORT + PORT_STEP * k, the last one within 65535.
-MAX_BASE_PORT = 65535 - PORT_STEP * (NUM_UAVS - 1)
+MAX_PORT = 65535
 
 
 def build_parser() -> OneLineParser:
@@ -30,6 +31,10 @@ def build_parser() -> OneLineParser:
     add = parser.add_argument
     add("--params-file", type=Path, default=REPO_CONFIG if REPO_CONFIG.exists() else None,
         help="ROS 2 params file for every node (default: config/params.yaml)")
+    add("--uavs", type=int, default=None, metavar="N",
+        help=f"fly a swarm of N UAVs, {MIN_UAVS}..{MAX_UAVS} (num_uavs; default: the params "
+             f"file's, Table I's {DEFAULT_NUM_UAVS}); R_min,k not given for N UAVs: the params "
+             "file's first N, its last repeated")
     add("--num-slots", type=int, default=0,
         help=f"override num_slots (default: {MAVLINK_NUM_SLOTS}; with --no-mavlink the "
              "params file's)")
@@ -60,7 +65,7 @@ def build_parser() -> OneLineParser:
     add("--mavlink-base-port", type=int, default=0,
         help=f"vehicle K listens on UDP PORT + {PORT_STEP} K (default: free ports chosen by "
              "the OS)")
-    add("--kill-uav", type=int, choices=UAVS, default=None, metavar="K",
+    add("--kill-uav", type=int, default=None, metavar="K",
         help="kill agent K's process (SIGKILL) when the swarm reaches --at SLOT and show the "
              "planner's re-plan")
     add("--at", type=int, default=10, metavar="SLOT", help="the slot for --kill-uav (default 10)")
@@ -106,6 +111,36 @@ def parse_options(argv: list[str] | None = None) -> argparse.Namespace:
         parser.error("--seed must be in 0..2147483647")
     if args.domain_id is not None and not 0 <= args.domain_id <= 232:
         parser.error("--domain-id must be in 0..232 (Fast DDS's range)")
-    if not 0 <= args.mavlink_base_port <= MAX_BASE_PORT:
-        parser.error(f"--mavlink-base-port must be in 0..{MAX_BASE_PORT}")
+    if args.uavs is not None and not MIN_UAVS <= args.uavs <= MAX_UAVS:
+        parser.error(f"--uavs: value {args.uavs} is not allowed; expected {MIN_UAVS}..{MAX_UAVS}")
+    # (checked again against the scenario's num_uavs when --uavs is not given: fit_swarm)
+    most = args.uavs or MAX_UAVS
+    if args.kill_uav is not None and not 0 <= args.kill_uav < most:
+        parser.error(f"--kill-uav: value {args.kill_uav} is not allowed; expected a UAV "
+                     f"0..{most - 1}")
+    max_base_port = MAX_PORT - PORT_STEP * (most - 1)
+    if not 0 <= args.mavlink_base_port <= max_base_port:
+        parser.error(f"--mavlink-base-port must be in 0..{max_base_port}")
     return args
+
+
+def fit_swarm(args: argparse.Namespace, overrides: dict[str, Any]) -> list[str]:
+    """Put --uavs N into `overrides` (num_uavs) and, unless -p gives rate_min_mbps, R_min,k
+    for N UAVs: the params file's first N, its last repeated (Table I's [10, 16.95, 1] gives
+    [10, 16.95] for two UAVs, [10, 16.95, 1, 1, 1] for five). Returns the problems (one line
+    each) of a --kill-uav beyond the swarm flown."""
+    from uav_insar_planner.param_specs import SPEC_BY_NAME
+    from uav_insar_planner.params_file import read_params_file
+
+    file = read_params_file(args.params_file, "planner") if args.params_file else {}
+    if args.uavs is not None:
+        overrides["num_uavs"] = args.uavs
+        if "rate_min_mbps" not in overrides:
+            given = list(file.get("rate_min_mbps", SPEC_BY_NAME["rate_min_mbps"].default))
+            if len(given) != args.uavs and given:
+                overrides["rate_min_mbps"] = (given + given[-1:] * args.uavs)[:args.uavs]
+    n = overrides.get("num_uavs", file.get("num_uavs", DEFAULT_NUM_UAVS))
+    if args.kill_uav is not None and isinstance(n, int) and args.kill_uav >= n:
+        return [f"--kill-uav: value {args.kill_uav} is not allowed; expected a UAV 0..{n - 1} "
+                f"of the {n} flown (num_uavs)"]
+    return []

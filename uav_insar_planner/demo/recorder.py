@@ -7,11 +7,11 @@ from __future__ import annotations
 import subprocess
 import sys
 import time
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 from uav_insar_planner.demo.processes import start_process, stop_node
-from uav_insar_planner.swarm import UAVS
 
 RECORDER_NODE = "uav_insar_recorder"  # ros/tools/bag_recorder.NODE_NAME
 # The topics the recorder must have subscribed to before the plan starts the slots: the
@@ -31,9 +31,9 @@ def start_recorder(path: Path, env: dict[str, str]) -> subprocess.Popen:
                          env)
 
 
-def recorder_ready(node: Any, uavs: range = UAVS) -> bool:
-    """True once the recorder subscribes to each agent's AGENT_TOPICS (`node`: any rclpy node
-    on the same domain)."""
+def recorder_ready(node: Any, uavs: Sequence[int]) -> bool:
+    """True once the recorder subscribes to the AGENT_TOPICS of each agent of `uavs` (`node`:
+    any rclpy node on the same domain)."""
     return all(any(info.node_name == RECORDER_NODE
                    for info in node.get_subscriptions_info_by_topic("/" + t.format(k=k)))
                for k in uavs for t in AGENT_TOPICS)

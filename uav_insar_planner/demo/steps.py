@@ -24,7 +24,7 @@ from uav_insar_planner.demo.processes import (
 from uav_insar_planner.demo.recorder import recorder_ready, start_recorder, stop_recorder
 from uav_insar_planner.param_specs import FIRST_SYSID, PORT_STEP
 from uav_insar_planner.report.flown import MavlinkPass, mavlink_table, rate_table, summary
-from uav_insar_planner.swarm import MASTER, NUM_UAVS, UAVS, agent_name, uav_name
+from uav_insar_planner.swarm import MASTER, MAX_UAVS, agent_name, uav_name, uavs
 
 if TYPE_CHECKING:
     from uav_insar_planner.params import Params
@@ -92,12 +92,15 @@ def start_mavlink(ports: Sequence[int], pass_s: float, common: Sequence[str],
 
 
 def node_names(node: str, args: argparse.Namespace) -> list[str]:
-    """The full names the demo gives `node`'s processes (params-file sections match these)."""
+    """The full names the demo gives `node`'s processes (params-file sections match these),
+    for the --uavs flown (without it, every UAV a swarm may have: its num_uavs is not known
+    before the params file is read)."""
     stacks = getattr(args, "per_uav_stacks", False)
+    swarm = uavs(getattr(args, "uavs", None) or MAX_UAVS)
     if node == "agent":
-        return [f"/{uav_name(k)}/agent" if stacks else agent_name(k) for k in UAVS]
+        return [f"/{uav_name(k)}/agent" if stacks else agent_name(k) for k in swarm]
     if node == "mavlink_bridge" and stacks:
-        return [f"/{uav_name(k)}/mavlink_bridge" for k in UAVS]
+        return [f"/{uav_name(k)}/mavlink_bridge" for k in swarm]
     return [node]
 
 
@@ -161,9 +164,14 @@ class Mission:
 
         self.args, self.params, self.env = args, params, ros_env(domain)
         self.common = ["--params-file", str(args.params_file)] if args.params_file else []
+        # the swarm's size and R_min,k as the demo validated them (--uavs fits the R_min list)
+        rate_min = ", ".join(repr(float(r)) for r in params.raw["rate_min_mbps"])
         self.common += ["-p", f"num_slots:={params.num_slots}",
-                        *(a for text in args.param for a in ("-p", text))]
-        print(f"demo: ROS_DOMAIN_ID={domain}, {params.num_slots} slots of "
+                        *(a for text in args.param for a in ("-p", text)),
+                        "-p", f"num_uavs:={params.num_uavs}",
+                        "-p", f"rate_min_mbps:=[{rate_min}]"]
+        self.swarm = uavs(params.num_uavs)
+        print(f"demo: ROS_DOMAIN_ID={domain}, {params.num_uavs} UAVs, {params.num_slots} slots of "
               f"{params.slot_duration_s:g} s at time_scale {args.time_scale:g}, scheme "
               f"{params.scheme}, solver {params.solver}", flush=True)
         self.procs: list[subprocess.Popen] = []
@@ -176,7 +184,8 @@ class Mission:
         # the bridge's pass: the slots and one more, so every UAV crosses the line after its
         # last slot (ObservedMission's end)
         self.pass_s = (params.num_slots + 1) * params.slot_duration_s
-        self.watcher = TopicWatcher(None, "demo_watcher", on_mavlink_pose=self._on_vehicle)
+        self.watcher = TopicWatcher(None, "demo_watcher", on_mavlink_pose=self._on_vehicle,
+                                    num_uavs=params.num_uavs)
 
     def _on_vehicle(self, k: int, msg: Any) -> None:
         if self.mavlink_pass is not None:
@@ -191,7 +200,7 @@ class Mission:
         if self.recorder is not None:
             print(f"demo: recording the mission to {args.bag}", flush=True)
         source = "agent" if args.no_mavlink else "autopilot"
-        for k in UAVS:
+        for k in self.swarm:
             self.procs.append(start_node(
                 "agent", [*self.common, "-p", f"uav_id:={k}", "-p",
                           f"time_scale:={args.time_scale}", "-p",
@@ -199,7 +208,8 @@ class Mission:
                           *([] if args.no_mavlink else ["-p", f"position_source:={source}"]),
                           *self._agent_name_args(k)], self.env, f"[{agent_name(k)}]"))
         if not w.spin_until(lambda: w.agents_matched() and (
-                self.recorder is None or recorder_ready(w.node)), AGENTS_UP_S, self.procs):
+                self.recorder is None or recorder_ready(w.node, self.swarm)), AGENTS_UP_S,
+                self.procs):
             print("demo: the agents did not come up (see their log above)", flush=True)
             return False
         return True
@@ -219,11 +229,11 @@ class Mission:
         self.procs.append(start_node("planner", [*self.common, *own], self.env, "[planner]"))
         if args.no_mavlink:
             return
-        self.ports = ([args.mavlink_base_port + PORT_STEP * k for k in UAVS]
-                      if args.mavlink_base_port else free_udp_ports(NUM_UAVS))
+        self.ports = ([args.mavlink_base_port + PORT_STEP * k for k in self.swarm]
+                      if args.mavlink_base_port else free_udp_ports(len(self.swarm)))
         flown_by = ("one bridge per UAV (/uavK/mavlink_bridge, uav_id K; the planner starts "
                     "every pass at one instant)" if args.per_uav_stacks else "the bridge")
-        print(f"demo: MAVLink vehicles sysid {FIRST_SYSID}..{FIRST_SYSID + NUM_UAVS - 1} on "
+        print(f"demo: MAVLink vehicles sysid {FIRST_SYSID}..{FIRST_SYSID + len(self.ports) - 1} on "
               f"UDP ports {', '.join(map(str, self.ports))}, flown by {flown_by} for the whole "
               f"mission (a pass of {self.pass_s:g} s); the agents take their positions from "
               "them (position_source autopilot)", flush=True)
@@ -296,7 +306,7 @@ class Mission:
             if self.mavlink_pass is not None:
                 print("\nMAVLink vehicles (track frame [m]; positions from /uavK/mavlink/pose)")
                 print("\n".join(mavlink_table(
-                    self.mavlink_pass, [FIRST_SYSID + k for k in UAVS],
+                    self.mavlink_pass, [FIRST_SYSID + k for k in self.swarm],
                     [f"udpin:127.0.0.1:{port}" for port in self.ports])))
             energy = {k: w.offloads[k][-1][2] for k in self.targets if w.offloads[k]}
             print(summary(status.message if status else None, self.targets, w.rates,

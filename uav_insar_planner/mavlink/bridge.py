@@ -68,7 +68,7 @@ from uav_insar_planner.mavlink.setpoints import setpoint_message
 from uav_insar_planner.mavlink.signing import read_key_file, signing_state
 from uav_insar_planner.mavlink.supervision import WatchedVehicle, is_vehicle_heartbeat
 from uav_insar_planner.mavlink.trajectory import PassTrajectory, clean_formation, separation
-from uav_insar_planner.swarm import NUM_UAVS
+from uav_insar_planner.swarm import MAX_UAVS
 
 __all__ = ["Bridge", "BridgeConfig", "BridgeEvent", "VehicleStatus"]
 
@@ -122,7 +122,8 @@ class Bridge:
                                          expected_source=self._links[address].peer_address)
                           for k, sysid, address
                           in zip(self.uavs, config.target_sysids, addresses, strict=True)]
-        self._count = max(self.uavs) + 1 if config.uav_id < 0 else NUM_UAVS  # poses read
+        # poses read: one per vehicle, or every pose a plan may have (separation from the others)
+        self._count = max(self.uavs) + 1 if config.uav_id < 0 else MAX_UAVS
         self._separation = [""] * self._count
         self._sequences: dict[int, ArmingSequence] = {}  # per UAV, once arm_and_takeoff ran
         self._holding = Holding(config.autopilot, config.gcs_timeout_s,

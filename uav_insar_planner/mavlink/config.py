@@ -10,14 +10,16 @@ from uav_insar_planner.mavlink.frames import Vec3
 from uav_insar_planner.mavlink.link import parse_address
 from uav_insar_planner.param_specs import (
     BRIDGE_SPECS,
+    FIRST_SYSID,
     GCS_TIMEOUT_AUTO,
     GCS_TIMEOUT_DEFAULT_S,
     GCS_TIMEOUT_MIN_S,
     ORIGIN_LIMIT_M,
+    vehicle_connection,
 )
 from uav_insar_planner.params import check_value
 from uav_insar_planner.plan import SAFE_SEPARATION_M as DEFAULT_MIN_SEPARATION_M
-from uav_insar_planner.swarm import NUM_UAVS
+from uav_insar_planner.swarm import MAX_UAVS
 
 _DEFAULTS = {spec.name: spec.default for spec in BRIDGE_SPECS}
 
@@ -41,8 +43,8 @@ class BridgeConfig:
     - signing_key_file: MAVLink 2 signing on every link with this key (`signing`); "" off.
     - gcs_timeout_s: hold when the ground station is silent this long (`holding`); 0 off,
       else at least GCS_TIMEOUT_MIN_S.
-    - uav_id: -1 flies UAV k = 0.. of `target_sysids` each; 0..NUM_UAVS-1 flies that UAV
-      alone (one sysid, one connection: a stack per UAV).
+    - uav_id: -1 flies UAV k = 0.. of `target_sysids` each (N entries for N UAVs);
+      0..MAX_UAVS-1 flies that UAV alone (one sysid, one connection: a stack per UAV).
     - pass_start: "capture" (the bridge's own capture gate) or "planner" (`Bridge.set_start`,
       the planner's formation/start).
     """
@@ -127,17 +129,19 @@ class BridgeConfig:
 
 
 def from_parameters(values: dict[str, Any]) -> BridgeConfig:
-    """The config of the node's parameter values (lists as given). With `uav_id` >= 0,
-    `connections` and `target_sysids` left at their defaults (every UAV's) mean that UAV's
-    entry; "auto" `pass_start` is planner with a uav_id, else capture, and "auto" (-1)
-    `gcs_timeout_s` GCS_TIMEOUT_DEFAULT_S with a uav_id, else off. TypeError or ValueError
-    (one line) when a value is bad."""
+    """The config of the node's parameter values (lists as given). With `uav_id` K >= 0,
+    `connections` and `target_sysids` left at their defaults (Table I's three UAVs') mean UAV
+    K's own default (param_specs.vehicle_connection(K), sysid FIRST_SYSID + K, any K < 6);
+    "auto" `pass_start` is planner with a uav_id, else capture, and "auto" (-1) `gcs_timeout_s`
+    GCS_TIMEOUT_DEFAULT_S with a uav_id, else off. TypeError or ValueError (one line) when a
+    value is bad."""
     values = {name: tuple(v) if isinstance(v, list) else v for name, v in values.items()}
     k = values.get("uav_id", -1)
-    if isinstance(k, int) and 0 <= k < NUM_UAVS:
+    if isinstance(k, int) and 0 <= k < MAX_UAVS:
+        own = {"connections": vehicle_connection(k), "target_sysids": FIRST_SYSID + k}
         for name in ("connections", "target_sysids"):
             if values.get(name) == tuple(_DEFAULTS[name]):
-                values[name] = (_DEFAULTS[name][k],)
+                values[name] = (own[name],)
     if values.get("gcs_timeout_s", GCS_TIMEOUT_AUTO) == GCS_TIMEOUT_AUTO:
         values["gcs_timeout_s"] = (GCS_TIMEOUT_DEFAULT_S if isinstance(k, int) and k >= 0
                                    else 0.0)

@@ -22,7 +22,7 @@ from uav_insar_planner.scene import swath_edges  # noqa: E402
 from uav_insar_planner.solver import rays  # noqa: E402
 from uav_insar_planner.solver.power import station_radius_sq  # noqa: E402
 from uav_insar_planner.study.grid import MapRow  # noqa: E402
-from uav_insar_planner.swarm import UAVS  # noqa: E402
+from uav_insar_planner.swarm import UAV_COLORS  # noqa: E402
 from uav_insar_planner.sweep import SweepRow  # noqa: E402
 
 SCHEME_STYLE = {
@@ -136,7 +136,7 @@ def plot_formation(p: Params, plan: Plan, path: str | Path) -> None:
     """The across-track plane: target line, the UAVs with their beams and swaths, the ground
     station with each UAV's communication disk (C9-C11), the master's C2 line and each slave's
     feasible region with the others at the plan."""
-    flown = [k for k in UAVS if np.isfinite(plan.formation[k, 0])]
+    flown = [k for k in range(plan.num_uavs) if np.isfinite(plan.formation[k, 0])]
     gx, _, gz = p.ground_station
     xs_all = [plan.formation[k, 0] for k in flown] + [p.x_t, gx]
     xlo, xhi = min(xs_all) - 40, max(xs_all) + 40
@@ -144,7 +144,7 @@ def plot_formation(p: Params, plan: Plan, path: str | Path) -> None:
     # equal axes: size the figure to the plane so the plot fills it
     fig, ax = plt.subplots(figsize=(10, max(3.5, 10 * zhi / (xhi - xlo) + 1.2)))
     xs, zs = np.linspace(xlo, xhi, 400), np.linspace(0, zhi, 300)
-    colors = ["tab:red", "tab:blue", "tab:green"]
+    colors = UAV_COLORS
     for k in flown:
         if k > 0:
             mask = _slave_region(p, plan, k, xs, zs)

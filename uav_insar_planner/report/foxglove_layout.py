@@ -1,6 +1,7 @@
 """A Foxglove layout for a recorded mission (no ROS import): `foxglove_layout()` is the layout
 as Foxglove exports it (`configById`, `globalVariables`, `userNodes`, `playbackConfig` and
-`layout`, a mosaic tree of panel ids `Type!name`), one panel series per UAV of swarm.py:
+`layout`, a mosaic tree of panel ids `Type!name`), one plot series per UAV of the mission
+(`foxglove_layout(num_uavs)`):
 
   3D!markers                  /formation/markers and /formation/markers/flown, display frame
                               insar_track (there is no tf: every marker is in that frame)
@@ -16,8 +17,9 @@ as Foxglove exports it (`configById`, `globalVariables`, `userNodes`, `playbackC
 
 Topic names are the suite's (ros/topics.py, which imports rclpy and so cannot be imported
 here; test/test_foxglove_layout.py holds both to the same names and to a recorded bag).
-SHIPPED is the layout generated for swarm.NUM_UAVS, shipped as package data;
-`python -m uav_insar_planner.report.foxglove_layout` writes it again.
+SHIPPED is the layout generated for Table I's swarm (swarm.DEFAULT_NUM_UAVS), shipped as
+package data; `python -m uav_insar_planner.report.foxglove_layout` writes it again.
+`uav-insar report` writes the layout for the number of UAVs in the bag beside its plots.
 """
 from __future__ import annotations
 
@@ -31,9 +33,10 @@ from uav_insar_planner.report.planner_messages import (
     POSITION_ERROR_KEY,
     uav_status_name,
 )
-from uav_insar_planner.swarm import UAVS, uav_name
+from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, uav_name, uavs
 
-SHIPPED = Path(__file__).with_name("foxglove_layout.json")
+LAYOUT_FILE = "foxglove_layout.json"
+SHIPPED = Path(__file__).with_name(LAYOUT_FILE)
 FRAME_ID = "insar_track"
 MARKERS = "/formation/markers"
 FLOWN_MARKERS = "/formation/markers/flown"
@@ -81,16 +84,17 @@ def _split(first: Any, second: Any, direction: str, percent: float) -> dict[str,
             "splitPercentage": percent}
 
 
-def foxglove_layout() -> dict[str, Any]:
-    """The layout (see the module docstring), for every UAV of swarm.py."""
+def foxglove_layout(num_uavs: int = DEFAULT_NUM_UAVS) -> dict[str, Any]:
+    """The layout (see the module docstring) for UAVs uav0..uav(num_uavs-1)."""
+    swarm = uavs(num_uavs)
     config = {
         "3D!markers": _three_d(),
         "Plot!rate": _plot("achieved rate [bit/s]",
-                           [(achieved_rate_path(k), uav_name(k)) for k in UAVS]),
+                           [(achieved_rate_path(k), uav_name(k)) for k in swarm]),
         "Plot!power": _plot("power applied [W]",
-                            [(power_path(k), uav_name(k)) for k in UAVS]),
+                            [(power_path(k), uav_name(k)) for k in swarm]),
         "Plot!position_error": _plot("position error [m] (planner)",
-                                     [(position_error_path(k), uav_name(k)) for k in UAVS]),
+                                     [(position_error_path(k), uav_name(k)) for k in swarm]),
         "DiagnosticSummary!all": {"minLevel": 0, "pinnedIds": [], "hardwareIdFilter": "",
                                   "topicToRender": DIAGNOSTICS, "sortByLevel": True},
         "DiagnosticStatusPanel!plan": {"topicToRender": DIAGNOSTICS,
@@ -110,9 +114,9 @@ def foxglove_layout() -> dict[str, Any]:
             "playbackConfig": {"speed": 1.0}, "layout": layout}
 
 
-def layout_json() -> str:
-    """`foxglove_layout()` as the text of SHIPPED."""
-    return json.dumps(foxglove_layout(), indent=2) + "\n"
+def layout_json(num_uavs: int = DEFAULT_NUM_UAVS) -> str:
+    """`foxglove_layout(num_uavs)` as a file's text (the default's is SHIPPED's)."""
+    return json.dumps(foxglove_layout(num_uavs), indent=2) + "\n"
 
 
 if __name__ == "__main__":

@@ -12,7 +12,7 @@ import numpy as np
 
 from uav_insar_planner.evaluate import rate_tolerance_bps
 from uav_insar_planner.plan import Plan
-from uav_insar_planner.swarm import UAV_NAMES, uav_name
+from uav_insar_planner.swarm import uav_index, uav_name
 
 # diagnostic_msgs/DiagnosticStatus levels.
 OK, WARN, ERROR, STALE = 0, 1, 2, 3
@@ -30,7 +30,7 @@ def bridge_status_name(k: int) -> str:
 def bridge_status_uav(name: str) -> int | None:
     """The UAV a `bridge_status_name` names; None for any other status."""
     rest = name[len(BRIDGE_STATUS_PREFIX):] if name.startswith(BRIDGE_STATUS_PREFIX) else ""
-    return UAV_NAMES.index(rest) if rest in UAV_NAMES else None
+    return uav_index(rest) if rest else None
 PLAN_STATUS_NAME = "planner: plan"
 POSITION_ERROR_KEY = "position_error_m"  # a uav_status value: |(x, z) - (x_k, z_k)| [m]
 
@@ -57,7 +57,7 @@ def fmt(value: float) -> str:
 
 
 def formation_points(plan: Plan) -> list[tuple[float, float, float]]:
-    """poses[k] = (x_k, y_start = 0, z_k) for k = 0 (master), 1, 2.
+    """poses[k] = (x_k, y_start = 0, z_k) for k = 0 (master), 1, .., num_uavs - 1.
 
     A UAV the scheme does not fly (single-baseline's U2) keeps NaN x and z, so poses[k]
     always means U_k.
@@ -66,7 +66,7 @@ def formation_points(plan: Plan) -> list[tuple[float, float, float]]:
 
 
 def power_rows(plan: Plan) -> tuple[int, int, list[float]]:
-    """(NUM_UAVS, N, P_com[k][n] row-major in watts) for a Float64MultiArray with dims
+    """(num_uavs, N, P_com[k][n] row-major in watts) for a Float64MultiArray with dims
     [uav, slot]."""
     p = np.asarray(plan.p_com_w, dtype=float)
     return int(p.shape[0]), int(p.shape[1]), [float(v) for v in p.ravel()]
@@ -91,7 +91,7 @@ def plan_status(plan: Plan) -> Status:
             (f"coherence.{name}", fmt(pair["coherence_total"])),
         ]
     for k, (x, _, z) in enumerate(formation_points(plan)):
-        values += [(f"x_m.{UAV_NAMES[k]}", fmt(x)), (f"z_m.{UAV_NAMES[k]}", fmt(z))]
+        values += [(f"x_m.{uav_name(k)}", fmt(x)), (f"z_m.{uav_name(k)}", fmt(z))]
     values += [
         ("solve_time_s", fmt(plan.solve_time_s)),
         ("iterations", str(plan.iterations)),

@@ -26,7 +26,8 @@ from uav_insar_planner.bag.reader import MissionRecord
 from uav_insar_planner.evaluate import evaluate, rate_tolerance_bps
 from uav_insar_planner.params import Params
 from uav_insar_planner.report.flown import summary
-from uav_insar_planner.swarm import NUM_UAVS, UAVS, uav_name
+from uav_insar_planner.swarm import count_problem, uav_name
+from uav_insar_planner.swarm import uavs as swarm_uavs
 
 
 class ReportError(ValueError):
@@ -59,7 +60,7 @@ class MissionFigures:
     budget_j: dict[int, float]
     tracks: dict[int, UavTrack]
     flown_xz: dict[int, tuple[float, float]]  # mean (x, z) on the track
-    planned_power_w: np.ndarray  # (NUM_UAVS, N)
+    planned_power_w: np.ndarray  # (num_uavs, N)
     sigma_h_plan_m: float
     sigma_h_recorded_m: float  # the planner's figure on /diagnostics (NaN if none)
     sigma_h_flown_m: float
@@ -77,12 +78,30 @@ def _track(poses: np.ndarray | None, offloads: np.ndarray | None,
 
 
 def flown_scenario(record: MissionRecord, p: Params) -> Params:
-    """`p` with num_slots set to the recorded plan's N (the demo's --num-slots), when they
-    differ: the plan's power rows say how many slots were flown."""
-    if record.power is not None and record.power.ndim == 2 and \
-            record.power.shape[1] != p.num_slots:
-        return p.replace(num_slots=int(record.power.shape[1]))
-    return p
+    """`p` with num_slots and num_uavs set to the recorded plan's N and number of UAVs when
+    they differ (the demo's --num-slots and --uavs): the plan's power says how many slots and
+    UAVs were flown. With another num_uavs, rate_min_mbps is R_min,k as the planner reported
+    it on /diagnostics (`planner: uavK`, rate_min_bps), else p's for the UAVs p has and its
+    last slave's for the others."""
+    if record.power is None or record.power.ndim != 2:
+        return p
+    changes: dict = {}
+    if record.power.shape[1] != p.num_slots:
+        changes["num_slots"] = int(record.power.shape[1])
+    n = int(record.power.shape[0])
+    if n != p.num_uavs and count_problem("uavs", n) is None:
+        mine = [r / 1e6 for r in p.rate_min_bps]
+        changes.update(num_uavs=n, rate_min_mbps=[_recorded_rate_min_mbps(
+            record, k, mine[min(k, len(mine) - 1)]) for k in swarm_uavs(n)])
+    return p.replace(**changes) if changes else p
+
+
+def _recorded_rate_min_mbps(record: MissionRecord, k: int, otherwise: float) -> float:
+    try:
+        value = float(record.uav_values.get(k, {}).get("rate_min_bps", "nan")) / 1e6
+    except ValueError:
+        return otherwise
+    return value if math.isfinite(value) and value >= 0.0 else otherwise
 
 
 def mission_figures(record: MissionRecord, p: Params) -> MissionFigures:
@@ -91,11 +110,13 @@ def mission_figures(record: MissionRecord, p: Params) -> MissionFigures:
         raise ReportError("the bag holds no formation and formation/power: was the planner "
                           "running while it recorded?")
     formation, power = record.formation, record.power
-    if formation.shape != (NUM_UAVS, 3) or power.shape[0] != NUM_UAVS:
-        raise ReportError(f"the recorded plan has {formation.shape[0]} UAVs and power rows "
-                          f"{power.shape}; expected {NUM_UAVS}")
+    n = formation.shape[0]
+    problem = count_problem("the recorded formation", n)
+    if problem or power.ndim != 2 or power.shape[0] != n or n != p.num_uavs:
+        raise ReportError(problem or f"the recorded plan has {n} poses and power rows "
+                          f"{power.shape}; expected {p.num_uavs} of each (num_uavs)")
     scheme = record.plan_values.get("scheme", p.scheme)
-    uavs = [k for k in UAVS if np.isfinite(formation[k]).all()]
+    uavs = [k for k in swarm_uavs(n) if np.isfinite(formation[k]).all()]
     targets = {k: tuple(float(v) for v in formation[k]) for k in uavs}
     offloads = {k: record.offloads.get(k, np.zeros((0, 5))) for k in uavs}
     tracks = {k: _track(record.poses.get(k), offloads[k], targets[k]) for k in uavs}

@@ -20,17 +20,24 @@ import numpy as np  # noqa: E402
 
 from uav_insar_planner.params import Params  # noqa: E402
 from uav_insar_planner.report.recorded import MissionFigures  # noqa: E402
+from uav_insar_planner.swarm import UAV_COLORS as COLORS  # noqa: E402
 from uav_insar_planner.swarm import uav_name  # noqa: E402
 
-COLORS = ("tab:red", "tab:blue", "tab:green")  # U0, U1, U2 as in plot-formation
 FILES = ("report_rate.png", "report_power.png", "report_energy.png", "report_error.png",
          "report_formation.png")
+PANELS_PER_ROW = 3
 
 
 def _panels(f: MissionFigures, title: str):
-    fig, axes = plt.subplots(1, len(f.uavs), figsize=(4 * len(f.uavs), 3.2), squeeze=False)
+    """A panel per flown UAV, at most PANELS_PER_ROW a row (a swarm of up to 6)."""
+    cols = min(len(f.uavs), PANELS_PER_ROW)
+    rows = -(-len(f.uavs) // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(4 * cols, 3.2 * rows), squeeze=False)
     fig.suptitle(title, fontsize=10)
-    return fig, dict(zip(f.uavs, axes[0], strict=True))
+    flat = list(axes.ravel())
+    for spare in flat[len(f.uavs):]:
+        spare.set_visible(False)
+    return fig, dict(zip(f.uavs, flat, strict=False))
 
 
 def _save(fig, path: Path) -> Path:

@@ -2,8 +2,9 @@
 over `uav_insar_planner.mavlink.bridge.Bridge`, which does all MAVLink work in its own thread.
 
 Parameters (param_specs.py BRIDGE_SPECS, all read-only: the links are opened once):
-  uav_id (-1: every UAV; 0..2: this UAV only, a stack per UAV, in namespace /uavK or the
-  swarm's; another UAV's namespace is refused), pass_start (auto|capture|planner),
+  uav_id (-1: every UAV of target_sysids, N entries for N UAVs; 0..5: this UAV only, a
+  stack per UAV, in namespace /uavK or the swarm's; another UAV's namespace is refused; a plan
+  with fewer UAVs holds it, one line), pass_start (auto|capture|planner),
   connections (string[]), target_sysids (int[]), source_sysid, track_bearing_deg,
   origin_ned_m (double[3], N E D), setpoint_rate_hz, velocity_feedforward, arm_and_takeoff,
   autopilot (ardupilot|px4), speed_mps, track_duration_s, capture_radius_m,
@@ -135,6 +136,15 @@ class MavlinkBridgeNode(Node):
         flown = sum(p is not None for p in poses)
         self.get_logger().info(f"formation received: {flown} UAV(s) with a target "
                                f"({power.plan_id})")
+        beyond = [k for k in self.bridge.uavs if k >= len(poses)]
+        if beyond:  # (clean_formation gives them no target: they hold)
+            self.get_logger().warning(
+                f"{power.plan_id} flies {len(poses)} UAVs (uav0..uav{len(poses) - 1}); "
+                f"{', '.join(uav_name(k) for k in beyond)} not in it: holding")
+        elif self.bridge.config.uav_id < 0 and len(self.bridge.uavs) < len(poses):
+            self.get_logger().warning(
+                f"{power.plan_id} flies {len(poses)} UAVs; this bridge has target_sysids for "
+                f"{len(self.bridge.uavs)} and flies only those")
 
     def _publish_poses(self) -> None:
         logger = self.get_logger()

@@ -27,7 +27,7 @@ from std_msgs.msg import Header
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.plan_msgs import PlanId
 from uav_insar_planner.ros.start_msgs import encode_start
-from uav_insar_planner.swarm import UAVS, uav_name
+from uav_insar_planner.swarm import uav_name
 
 CHECK_PERIOD_S = 0.1
 # Bridges publish a pose per LOCAL_POSITION_NED, ~10 Hz: older than this is a silent UAV.
@@ -66,10 +66,12 @@ class PassStart:
         self._y_start: float | None = None
         self._start_ns: int | None = None  # the published instant, while this pass lasts
         self._pub = node.create_publisher(Header, topics.FORMATION_START, topics.LATCHED)
-        for k in UAVS:
-            node.create_subscription(PoseStamped, topics.mavlink_pose(k),
-                                     lambda msg, k=k: self._on_pose(k, msg), topics.DEPTH)
         node.create_timer(CHECK_PERIOD_S, self._check)
+
+    def watch_uav(self, k: int) -> None:
+        """Subscribe vehicle k's uav{k}/mavlink/pose (the planner calls it for each UAV)."""
+        self._node.create_subscription(PoseStamped, topics.mavlink_pose(k),
+                                       lambda msg, k=k: self._on_pose(k, msg), topics.DEPTH)
 
     def on_plan(self, plan_id: PlanId, points: Sequence[Point]) -> None:
         """The planner published plan `plan_id` with start points `points` (NaN: not flown)."""

@@ -16,11 +16,12 @@ Validation (every decode; a bad message raises `PlanMessageError` naming topic, 
 cut short and what is allowed, and the caller drops it without any change of state):
   formation  each pose's x, y, z finite with |v| <= POSITION_BOUND_M (1e6 m, well inside
              float32, which MAVLink carries), or a UAV not flown: x and z both NaN (y, the
-             track start, may be finite or NaN); at least one pose, at most MAX_UAVS; the
-             quaternion is ignored;
-  power      exactly the three dimensions above (sizes >= 1, strides row-major, data_offset 0,
-             a parseable identity label), len(data) = K*N, every value finite, >= 0 and at
-             most FLOAT32_MAX W.
+             track start, may be finite or NaN); MIN_UAVS to MAX_UAVS poses (swarm.py: a
+             swarm of 2 to 6, one pose per UAV, NaN for a UAV not flown); the quaternion is
+             ignored;
+  power      exactly the three dimensions above (MIN_UAVS to MAX_UAVS rows, slots >= 1,
+             strides row-major, data_offset 0, a parseable identity label), len(data) = K*N,
+             every value finite, >= 0 and at most FLOAT32_MAX W.
 """
 from __future__ import annotations
 
@@ -37,11 +38,10 @@ from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 from uav_insar_planner.plan import Plan
 from uav_insar_planner.report import planner_messages as report
 from uav_insar_planner.ros import topics
-from uav_insar_planner.swarm import uav_name
+from uav_insar_planner.swarm import MAX_UAVS, MIN_UAVS, uav_name
 
 POSITION_BOUND_M = 1e6
 FLOAT32_MAX = 3.4e38
-MAX_UAVS = 16
 SHOWN_CHARS = 40
 _ID_LABEL = re.compile(r"^plan (/\S*) (\d{1,12})\.(\d{9})$")
 
@@ -127,9 +127,9 @@ def encode(plan: Plan, plan_id: PlanId) -> tuple[PoseArray, Float64MultiArray]:
 def decode_formation(msg: PoseArray) -> Formation:
     """Validated `formation`, or PlanMessageError."""
     poses = msg.poses
-    if not 1 <= len(poses) <= MAX_UAVS:
+    if not MIN_UAVS <= len(poses) <= MAX_UAVS:
         raise PlanMessageError(topics.FORMATION, "poses", f"{len(poses)} poses",
-                               f"1 to {MAX_UAVS} poses")
+                               f"{MIN_UAVS} to {MAX_UAVS} poses, one per UAV")
     points: list[tuple[float, float, float] | None] = []
     for k, pose in enumerate(poses):
         p = pose.position
@@ -170,9 +170,9 @@ def decode_power(msg: Float64MultiArray) -> PowerSchedule:
     if (uav.label, slot.label) != ("uav", "slot"):
         raise bad("layout.dim labels", [uav.label, slot.label], "['uav', 'slot']")
     rows, cols = int(uav.size), int(slot.size)
-    if not 1 <= rows <= MAX_UAVS or cols < 1 or ident.size != 1:
+    if not MIN_UAVS <= rows <= MAX_UAVS or cols < 1 or ident.size != 1:
         raise bad("layout.dim sizes", [rows, cols, int(ident.size)],
-                  f"[1..{MAX_UAVS}, >= 1, 1]")
+                  f"[{MIN_UAVS}..{MAX_UAVS} UAVs, >= 1 slots, 1]")
     if (uav.stride, slot.stride, ident.stride) != (rows * cols, cols, 1):
         raise bad("layout.dim strides", [uav.stride, slot.stride, ident.stride],
                   f"row-major [{rows * cols}, {cols}, 1]")

@@ -25,7 +25,6 @@ from uav_insar_planner.report import planner_messages as report
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.plan_gate import publisher_names
 from uav_insar_planner.ros.plan_msgs import PlanId
-from uav_insar_planner.swarm import UAVS
 
 PUBLISHERS_STATUS_NAME = "planner: formation publishers"
 
@@ -38,10 +37,13 @@ class PlanWatch:
         self._topic = node.resolve_topic_name(topics.FORMATION)
         self._me = node.get_fully_qualified_name()
         self._others: list[str] = []
-        self.flown: dict[int, str | None] = dict.fromkeys(UAVS)
-        for k in UAVS:
-            node.create_subscription(String, topics.flown_plan(k),
-                                     lambda msg, k=k: self._on_flown(k, msg), topics.LATCHED)
+        self.flown: dict[int, str | None] = {}
+
+    def watch_uav(self, k: int) -> None:
+        """Subscribe agent k's uav{k}/plan (the planner calls it for each UAV it watches)."""
+        self.flown.setdefault(k, None)
+        self._node.create_subscription(String, topics.flown_plan(k),
+                                       lambda msg, k=k: self._on_flown(k, msg), topics.LATCHED)
 
     def _on_flown(self, k: int, msg: String) -> None:
         self.flown[k] = msg.data
@@ -60,12 +62,13 @@ class PlanWatch:
         out = [self._publishers_status()]
         own = plan_id.label if plan_id is not None else None
         flown_by_plan = set(plan.active_uavs) if plan is not None else set()
-        watched = sorted(flown_by_plan | {k for k, f in self.flown.items() if f})
+        watched = sorted(k for k in flown_by_plan | {k for k, f in self.flown.items() if f}
+                         if k < min(len(rate_min_bps), len(reports)))  # the scenario's UAVs
         for k in watched:
             target = (tuple(float(v) for v in plan.formation[k]) if k in flown_by_plan
                       else (math.nan, math.nan))
             status = report.uav_status(k, target, rate_min_bps, reports[k])
-            flown = self.flown[k]
+            flown = self.flown.get(k)
             status.values += [("plan_flown", flown or ""), ("plan_published", own or "")]
             if flown and flown != own:
                 mine = f"this planner's is {own}" if own else "this planner has none"

@@ -6,8 +6,10 @@ logs one line per problem and exits with code 2; a run-time set is validated in 
 callback (refused with the same lines, nothing changes) and solved after it took effect.
 
 Publishes (names relative to the node's namespace, except /diagnostics):
-  formation         geometry_msgs/PoseArray, reliable + transient_local, depth 1
-  formation/power   std_msgs/Float64MultiArray, reliable + transient_local, depth 1; both
+  formation         geometry_msgs/PoseArray, reliable + transient_local, depth 1: one pose
+                    per UAV of the plan (num_uavs, 2..6; NaN for a UAV not flown)
+  formation/power   std_msgs/Float64MultiArray, reliable + transient_local, depth 1, one row
+                    of P_com per UAV of the plan; both
                     carry the plan's identity (ros/plan_msgs.py)
   formation/markers        visualization_msgs/MarkerArray, latched: the plan (ros/markers.py)
   formation/markers/flown  visualization_msgs/MarkerArray: the agents' positions and paths
@@ -18,7 +20,8 @@ Publishes (names relative to the node's namespace, except /diagnostics):
                     ros/swarm_watch.py) and, once a second, each UAV's rate margin, position
                     error and the plan it flies (WARN when it misses R_min or flies another
                     plan), with or without a plan of this planner's
-Subscribes uav{K}/pose (PoseStamped), uav{K}/achieved_rate (Float64, bit/s), uav{K}/plan; the
+Subscribes, for K = 0..num_uavs-1 of the scenario (more when a larger num_uavs is set),
+uav{K}/pose (PoseStamped), uav{K}/achieved_rate (Float64, bit/s), uav{K}/plan; the
 swarm watch (swarm_watch.py: lost UAVs, saturated closed loops, the re-plans they call for)
 also uav{K}/offload and /diagnostics; the pass start (pass_start.py) uav{K}/mavlink/pose, and
 publishes formation/start (std_msgs/Header, latched: the wall-clock start of the pass and the
@@ -71,7 +74,6 @@ from uav_insar_planner.ros.run import run_node
 from uav_insar_planner.ros.solve_worker import SolveWorker
 from uav_insar_planner.ros.swarm_watch import SwarmWatch
 from uav_insar_planner.solver import solve
-from uav_insar_planner.swarm import UAVS
 
 DIAGNOSTICS_PERIOD_S = 1.0
 
@@ -95,7 +97,8 @@ class PlannerNode(Node):
         self._plan: Plan | None = None  # the last published (feasible) plan
         self._plan_status: report.Status | None = None
         self._scenario: Params = params
-        self._reports = [report.UavReport() for _ in UAVS]
+        self._watched = 0  # UAVs 0.._watched - 1 have their per-UAV subscriptions
+        self._reports: list[report.UavReport] = []
 
         self._formation_pub = self.create_publisher(PoseArray, topics.FORMATION,
                                                     topics.LATCHED)
@@ -106,11 +109,6 @@ class PlannerNode(Node):
         self._plans = PlanWatch(self)  # other planners, the plan each agent flies
         self._markers = PlannerMarkers(self)
         self._heartbeat = GcsHeartbeat(self)
-        for k in UAVS:
-            self.create_subscription(PoseStamped, topics.pose(k),
-                                     lambda msg, k=k: self._on_pose(k, msg), topics.DEPTH)
-            self.create_subscription(Float64, topics.achieved_rate(k),
-                                     lambda msg, k=k: self._on_rate(k, msg), topics.RATE_DEPTH)
         self.create_service(Trigger, topics.REPLAN, self._on_replan)
         self._pending: tuple[Params, str] | None = None
         guard_sets(self)
@@ -120,7 +118,30 @@ class PlannerNode(Node):
         self._worker = SolveWorker(solve, self._on_solved)
         self._swarm = SwarmWatch(self, params)
         self._pass_start = PassStart(self, self._swarm.lost_uavs)
+        self._watch_uavs(params.num_uavs)
         self._worker.request(params, "start")
+
+    def _watch_uavs(self, n: int) -> None:
+        """Subscribe the per-UAV topics of UAVs 0..n-1 not yet watched: the scenario's
+        num_uavs at start, more when a larger num_uavs is set at run time. A smaller one keeps
+        the others subscribed (rclpy cannot take a subscription back from a callback safely);
+        what they say beyond the scenario's UAVs is not reported."""
+        for k in range(self._watched, n):
+            self.create_subscription(PoseStamped, topics.pose(k),
+                                     lambda msg, k=k: self._on_pose(k, msg), topics.DEPTH)
+            self.create_subscription(Float64, topics.achieved_rate(k),
+                                     lambda msg, k=k: self._on_rate(k, msg), topics.RATE_DEPTH)
+            self._plans.watch_uav(k)
+            self._swarm.watch_uav(k)
+            self._pass_start.watch_uav(k)
+        with self._state_lock:
+            self._watched = max(self._watched, n)
+            self._reports += [report.UavReport()
+                              for _ in range(self._watched - len(self._reports))]
+
+    def _fresh_reports(self) -> list[report.UavReport]:
+        """What was heard since the plan: nothing yet (call with the state lock held)."""
+        return [report.UavReport() for _ in range(self._watched)]
 
     def stop(self) -> None:
         """Stop the solve worker (call before destroy_node)."""
@@ -153,6 +174,7 @@ class PlannerNode(Node):
             if pending is not None:
                 self._scenario = pending[0]
         if pending is not None:
+            self._watch_uavs(pending[0].num_uavs)
             self.get_logger().info(f"parameters set: {pending[1]}; solving again")
             self._worker.request(pending[0], "parameters set: " + pending[1])
 
@@ -184,10 +206,10 @@ class PlannerNode(Node):
             self._plan_status = status
             if plan is not None and plan.feasible:
                 self._plan = plan
-                self._reports = [report.UavReport() for _ in UAVS]
+                self._reports = self._fresh_reports()
         if plan is not None and plan.feasible:
             # With a UAV lost, the full plan is not flown: the swarm watch re-plans it (or
-            # re-publishes the hold) at once, so a three-UAV plan never reaches the agents.
+            # re-publishes the hold) at once, so a full-swarm plan never reaches the agents.
             if not self._swarm.has_lost():
                 self._publish_plan(plan)
             self._swarm.on_plan(plan, params)
@@ -199,7 +221,7 @@ class PlannerNode(Node):
         with self._state_lock:
             self._plan_status = status
             self._plan = plan
-            self._reports = [report.UavReport() for _ in UAVS]
+            self._reports = self._fresh_reports()
         self._publish_plan(plan)
         self._publish_diagnostics()
 
@@ -257,13 +279,16 @@ class PlannerNode(Node):
     def _on_pose(self, k: int, msg) -> None:
         p = msg.pose.position
         with self._state_lock:
-            self._reports[k].position = (p.x, p.y, p.z)
+            if k < len(self._reports):
+                self._reports[k].position = (p.x, p.y, p.z)
         self._swarm.on_pose(k, msg)
         self._markers.on_pose(k, msg)
 
     def _on_rate(self, k: int, msg) -> None:
         with self._state_lock:
-            self._reports[k].record_rate(msg.data, self._scenario.rate_min_bps[k])
+            rate_min = self._scenario.rate_min_bps
+            if k < min(len(rate_min), len(self._reports)):  # a UAV of the scenario
+                self._reports[k].record_rate(msg.data, rate_min[k])
         self._swarm.on_rate(k, msg)
 
 

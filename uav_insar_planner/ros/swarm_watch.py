@@ -6,15 +6,15 @@ Created by the planner node, which feeds it uavK/pose and uavK/achieved_rate (`o
 /diagnostics (the MAVLink bridge's `mavlink_bridge: uavK` statuses with link `lost`) itself,
 and checks the swarm every CHECK_PERIOD_S against the planner parameter `uav_timeout_s`.
 
-- Lost slave, the plan flew it and one slave survives: the single-baseline problem of
-  `replan.remaining_problem` is solved (on a worker thread) from the slot the swarm reached
-  with the energy left; the plan is published on formation / formation/power (the lost UAV
-  NaN, its power row zero) with the plan status `uavK lost at slot n (why); re-planned from
-  slot n without uavK: ...`; WARN instead of OK when a new target lies within
-  plan.SAFE_SEPARATION_M (across-track) of where the lost UAV was last heard (the solver knows
-  nothing of it, and a UAV that is only silent may still be there). An infeasible reduced
-  problem is reported (ERROR) and not published: the survivors fly on with the plan they
-  have.
+- Lost slave, the plan flew it and at least one slave survives: the (N-1)-UAV problem of
+  `replan.remaining_problem` (single-baseline when one slave is left) is solved (on a worker
+  thread) from the slot the swarm reached with the energy left; the plan is published on
+  formation / formation/power (the lost UAV NaN, its power row zero) with the plan status
+  `uavK lost at slot n (why); re-planned from slot n without uavK: ...`; WARN instead of OK
+  when a new target lies within plan.SAFE_SEPARATION_M (across-track) of where the lost UAV
+  was last heard (the solver knows nothing of it, and a UAV that is only silent may still be
+  there). An infeasible reduced problem is reported (ERROR) and not published: the survivors
+  fly on with the plan they have.
 - Lost master (or no slave left): nothing can be measured any more; the plan status is ERROR
   `mission cannot continue: master uav0 lost at slot n (why)` and the hold plan
   (`replan.hold_plan`: every pose NaN, every power zero) is published: agents hold where
@@ -42,7 +42,7 @@ from uav_insar_planner.plan import SAFE_SEPARATION_M, Plan
 from uav_insar_planner.report import planner_messages as report
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.solve_worker import SolveWorker
-from uav_insar_planner.swarm import MASTER, UAV_NAMES, UAVS
+from uav_insar_planner.swarm import MASTER, uav_name
 from uav_insar_planner.swarm_health import Lost, Saturated, SwarmMonitor
 
 CHECK_PERIOD_S = 0.1
@@ -71,10 +71,6 @@ class SwarmWatch:
         self.monitor = SwarmMonitor(params)
         self._ended: str | None = None  # why the mission cannot continue
         self._warnings: list[str] = []
-        for k in UAVS:
-            node.create_subscription(Float64MultiArray, topics.offload(k),
-                                     lambda msg, k=k: self._on_offload(k, msg),
-                                     topics.RATE_DEPTH)
         node.create_subscription(DiagnosticArray, topics.DIAGNOSTICS, self._on_diagnostics,
                                  topics.RATE_DEPTH)
         node.create_timer(CHECK_PERIOD_S, self._check)
@@ -82,6 +78,15 @@ class SwarmWatch:
 
     def stop(self) -> None:
         self._worker.stop()
+
+    def watch_uav(self, k: int) -> None:
+        """Watch UAV k too: its uav{k}/offload and a place in the monitor (the planner calls
+        it for each UAV of the scenario, and for more when num_uavs grows)."""
+        with self._lock:
+            self.monitor.watch(k + 1)
+        self._node.create_subscription(Float64MultiArray, topics.offload(k),
+                                       lambda msg, k=k: self._on_offload(k, msg),
+                                       topics.RATE_DEPTH)
 
     @property
     def failure(self) -> str | None:
@@ -111,7 +116,7 @@ class SwarmWatch:
             if k is None:
                 continue
             values = {kv.key: kv.value for kv in s.values}
-            if values.get("link") == "lost":
+            if values.get("link") == "lost" and k < len(self.monitor.uavs):
                 with self._lock:
                     lost = self.monitor.bridge_lost(k, time.monotonic(), s.message)
                 if lost is not None:
@@ -148,13 +153,13 @@ class SwarmWatch:
             self._react(item)
         for item in back:
             self._node.get_logger().warning(
-                f"{UAV_NAMES[item.uav]} heard again after it was lost at slot {item.slot}: "
+                f"{uav_name(item.uav)} heard again after it was lost at slot {item.slot}: "
                 "not taken back into the plan (lost is final for the mission)")
         for event in saturated:
             self._power_replan(event)
 
     def _react(self, lost: Lost, again: bool = False) -> None:
-        name = UAV_NAMES[lost.uav]
+        name = uav_name(lost.uav)
         log = self._node.get_logger()
         with self._lock:
             plan, params = self._plan, self._params
@@ -180,7 +185,7 @@ class SwarmWatch:
         with self._lock:
             self._ended = why
         status = report.Status(report.ERROR, report.PLAN_STATUS_NAME, why,
-                               [("lost_uav", UAV_NAMES[lost.uav]), ("lost_at_slot",
+                               [("lost_uav", uav_name(lost.uav)), ("lost_at_slot",
                                                                     str(lost.slot))])
         self._node.get_logger().error(why)
         self._node.publish_replan(replan.hold_plan(params, why), status)
@@ -194,7 +199,7 @@ class SwarmWatch:
     def _on_solved(self, request: LostSlaveReplan, plan: Plan | None, error: str | None,
                    reason: str) -> None:
         lost, log = request.lost, self._node.get_logger()
-        head = f"{UAV_NAMES[lost.uav]} lost at slot {lost.slot} ({lost.why})"
+        head = f"{uav_name(lost.uav)} lost at slot {lost.slot} ({lost.why})"
         if plan is None or not plan.feasible:
             why = error or (report.plan_status(plan).message if plan else "no plan")
             status = report.Status(report.ERROR, report.PLAN_STATUS_NAME,
@@ -211,7 +216,7 @@ class SwarmWatch:
         if near:
             status.level = report.WARN
             status.message += "; " + near
-        status.values += [("lost_uav", UAV_NAMES[lost.uav]), ("lost_at_slot", str(lost.slot)),
+        status.values += [("lost_uav", uav_name(lost.uav)), ("lost_at_slot", str(lost.slot)),
                           ("replan_latency_s", report.fmt(latency))]
         with self._lock:
             self._plan = plan
@@ -228,14 +233,14 @@ class SwarmWatch:
         close = [(k, math.hypot(plan.formation[k][0] - last[0], plan.formation[k][1] - last[2]))
                  for k in plan.active_uavs]
         close = [(k, d) for k, d in close if d < SAFE_SEPARATION_M]
-        return "; ".join(f"{UAV_NAMES[k]}'s new target is {d:.2f} m across-track from where "
-                         f"{UAV_NAMES[lost]} was last heard (it may still be there)"
+        return "; ".join(f"{uav_name(k)}'s new target is {d:.2f} m across-track from where "
+                         f"{uav_name(lost)} was last heard (it may still be there)"
                          for k, d in close)
 
     def _power_replan(self, event: Saturated) -> None:
         with self._lock:
             plan, params = self._plan, self._params
-        name = UAV_NAMES[event.uav]
+        name = uav_name(event.uav)
         cause = "at P_max" if event.at_p_max else "short of energy"
         warning = (f"{name} closed loop saturated: R_min missed {len(event.slots)} slots in a "
                    f"row (slots {event.slots[0]}-{event.slots[-1]}) {cause}")
@@ -262,11 +267,11 @@ class SwarmWatch:
         now = time.monotonic()
         with self._lock:
             m = self.monitor
-            values = [(UAV_NAMES[k], m.describe(k, now)) for k in range(len(m.uavs))]
+            values = [(uav_name(k), m.describe(k, now)) for k in range(len(m.uavs))]
             values.append(("next_slot", str(m.next_slot())))
-            lost = [f"{UAV_NAMES[k]} lost at slot {item.slot}" for k, item in
+            lost = [f"{uav_name(k)} lost at slot {item.slot}" for k, item in
                     sorted(m.lost.items())]
-            heard = [UAV_NAMES[k] for k, u in enumerate(m.uavs)
+            heard = [uav_name(k) for k, u in enumerate(m.uavs)
                      if u.last_heard is not None and k not in m.lost]
             ended, warnings = self._ended, list(self._warnings[-3:])
         values.append(("uav_timeout_s", report.fmt(

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from uav_insar_planner.param_specs import GCS_HEARTBEAT_PERIOD_S
-from uav_insar_planner.swarm import UAVS, uav_name
+from uav_insar_planner.swarm import uav_index, uav_name
 
 FRAME_ID = "insar_track"
 FORMATION = "formation"
@@ -113,8 +113,9 @@ class TopicSpec:
         """The publishers' QoS profile (None for a service)."""
         return QOS_PROFILES[self.qos] if self.qos else None
 
-    def names(self, uavs: Iterable[int] = UAVS) -> tuple[str, ...]:
-        """The names as created: one per UAV of `uavs` for a per-UAV topic."""
+    def names(self, uavs: Iterable[int]) -> tuple[str, ...]:
+        """The names as created: one per UAV of `uavs` (e.g. swarm.uavs(params.num_uavs))
+        for a per-UAV topic."""
         return tuple(self.name.format(k=k) for k in uavs) if self.per_uav else (self.name,)
 
 
@@ -179,8 +180,7 @@ def swarm_namespace(node_namespace: str, k: int | None) -> str:
     parent, _, last = ns.rpartition("/")
     if k is not None and last == uav_name(k):
         return parent or "/"
-    names = {uav_name(j) for j in UAVS}
-    if last in names:
+    if uav_index(last) is not None:  # any swarm's uav0..uav5
         raise ValueError(f"namespace: {ns!r} is another UAV's; expected {uav_name(k)!r} "
                          f"(its own) or the swarm's namespace" if k is not None else
                          f"namespace: {ns!r} is one UAV's; expected the swarm's namespace "

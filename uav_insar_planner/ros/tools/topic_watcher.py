@@ -28,7 +28,7 @@ from std_msgs.msg import Float64, Float64MultiArray, String
 from uav_insar_planner.report.planner_messages import PLAN_STATUS_NAME
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.plan_msgs import PlanMessageError, decode_formation, decode_power
-from uav_insar_planner.swarm import UAVS
+from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, uavs
 
 SPIN_STEP_S = 0.05
 
@@ -37,20 +37,22 @@ class TopicWatcher:
     """See the module docstring. `node` is the rclpy node, for extra subscriptions or clients."""
 
     def __init__(self, context: Context | None = None, name: str = "watcher",
-                 on_mavlink_pose: Callable[[int, Any], None] | None = None) -> None:
+                 on_mavlink_pose: Callable[[int, Any], None] | None = None,
+                 num_uavs: int = DEFAULT_NUM_UAVS) -> None:
         self._own_context = context is None
         if context is None:
             context = Context()
             rclpy.init(args=[name], context=context)
         self.node = Node(name, context=context)
+        self.uavs = uavs(num_uavs)  # the per-UAV topics watched: uav0..uav(num_uavs-1)
         self.formations: list[Any] = []
         self.powers: list[Any] = []
         self.diagnostics: list[Any] = []
-        self.rates: dict[int, list[float]] = {k: [] for k in UAVS}
-        self.poses: dict[int, list[Any]] = {k: [] for k in UAVS}
-        self.mavlink_poses: dict[int, list[Any]] = {k: [] for k in UAVS}
-        self.offloads: dict[int, list[list[float]]] = {k: [] for k in UAVS}
-        self.flown_plans: dict[int, list[str]] = {k: [] for k in UAVS}
+        self.rates: dict[int, list[float]] = {k: [] for k in self.uavs}
+        self.poses: dict[int, list[Any]] = {k: [] for k in self.uavs}
+        self.mavlink_poses: dict[int, list[Any]] = {k: [] for k in self.uavs}
+        self.offloads: dict[int, list[list[float]]] = {k: [] for k in self.uavs}
+        self.flown_plans: dict[int, list[str]] = {k: [] for k in self.uavs}
         self._on_mavlink_pose = on_mavlink_pose
         n = self.node
         n.create_subscription(PoseArray, "/" + topics.FORMATION, self.formations.append,
@@ -59,7 +61,7 @@ class TopicWatcher:
                               topics.LATCHED)
         n.create_subscription(DiagnosticArray, topics.DIAGNOSTICS, self.diagnostics.append,
                               topics.RATE_DEPTH)
-        for k in UAVS:
+        for k in self.uavs:
             n.create_subscription(Float64, "/" + topics.achieved_rate(k),
                                   lambda m, k=k: self.rates[k].append(m.data),
                                   topics.RATE_DEPTH)
@@ -120,7 +122,7 @@ class TopicWatcher:
         """True once every agent's achieved_rate publisher has been discovered: a new process
         can take a discovery announcement period (~3 s) to be seen, and rates sent before
         that are lost (volatile), so wait for this before a plan starts their slots."""
-        return all(self.node.count_publishers("/" + topics.achieved_rate(k)) for k in UAVS)
+        return all(self.node.count_publishers("/" + topics.achieved_rate(k)) for k in self.uavs)
 
     def plan_ids(self) -> tuple[list[Any], list[Any]]:
         """(formation stamps (sec, nanosec), power PlanIds) in arrival order; an entry that
