@@ -154,9 +154,8 @@ def test_cli_plans_simulates_and_plots(tmp_path):
 
 
 def test_cli_prints_the_table_for_four_slaves():
-    # until the global solver searches K slaves
     proc = run("montecarlo", "--set", "num_uavs=5", "--set", "rate_min_mbps=[10,16.95,1,1,1]",
-               "--set", "solver=paper-ao", "--samples", "5000")
+               "--samples", "5000")
     assert proc.returncode == 0, proc.stderr
     assert "U0-4" in proc.stdout and "resolved across the 4 pairs" in proc.stdout
 

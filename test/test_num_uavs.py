@@ -2,9 +2,6 @@
 planner's topics, an agent beyond the plan, a slave lost in a five-UAV mission (real planner
 and agent processes on a private domain), the demo with five vehicles flown over MAVLink by
 the bridge and recorded, and the report of that bag.
-
-Five UAVs run on the paper's AO: `solver=global` refuses more than two slaves
-# until the global solver searches K slaves (then drop the -p solver:=paper-ao below).
 """
 from __future__ import annotations
 
@@ -28,13 +25,11 @@ REPO = Path(__file__).resolve().parents[1]
 CONFIG = str(REPO / "config" / "params.yaml")
 # R_min,k of Table I, the last slave's for the slaves beyond U2 (as the demo's --uavs fits it)
 RATE_MIN = {2: "[10.0, 16.95]", 5: "[10.0, 16.95, 1.0, 1.0, 1.0]"}
-# until the global solver searches K slaves
-SOLVER = {2: [], 5: ["-p", "solver:=paper-ao"]}
 
 
 def scenario(n: int, slots: int) -> list[str]:
     return ["--params-file", CONFIG, "-p", f"num_slots:={slots}", "-p", f"num_uavs:={n}",
-            "-p", f"rate_min_mbps:={RATE_MIN[n]}", *SOLVER[n]]
+            "-p", f"rate_min_mbps:={RATE_MIN[n]}"]
 
 
 def formation_of(count: int) -> PoseArray:
@@ -151,7 +146,7 @@ def test_demo_flies_five_vehicles_and_the_report_follows_the_bag(ros_domain, tmp
     `uav-insar report` of the bag has five UAVs in its table and a five-UAV layout."""
     bag = tmp_path / "five"
     code, out = _run_group([sys.executable, "-m", "uav_insar_planner.demo", "--uavs", "5",
-                            "--num-slots", "6", "-p", "solver:=paper-ao", "--bag", str(bag),
+                            "--num-slots", "6", "--bag", str(bag),
                             "--domain-id", str(ros_domain)], 200.0)
     assert code == 0, out[-4000:]
     assert "5 UAVs, 6 slots" in out and "MAVLink vehicles sysid 2..6" in out
