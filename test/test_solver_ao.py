@@ -130,15 +130,17 @@ def test_c6_range_limits_are_tight():
     assert math.isclose(r0_max, r0, rel_tol=1e-7)
 
 
-def test_the_h_amb_ladder_is_a_per_slave_c8_the_checker_accepts():
+def test_the_h_amb_ratio_is_a_per_slave_c8_the_checker_accepts():
     from uav_insar_planner.solver.ao.algorithm2 import solve_ao
 
     p = default_params().replace(num_uavs=4, rate_min_mbps=[10, 16.95, 1, 1])
-    plain, ladder = (solve_ao(p, "proposed", "exact", rho) for rho in (1.0, 1.5))
-    ev = evaluate(p, ladder.formation, ladder.p_com, "proposed")
+    plain, ladder = (solve_ao(p.replace(h_amb_ratio=rho), "proposed", "exact")
+                     for rho in (1.0, 1.5))
+    q = p.replace(h_amb_ratio=1.5)
+    ev = evaluate(q, ladder.formation, ladder.p_com, "proposed")
     assert ladder.feasible and ev.feasible, ev.violated
     h = [ev.metrics["pairs"][f"uav{k}"]["h_amb_m"] for k in (1, 2, 3)]
     assert h == pytest.approx([1.2, 1.8, 2.7], rel=1e-5)  # every rung binds
     assert ev.sigma_h > evaluate(p, plain.formation, plain.p_com, "proposed").sigma_h
-    with pytest.raises(ValueError, match="ratio"):
-        solve_ao(p, "proposed", "exact", 0.5)
+    # the plain plan's equal h_amb break the ladder's upper rungs
+    assert evaluate(q, plain.formation, plain.p_com, "proposed").violated == ["C8"]

@@ -33,6 +33,11 @@ def with_slaves(p, k_slaves, rate_bps=1e6):
     return dataclasses.replace(p, rate_min_bps=rates, **size)
 
 
+def rung(p, k):
+    """Slave k's C8 limit h_amb_min rho^(k-1) (h_amb_ratio's ladder; rho = 1 the paper's)."""
+    return p.h_amb_min * p.h_amb_ratio ** (k - 1)
+
+
 def flown(p, scheme):
     return (0, 1) if scheme == "single-baseline" else tuple(range(len(p.rate_min_bps)))
 
@@ -100,7 +105,8 @@ def violations(p, q, p_com, scheme):
         if model.coherence_baseline(model.chi(p.theta0, th), bp) < p.coherence_rg_min - TOL:
             bad.append(f"C7 {k}")
         b = model.perpendicular_baseline(q[0, 0], q[0, 1], q[k, 0], q[k, 1], p.theta0)
-        if p.wavelength * r0 * math.sin(p.theta0) < p.h_amb_min * b * (1 - TOL):
+        # C8 against slave k's own rung (h_amb_ratio's ladder), written here from its definition
+        if p.wavelength * r0 * math.sin(p.theta0) < rung(p, k) * b * (1 - TOL):
             bad.append(f"C8 {k}")
     bad += [f"C4 {i}{j}" for i in uavs for j in uavs
             if i < j and math.dist(q[i], q[j]) < p.d_min - POS_TOL]
@@ -222,7 +228,7 @@ def _g(p, q, scheme):
                     model.coherence_snr(model.snr_monostatic(r0, gm),
                                         model.snr_bistatic(r0, r, gm)) - p.coherence_snr_min,
                     model.coherence_baseline(model.chi(p.theta0, th), bp) - p.coherence_rg_min,
-                    p.wavelength * r0 * math.sin(p.theta0) - p.h_amb_min
+                    p.wavelength * r0 * math.sin(p.theta0) - rung(p, k)
                     * model.perpendicular_baseline(q[0, 0], q[0, 1], q[k, 0], q[k, 1],
                                                    p.theta0)]
     out += [float(np.sum((q[i] - q[j]) ** 2)) - p.d_min**2
@@ -279,13 +285,15 @@ def _starts(p, scheme, q_opt, rng, perturbed, random):
     return out
 
 
-@pytest.mark.parametrize("k_slaves,scheme,d_min", [
-    (1, "proposed", None), (2, "proposed", None), (3, "proposed", None),
-    (3, "static-power", None), (4, "proposed", None),
+@pytest.mark.parametrize("k_slaves,scheme,d_min,ratio", [
+    (1, "proposed", None, 1.0), (2, "proposed", None, 1.0), (3, "proposed", None, 1.0),
+    (3, "static-power", None, 1.0), (4, "proposed", None, 1.0),
     # d_min comparable with the rays' spacing: C4 couples slaves that are not angle neighbours
-    (3, "proposed", 12.0), (4, "proposed", 6.0)])
-def test_agrees_with_cartesian_multistart(k_slaves, scheme, d_min):
-    p = with_slaves(default_params(), k_slaves)
+    (3, "proposed", 12.0, 1.0), (4, "proposed", 6.0, 1.0),
+    # a C8 ladder: per-slave caps in every bound, no symmetry cut between different rungs
+    (2, "proposed", None, 1.5), (4, "proposed", None, 1.25), (3, "proposed", 12.0, 1.25)])
+def test_agrees_with_cartesian_multistart(k_slaves, scheme, d_min, ratio):
+    p = dataclasses.replace(with_slaves(default_params(), k_slaves), h_amb_ratio=ratio)
     if d_min is not None:
         p = dataclasses.replace(p, d_min=d_min)
     res = solve_global(p, scheme, "exact")

@@ -118,8 +118,10 @@ def evaluate(p: Params, formation: np.ndarray, p_com: np.ndarray, scheme: str) -
                       for k in slaves}, 1.0)
     c["C7"] = status({f"gamma_rg{k}": pairs[k]["coherence_baseline"] - p.coherence_rg_min
                       for k in slaves}, 1.0)
-    c["C8"] = status({f"h_amb{k}": pairs[k]["h_amb_m"] - p.h_amb_min for k in slaves},
-                     p.h_amb_min)
+    # C8 per slave against its own rung (h_amb_ratio's ladder; all equal at ratio 1)
+    # (tolerance scaled by the lowest rung, h_amb^min: the strictest for every slave)
+    c["C8"] = status({f"h_amb{k}": pairs[k]["h_amb_m"] - model.h_amb_min_of(p, k)
+                      for k in slaves}, p.h_amb_min)
     c["C9"] = status({f"P{k}": float(min(power[k].min(), p.p_max_w - power[k].max()))
                       for k in uavs}, max(p.p_max_w, 1e-9))
     c["C10"] = status({f"R{k}": float((rates[k] - p.rate_min_bps[k]).min()) for k in uavs},

@@ -145,19 +145,27 @@ def height_of_ambiguity(wavelength: float, r0: ArrayLike, theta0: float,
         return wavelength * np.asarray(r0) * np.sin(theta0) / np.asarray(b_perp)
 
 
-def baseline_max(p: Params, r0: ArrayLike) -> ArrayLike:
-    """C8 as a baseline limit: h_amb,k >= h_amb^min with h_amb,k = lambda r_0 sin(theta_0) /
-    b_perp,k (eq. 12) is b_perp,k <= b_max(r_0) = lambda r_0 sin(theta_0) / h_amb^min.
+def h_amb_min_of(p: Params, k: int = 1) -> float:
+    """C8's limit for slave k (1..K): h_amb,k^min = h_amb^min rho^(k-1), rho = h_amb_ratio.
+    rho = 1 is the paper's common limit; rho > 1 a ladder of diverse heights of ambiguity,
+    which lets the pairs resolve each other's phase ambiguities. The one home of the rung."""
+    return p.h_amb_min * p.h_amb_ratio ** (k - 1)
+
+
+def baseline_max(p: Params, r0: ArrayLike, k: int = 1) -> ArrayLike:
+    """C8 as a baseline limit for slave k: h_amb,k >= h_amb,k^min with h_amb,k = lambda r_0
+    sin(theta_0) / b_perp,k (eq. 12) is b_perp,k <= b_max,k(r_0) = lambda r_0 sin(theta_0) /
+    h_amb,k^min (`h_amb_min_of`).
 
     Linear in r_0 (at r_0 = 1 it is the limit per metre of master range). Every back end's
     C8 asks here; `master_range_min_c8` is its inverse."""
-    return p.wavelength * r0 * math.sin(p.theta0) / p.h_amb_min
+    return p.wavelength * r0 * math.sin(p.theta0) / h_amb_min_of(p, k)
 
 
-def master_range_min_c8(p: Params, b_perp: ArrayLike) -> ArrayLike:
-    """C8 as a master-range limit, the inverse of `baseline_max`: the least r_0 with
-    b_max(r_0) >= b_perp, r_0 >= h_amb^min b_perp / (lambda sin(theta_0))  (eq. 12)."""
-    return p.h_amb_min * b_perp / (p.wavelength * math.sin(p.theta0))
+def master_range_min_c8(p: Params, b_perp: ArrayLike, k: int = 1) -> ArrayLike:
+    """C8 as a master-range limit for slave k, the inverse of `baseline_max`: the least r_0
+    with b_max,k(r_0) >= b_perp, r_0 >= h_amb,k^min b_perp / (lambda sin(theta_0)) (eq. 12)."""
+    return h_amb_min_of(p, k) * b_perp / (p.wavelength * math.sin(p.theta0))
 
 
 def phase_error_crb(gamma: ArrayLike, looks: int) -> ArrayLike:

@@ -65,6 +65,7 @@ class Params:
     z_min: float
     z_max: float
     h_amb_min: float
+    h_amb_ratio: float  # C8 ladder: slave k's limit is h_amb_min h_amb_ratio^(k-1) (model)
     x_t: float
     ground_station: tuple[float, float, float]
     d_min: float
@@ -298,6 +299,7 @@ def params_from_mapping(values: Mapping[str, Any]) -> Params:
         z_min=v["z_min_m"],
         z_max=v["z_max_m"],
         h_amb_min=v["h_amb_min_m"],
+        h_amb_ratio=v["h_amb_ratio"],
         x_t=v["target_x_m"],
         ground_station=v["ground_station_m"],
         d_min=v["d_min_m"],

@@ -10,8 +10,8 @@ constraint family allows an interval of ranges:
 - C5: r >= S_min cos(theta) / Theta_3dB;
 - C6: r <= gamma_m / r_0^2 (1 / (gamma_SNR^min^2 (1 + r_0^3 / gamma_m)) - 1)  (eqs. 7-9,
   model.slave_range_max);
-- C8: r |sin(theta - theta_0)| <= lambda r_0 sin(theta_0) / h_amb^min  (eq. 12,
-  model.baseline_max);
+- C8: r |sin(theta - theta_0)| <= lambda r_0 sin(theta_0) / h_amb,k^min  (eq. 12,
+  model.baseline_max; slave k's own rung of h_amb_ratio's ladder);
 - C9-C11: the cheapest schedule turns them into a disk about the ground station in the x-z
   plane (power.station_radius_sq), i.e. an interval [r_a, r_b] of the ray;
 - C4 to the master removes an open interval (a hole) around the master's nearest point;
@@ -156,11 +156,12 @@ def snr_limit(sc: Scenario, r0):
     return model.slave_range_max(sc.p, r0)
 
 
-def baseline_limit(sc: Scenario, r0):
-    """C8's largest perpendicular baseline (model.baseline_max); +inf when C8 is off."""
+def baseline_limit(sc: Scenario, r0, k: int = 1):
+    """C8's largest perpendicular baseline of slave k (model.baseline_max, its own rung);
+    +inf when C8 is off."""
     if not sc.on("C8"):
         return np.full(np.shape(r0), math.inf)
-    return model.baseline_max(sc.p, np.asarray(r0, dtype=float))
+    return model.baseline_max(sc.p, np.asarray(r0, dtype=float), k)
 
 
 def ray_limits(sc: Scenario, k: int, r0, theta):
@@ -177,7 +178,7 @@ def ray_limits(sc: Scenario, k: int, r0, theta):
         lo = np.maximum(lo, p.swath_min * cos / p.beamwidth)
     up = np.minimum(up, snr_limit(sc, r0))
     with np.errstate(divide="ignore"):
-        up = np.minimum(up, baseline_limit(sc, r0) / np.abs(np.sin(theta - sc.th0)))
+        up = np.minimum(up, baseline_limit(sc, r0, k) / np.abs(np.sin(theta - sc.th0)))
     return lo, up
 
 

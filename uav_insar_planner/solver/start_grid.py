@@ -127,7 +127,7 @@ def _slave_pieces(p: Params, k: int, scheme: str, fam: frozenset[str], q0: np.nd
         hi = np.where(g_rg >= p.coherence_rg_min, hi, -np.inf)
     if "C8" in fam:
         # b_perp = |c0 + r sin(theta_0 - theta)| (eq. 3 projected on the LOS normal)
-        bmax = model.baseline_max(p, r0)
+        bmax = model.baseline_max(p, r0, k)  # slave k's own C8 rung
         c0 = (p.x_t - q0[0]) * math.cos(p.theta0) - q0[1] * math.sin(p.theta0)
         s = np.sin(p.theta0 - thetas)
         with np.errstate(divide="ignore", invalid="ignore"):

@@ -28,10 +28,11 @@ import math
 
 import numpy as np
 
+from uav_insar_planner import model
 from uav_insar_planner.params import Params
 from uav_insar_planner.schemes import slave_uavs
 from uav_insar_planner.solver import blocking
-from uav_insar_planner.solver.ao.closed_forms import c8_ladder, formation_bound
+from uav_insar_planner.solver.ao.closed_forms import formation_bound
 from uav_insar_planner.solver.ao.master import MasterProblem
 from uav_insar_planner.solver.ao.slave import SlaveProblem
 from uav_insar_planner.solver.power import schedules
@@ -50,22 +51,18 @@ def blocking_families(p: Params, scheme: str) -> list[str]:
         families, lambda fam: find_start(p, scheme, fam, first=True) is not None)
 
 
-def solve_ao(p: Params, scheme: str, objective: str,
-             h_amb_ladder: float = 1.0) -> SolverResult:
+def solve_ao(p: Params, scheme: str, objective: str) -> SolverResult:
     """Algorithm 2 for `scheme`; see the module docstring. Deterministic.
 
-    `h_amb_ladder` = rho > 1 asks for diverse heights of ambiguity, C8 per slave
-    h_amb,k >= h_amb^min rho^(i) for the i-th slave (closed_forms.c8_ladder), an option for
-    studies (benchmarks/ambiguity_diversity.py), not a parameter of (P). The start is then
-    the grid's start at the ladder's top rung for every slave, which meets every rung."""
+    C8 is per slave, h_amb,k >= h_amb^min rho^(k-1) with rho = `h_amb_ratio` (model.h_amb_min_of;
+    rho = 1 is the paper's common limit); the start grid meets every slave's own rung."""
     slaves = list(slave_uavs(scheme, p.num_uavs))
     note = ("objective 'exact' requested: paper-ao minimises Proposition 1's bound, as the paper "
             "does; " if objective == "exact" else "")
-    rungs = c8_ladder(p, slaves, h_amb_ladder)
-    if h_amb_ladder != 1.0:
-        note += "C8 ladder " + ", ".join(f"h_amb,{k} >= {h:.4g} m" for k, h in rungs.items()) + "; "
-    start = find_start(p if h_amb_ladder == 1.0 else p.replace(h_amb_min_m=max(rungs.values())),
-                       scheme)
+    if p.h_amb_ratio != 1.0:
+        note += "C8 ladder " + ", ".join(f"h_amb,{k} >= {model.h_amb_min_of(p, k):.4g} m"
+                                         for k in slaves) + "; "
+    start = find_start(p, scheme)
     if start is None:
         blocking = blocking_families(p, scheme)
         return SolverResult(False, np.full((p.num_uavs, 2), np.nan),
@@ -76,9 +73,9 @@ def solve_ao(p: Params, scheme: str, objective: str,
     formation = start.formation.copy()
     # Powers of a UAV whose sub-problem never moved it: the cheapest schedule at its position.
     p_com = schedules(p, formation, scheme)
-    master = MasterProblem(p, scheme, slaves, rungs)
-    slave_problems = {k: SlaveProblem(p, scheme, k, [0] + [j for j in slaves if j != k],
-                                      rungs[k]) for k in slaves}
+    master = MasterProblem(p, scheme, slaves)
+    slave_problems = {k: SlaveProblem(p, scheme, k, [0] + [j for j in slaves if j != k])
+                      for k in slaves}
     inner: dict[str, list[int]] = {"P.0": []} | {f"P.{k}": [] for k in slaves}
     halves: dict[int, str] = {}
     bound = formation_bound(p, formation[0], formation, slaves)

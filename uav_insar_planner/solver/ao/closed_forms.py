@@ -4,8 +4,7 @@
   b_perp,k from eq. 16),
 - Proposition 2's C7a/C7b slopes alpha_a, alpha_b (None when the side is unconstrained),
 - C6 as the master's range limit (exact: gamma_SNR is monotone in each slant range; the
-  slaves' limit is model.slave_range_max),
-- the per-slave C8 limits of the diverse-h_amb option (`c8_ladder`).
+  slaves' limit is model.slave_range_max).
 """
 from __future__ import annotations
 
@@ -63,12 +62,3 @@ def master_range_max(p: Params, slave_ranges: list[float]) -> float:
                 z.real > 0.0]
         best = min(best, max(real) if real else 0.0)
     return best
-
-
-def c8_ladder(p: Params, slaves: Sequence[int], ratio: float) -> dict[int, float]:
-    """A ladder of heights of ambiguity, h_amb,k >= h_amb^min ratio^(i) for the i-th slave
-    (i = 0, 1, ...): diverse h_amb,k let the pairs resolve each other's ambiguities
-    (montecarlo.resolve_ambiguities) at the price of shorter baselines. ratio = 1 is (P)'s C8."""
-    if not (math.isfinite(ratio) and ratio >= 1.0):
-        raise ValueError(f"ratio: value {ratio!r} is not allowed; expected a finite number >= 1")
-    return {k: p.h_amb_min * ratio**i for i, k in enumerate(slaves)}

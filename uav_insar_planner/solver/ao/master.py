@@ -10,8 +10,8 @@ so each SCA step only updates numbers:
        C4~  2 q_0^T (q_0^(i) - q_k) - ||q_0^(i)||^2 + ||q_k||^2 >= d_min^2   (eq. 18)
        C5   Theta_3dB r_0 / cos(theta_0) >= S_min   (linear on the C2 line)
        C6   r_0 <= r_0,max(r_k)   (gamma_SNR,k decreases in r_0: exact, see closed_forms)
-       C8   lambda r_0 sin(theta_0) >= h_amb,k^min b_perp,k   (h_amb,k^min = h_amb^min unless
-            a per-slave ladder is given, closed_forms.c8_ladder)
+       C8   lambda r_0 sin(theta_0) >= h_amb,k^min b_perp,k   (h_amb,k^min, the slave's rung
+            of h_amb_ratio's ladder, model.h_amb_min_of)
        C9-C11 with P_com,0 a variable (comm_constraints).
 With r_0 = z_0 / cos(theta_0) on the C2 line. Benchmark 2 pins z_0 (and x_0) to q0_fixed and
 uses the same programme only to allocate P_com,0.
@@ -37,10 +37,8 @@ from uav_insar_planner.solver.ao.convex import MAX_INNER, solve_convex
 class MasterProblem:
     """(P.0~) for the slaves in `slaves` (1 or 2 of them), rebuilt only by Parameter updates."""
 
-    def __init__(self, p: Params, scheme: str, slaves: list[int],
-                 h_amb_min: dict[int, float] | None = None):
+    def __init__(self, p: Params, scheme: str, slaves: list[int]):
         self.p, self.slaves = p, slaves
-        self.h_amb_min = h_amb_min or {k: p.h_amb_min for k in slaves}
         self.q = cp.Variable(2, name="q0")
         x0, z0 = self.q[0], self.q[1]
         cos0 = math.cos(p.theta0)
@@ -71,9 +69,9 @@ class MasterProblem:
         self.scale.value = k_bound / math.sqrt(max(sum(v * v for v in b), 1e-300))
         ranges = [float(np.hypot(formation[k, 0] - p.x_t, formation[k, 1])) for k in self.slaves]
         self.r0_max.value = master_range_max(p, ranges)
-        # C8 per slave: r_0 >= h_amb,k^min b_perp,k / (lambda sin(theta_0)); model's form
-        # scaled from h_amb^min to the slave's own limit
-        self.r0_min.value = max(model.master_range_min_c8(p, bk) * self.h_amb_min[k] / p.h_amb_min
+        # C8 per slave: r_0 >= h_amb,k^min b_perp,k / (lambda sin(theta_0)), each slave
+        # against its own rung
+        self.r0_min.value = max(model.master_range_min_c8(p, bk, k)
                                 for k, bk in zip(self.slaves, b, strict=True))
         for k in self.slaves:
             qk = formation[k]

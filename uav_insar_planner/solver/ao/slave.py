@@ -13,8 +13,8 @@ I_b. The convex approximation (P.k.a~) / (P.k.b~) around q_k^(j), built once per
        C5~  r_k^2(q^(j)) + grad r_k^2(q^(j))^T (q_k - q^(j)) >= S_min z_k / Theta_3dB   (eq. 20)
        C6   ||q_k - (x_t, 0)|| <= r_k,max(r_0)   (exact, model.slave_range_max)
        C7a  alpha_a z_k <= x_t - x_k  (I_a)  /  C7b  x_t - x_k <= alpha_b z_k  (I_b)  (Prop. 2)
-       C8   b_perp,k <= lambda r_0 sin(theta_0) / h_amb,k^min  (h_amb^min, or the slave's rung
-            of a ladder, closed_forms.c8_ladder)
+       C8   b_perp,k <= lambda r_0 sin(theta_0) / h_amb,k^min  (the slave's rung of
+            h_amb_ratio's ladder, model.h_amb_min_of)
        C9-C11 with P_com,k a variable (comm_constraints).
 Both halves are run to convergence (eps_1 = params.tolerance) and the larger b_perp,k is kept.
 """
@@ -35,10 +35,8 @@ from uav_insar_planner.solver.ao.convex import MAX_INNER, solve_convex
 class SlaveProblem:
     """(P.k.a~) and (P.k.b~) for slave k, sharing one set of Parameters."""
 
-    def __init__(self, p: Params, scheme: str, k: int, others: list[int],
-                 h_amb_min: float | None = None):
+    def __init__(self, p: Params, scheme: str, k: int, others: list[int]):
         self.p, self.k, self.others = p, k, others
-        self.h_amb_min = p.h_amb_min if h_amb_min is None else h_amb_min
         self.c4_lin = {i: cp.Parameter(2, name=f"c4_lin_{k}{i}") for i in others}
         self.c4_const = {i: cp.Parameter(name=f"c4_const_{k}{i}") for i in others}
         self.c5_grad = cp.Parameter(2, name=f"c5_grad_{k}")
@@ -86,7 +84,7 @@ class SlaveProblem:
         self.c5_const.value = float(r2 - grad @ q_ref)
         r0 = float(np.hypot(formation[0, 0] - p.x_t, formation[0, 1]))
         self.r_max.value = max(float(model.slave_range_max(p, r0)), 0.0)
-        self.b_max.value = model.baseline_max(p, r0) * p.h_amb_min / self.h_amb_min
+        self.b_max.value = model.baseline_max(p, r0, self.k)
 
     def _sca(self, half: str, formation: np.ndarray):
         """SCA on one half from the current slave position: (q, P, b_perp, steps) or None."""

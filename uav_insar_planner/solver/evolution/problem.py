@@ -12,8 +12,9 @@ Constraints, each a slack g_i(v) >= 0 scaled to order one (lengths by a length o
 family, coherences as they are), all from model.py:
 C1 z_min <= z_k <= z_max; C3 theta_min <= theta_k <= theta_max; C4 ||q_i - q_j|| >= d_min;
 C5 Theta_3dB r_k / cos(theta_k) >= S_min; C6 gamma_SNR,k >= gamma_SNR^min (eq. 7);
-C7 gamma_Rg,k >= gamma_Rg^min (eq. 10); C8 b_perp,k <= b_max(r_0) (model.baseline_max, the
-same as h_amb,k >= h_amb^min); C9-C11 with the cheapest power schedule, exactly the disk
+C7 gamma_Rg,k >= gamma_Rg^min (eq. 10); C8 b_perp,k <= b_max,k(r_0) (model.baseline_max, the
+same as h_amb,k >= h_amb,k^min, slave k's rung); C9-C11 with the cheapest power schedule,
+exactly the disk
 rho_k^2 <= power.station_radius_sq (rho_k the x-z distance to the station).
 
 Bounds (valid for every feasible point, so the box loses nothing): z_0 from C1, C5 (r_0 >=
@@ -155,8 +156,8 @@ class EvolutionProblem:
             if math.isfinite(rad):
                 rho_sq = (x - p.ground_station[0]) ** 2 + (z - p.ground_station[2]) ** 2
                 out.append(("C10", (rad - rho_sq) / max(abs(rad), 1.0)))
-        b_max = model.baseline_max(p, r0)
-        for b, g_snr, g_rg, theta in pairs.values():
+        for k, (b, g_snr, g_rg, theta) in pairs.items():
+            b_max = model.baseline_max(p, r0, k)  # slave k's own C8 rung (h_amb_ratio)
             out += [("C3", theta - p.theta_min), ("C3", p.theta_max - theta),
                     ("C6", g_snr - p.coherence_snr_min), ("C7", g_rg - p.coherence_rg_min),
                     ("C8", (b_max - b) / np.maximum(b_max, 1e-12))]

@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 
+from uav_insar_planner import model
 from uav_insar_planner.evaluate import evaluate
 from uav_insar_planner.params import Params
 from uav_insar_planner.solver import rays
@@ -22,8 +23,8 @@ def bound_minimizer_band(p: Params, scheme: str, samples: int = 160) -> tuple[fl
     1's bound.
 
     The bound is C r0 / sqrt(sum_k b_perp,k^2) and C8 caps each b_perp,k at
-    lambda r0 sin(theta_0) / h_amb^min, so it is at least the r0-free value
-    C h_amb^min / (lambda sin(theta_0) sqrt(n_slaves)), reached exactly by the feasible
+    lambda r0 sin(theta_0) / h_amb,k^min (slave k's rung), so it is at least the r0-free value
+    C / (lambda sin(theta_0) sqrt(sum_k h_amb,k^min^-2)), reached exactly by the feasible
     formations with every C8 tight. When the bound's global minimum equals that value (Table I
     and the figure sweeps), the minimisers are that whole set: each slave on the curve
     r_k = b_max(r0) / |sin(theta_k - theta_0)|, any r0 and angles keeping C1-C11. The band is
@@ -37,7 +38,9 @@ def bound_minimizer_band(p: Params, scheme: str, samples: int = 160) -> tuple[fl
     sc = rays.make_scenario(p, scheme, "exact")
     n = len(sc.slaves)
     sigma_phi_a = sc.sigma_phi_bound
-    c8_value = p.h_amb_min * sigma_phi_a / (2.0 * math.pi * math.sqrt(n))
+    # sum_k b_perp,k^2 <= (lambda r0 sin(theta_0))^2 sum_k h_amb,k^min^-2 (per-slave rungs)
+    c8_value = sigma_phi_a / (2.0 * math.pi * math.sqrt(sum(model.h_amb_min_of(p, k) ** -2
+                                                            for k in sc.slaves)))
     bound_value = _objective(p, res, scheme)
     # The grid below spans at most two slave angles; with more slaves the band is not sampled.
     if not (sc.on("C8") and bound_value <= c8_value * (1.0 + 1e-6)) or n > 2:
@@ -60,7 +63,7 @@ def _exact_sigma(p: Params, res: SolverResult, scheme: str) -> float:
 
 def _c8_tight_sigma(sc: rays.Scenario, k: int, r0, th):
     """Per slave on its C8-tight curve: (feasible mask, range, 1/sigma_h,k^2)."""
-    b = rays.baseline_limit(sc, r0)
+    b = rays.baseline_limit(sc, r0, k)
     with np.errstate(divide="ignore"):
         r = b / np.abs(np.sin(th - sc.th0))
     lo, up = rays.ray_limits(sc, k, r0, th)

@@ -16,7 +16,8 @@ Boxes whose lower bound is within `rel_gap` of the incumbent are closed; the sma
 bound of the closed and the still open boxes is a lower bound on the global optimum.
 
 Symmetry: slaves with equal station disks (equal disk_r2: the same rate and energy budget)
-are interchangeable, since every other constraint treats the slaves alike. Permuting such
+and equal C8 rungs (model.h_amb_min_of: all equal unless h_amb_ratio > 1) are
+interchangeable, since every other constraint treats the slaves alike. Permuting such
 slaves maps any point onto one whose angles are ordered (theta_i <= theta_j for i < j in the
 group) with the same objective, so only the ordered part of the space is searched: a box is
 cut to theta_j >= theta_i's lower end and theta_i <= theta_j's upper end (which keeps every
@@ -29,6 +30,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from uav_insar_planner import model
 from uav_insar_planner.solver.global_opt import local_refine, slave_sets
 from uav_insar_planner.solver.rays import Scenario
 
@@ -52,10 +54,11 @@ class SearchResult:
 
 def interchangeable_pairs(sc: Scenario) -> list[tuple[int, int]]:
     """(i, j), i < j positions in sc.slaves, consecutive members of a group of slaves with
-    equal station disks: ordering each such pair orders the whole group."""
+    equal station disks and equal C8 rungs: ordering each such pair orders the whole group.
+    (Slaves on different rungs are not interchangeable: swapping them breaks C8.)"""
     pairs, last = [], {}
     for j, k in enumerate(sc.slaves):
-        key = sc.disk_r2[k]
+        key = (sc.disk_r2[k], model.h_amb_min_of(sc.p, k) if sc.on("C8") else 0.0)
         if key in last:
             pairs.append((last[key], j))
         last[key] = j

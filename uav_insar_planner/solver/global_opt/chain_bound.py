@@ -52,11 +52,12 @@ FOREST_MAX_K = 4
 
 
 def chain_weight_bound(sc: Scenario, r0a, pieces: np.ndarray) -> np.ndarray:
-    """max (R) for each box: pieces is (K, 6, n), per slave (lo, up, smax, g_rg, theta_a,
-    theta_b); -inf where (R) is infeasible."""
+    """max (R) for each box: pieces is (K, 9, n), per slave (lo, up, smax, g_rg, theta_a,
+    theta_b, h1, h2, C8 cap); -inf where (R) is infeasible."""
     order = np.argsort(pieces[:, 4] + pieces[:, 5], axis=0, kind="stable")
-    lo, up, smax, g_rg, ta, tb = np.take_along_axis(pieces[:, :6], order[:, None, :], axis=0) \
-        .transpose(1, 0, 2)
+    cols = [0, 1, 2, 3, 4, 5, 8]  # the master's hole (h1, h2) is not used here
+    lo, up, smax, g_rg, ta, tb, cap = np.take_along_axis(pieces[:, cols], order[:, None, :],
+                                                         axis=0).transpose(1, 0, 2)
     k_count = len(lo)
     d2 = sc.p.d_min**2
     # c_i of the neighbour pair (i, i+1): cos of the largest angle difference in the box
@@ -66,7 +67,7 @@ def chain_weight_bound(sc: Scenario, r0a, pieces: np.ndarray) -> np.ndarray:
     valid = (cand >= lo[:, None]) & (cand <= up[:, None])
     with np.errstate(invalid="ignore"):
         w = slave_ranges.weight_bound(sc, r0a, np.where(valid, cand, 0.0), smax[:, None],
-                                      g_rg[:, None])
+                                      g_rg[:, None], cap[:, None])
     w = np.where(valid, w, -np.inf)
     best = w[0]
     for i in range(1, k_count):
@@ -153,7 +154,7 @@ def _forest_totals(sc: Scenario, r0a, pieces: np.ndarray, with_hole: bool = True
     slave at a time, ends with every slave at its top or at the lower crossing of an
     already fixed slave, i.e. at the values of a rooted forest; -inf where none is
     compatible. pieces as for chain_weight_bound."""
-    lo, up, smax, g_rg, ta, tb, h1, h2 = pieces.transpose(1, 0, 2)
+    lo, up, smax, g_rg, ta, tb, h1, h2, cap = pieces.transpose(1, 0, 2)
     k_count = len(lo)
     d2 = sc.p.d_min**2
     dmax = np.minimum(np.maximum(np.abs(tb[:, None] - ta[None]), np.abs(tb[None] - ta[:, None])),
@@ -170,7 +171,8 @@ def _forest_totals(sc: Scenario, r0a, pieces: np.ndarray, with_hole: bool = True
         last = np.array([path[-1] for path in paths])
         ok = ((val >= lo[last]) & (val <= up[last])
               & ~((val > h1[last]) & (val < h2[last])))
-        w = slave_ranges.weight_bound(sc, r0a, np.where(ok, val, 0.0), smax[last], g_rg[last])
+        w = slave_ranges.weight_bound(sc, r0a, np.where(ok, val, 0.0), smax[last], g_rg[last],
+                                      cap[last])
     w = np.where(ok, w, -np.inf)
     vals = val[table]                                        # (F, K, n)
     total = np.sum(w[table], axis=1)                         # (F, n)

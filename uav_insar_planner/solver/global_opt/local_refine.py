@@ -57,7 +57,9 @@ def _constraints(sc: Scenario, v: np.ndarray) -> np.ndarray:
     if sc.on("C6"):
         out.append(model.slave_range_max(p, r0)[:, None] - r)
     if sc.on("C8"):
-        out.append(model.baseline_max(p, r0)[:, None] - r * np.abs(np.sin(th - sc.th0)))
+        # per slave: its own C8 rung (h_amb_ratio's ladder)
+        b_max = np.stack([model.baseline_max(p, r0, k) for k in sc.slaves], axis=1)
+        out.append(b_max - r * np.abs(np.sin(th - sc.th0)))
     gx, gz = p.ground_station[0] - p.x_t, p.ground_station[2]
     for j, k in enumerate(sc.slaves):
         if math.isfinite(sc.disk_r2[k]):

@@ -149,7 +149,7 @@ def slave_box(sc: Scenario, k: int, r0a, r0b, ta, tb):
     up = np.minimum(up, rays.snr_limit(sc, r0a))
     smin, smax = _abs_sin_range(ta - sc.th0, tb - sc.th0)
     with np.errstate(divide="ignore", invalid="ignore"):
-        up = np.minimum(up, np.where(smin > 0, rays.baseline_limit(sc, r0b) / smin, math.inf))
+        up = np.minimum(up, np.where(smin > 0, rays.baseline_limit(sc, r0b, k) / smin, math.inf))
     if sc.on("C4"):
         up = _below_master_hole(sc, r0a, r0b, ta, tb, lo, up)
     g_rg = rays.coherence_rg(sc, _nearest(sc.th0, ta, tb))
@@ -200,14 +200,20 @@ def _master_hole_box(sc: Scenario, r0a, r0b, ta, tb):
             np.where(exists, r0a * np.cos(dhi) + root, -np.inf))
 
 
-def weight_bound(sc: Scenario, r0a, rho, smax, g_rg):
+def c8_cap(sc: Scenario, k: int) -> float:
+    """Slave k's C8 cap on b_perp / r0, lambda sin(theta_0) / h_amb,k^min (its own rung of
+    h_amb_ratio's ladder, free of r0); +inf when C8 is off."""
+    return float(model.baseline_max(sc.p, 1.0, k)) if sc.on("C8") else math.inf
+
+
+def weight_bound(sc: Scenario, r0a, rho, smax, g_rg, cap):
     """Upper bound on w / r0^2 for any point of the box whose slave range is at most rho.
 
-    b_perp / r0 <= min(r smax / r0a, lambda sin(theta_0) / h_amb^min) (the second is C8, free
-    of r0) and sigma_Phi >= sigma_Phi(g_rg_max gamma_SNR(r0a, r)). Uncapped, the bound grows
-    with r (module docstring); capped, it falls with r. So its maximum over r <= rho is at
-    min(rho, r_cap): the result is non-decreasing in rho, as the Pareto argument needs."""
-    cap = model.baseline_max(sc.p, 1.0) if sc.on("C8") else math.inf
+    b_perp / r0 <= min(r smax / r0a, cap), cap = lambda sin(theta_0) / h_amb,k^min the slave's
+    C8 (`c8_cap`, free of r0; per slave, broadcast with rho), and sigma_Phi >=
+    sigma_Phi(g_rg_max gamma_SNR(r0a, r)). Uncapped, the bound grows with r (module docstring);
+    capped, it falls with r. So its maximum over r <= rho is at min(rho, r_cap): the result is
+    non-decreasing in rho, as the Pareto argument needs."""
     with np.errstate(divide="ignore", invalid="ignore"):
         r = np.minimum(rho, np.where(smax > 0, cap * r0a / smax, math.inf))
         bn = np.where(smax > 0, np.minimum(r * smax / r0a, cap), 0.0)
@@ -220,11 +226,13 @@ def weight_bound(sc: Scenario, r0a, rho, smax, g_rg):
     return np.where(np.isnan(w), np.inf, w)
 
 
-def pair_weight_bound(sc: Scenario, r0a, one, two, w_one, w_two):
+def pair_weight_bound(sc: Scenario, r0a, one, two, w_one, w_two,
+                      caps: tuple[float, float]):
     """Upper bound on w_i / r0^2 + w_j / r0^2 over a box for two slaves kept d_min apart (C4),
     -inf where the pair provably has no feasible point. `one` and `two` are
     (lo, up, smax, g_rg, theta_a, theta_b): slave_box's pieces and the angle interval; w_one
-    and w_two their weight_bound at `up` (the single-slave bounds, computed once).
+    and w_two their weight_bound at `up` (the single-slave bounds, computed once); caps the
+    two slaves' C8 caps (c8_cap).
 
     C4 is kept through the ellipse with c_max = cos of the box's largest angle difference,
     which contains the true exclusion ellipse of every angle pair in it; by the Pareto argument
@@ -242,9 +250,9 @@ def pair_weight_bound(sc: Scenario, r0a, one, two, w_one, w_two):
         inside = up1 * up1 + up2 * up2 - 2.0 * c * up1 * up2 < d2
         y = _lower_crossing(up1, c, d2)
         x = _lower_crossing(up2, c, d2)
-        wa = np.where(y >= lo2, w_one + weight_bound(sc, r0a, np.maximum(y, 0.0), s2, g2),
+        wa = np.where(y >= lo2, w_one + weight_bound(sc, r0a, np.maximum(y, 0.0), s2, g2, caps[1]),
                       -np.inf)
-        wb = np.where(x >= lo1, weight_bound(sc, r0a, np.maximum(x, 0.0), s1, g1) + w_two,
+        wb = np.where(x >= lo1, weight_bound(sc, r0a, np.maximum(x, 0.0), s1, g1, caps[0]) + w_two,
                       -np.inf)
     return np.where(inside, np.maximum(wa, wb), w_top)
 

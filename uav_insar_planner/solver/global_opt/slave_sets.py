@@ -37,20 +37,22 @@ def box_lower_bound(sc: Scenario, boxes: np.ndarray, close_at: float = np.inf) -
     box anyway, so the costlier forest bound is spent only on boxes below it."""
     r0a, r0b = boxes[:, 0], boxes[:, 1]
     pieces, single = [], []
+    caps = [slave_ranges.c8_cap(sc, k) for k in sc.slaves]  # per slave: its own C8 rung
     ok = np.ones(len(boxes), dtype=bool)
     for j, k in enumerate(sc.slaves):
         ta, tb = (boxes[:, c] for c in angle_cols(j))
         lo, up, smax, g_rg = slave_ranges.slave_box(sc, k, r0a, r0b, ta, tb)
         ok &= lo <= up
         pieces.append((lo, up, smax, g_rg, ta, tb))
-        single.append(slave_ranges.weight_bound(sc, r0a, up, smax, g_rg))
+        single.append(slave_ranges.weight_bound(sc, r0a, up, smax, g_rg, caps[j]))
     if len(single) == 1 or not sc.on("C4"):
         w = np.sum(single, axis=0)
     elif len(single) == 2:  # one matching: the pair (its bound never exceeds W_1 + W_2)
-        w = slave_ranges.pair_weight_bound(sc, r0a, *pieces, *single)
+        w = slave_ranges.pair_weight_bound(sc, r0a, *pieces, *single, caps=(caps[0], caps[1]))
     else:
         holes = [slave_ranges.master_hole_box(sc, r0a, r0b, x[4], x[5]) for x in pieces]
-        stacked = np.stack([np.stack(x + h) for x, h in zip(pieces, holes, strict=True)])
+        stacked = np.stack([np.stack(x + h + (np.full_like(r0a, cap),))
+                            for x, h, cap in zip(pieces, holes, caps, strict=True)])
         w = chain_bound.chain_weight_bound(sc, r0a, stacked)
         if len(single) <= chain_bound.FOREST_MAX_K:
             # the forest keeps every pair and the master's hole: never looser than the chain
@@ -88,7 +90,8 @@ def _forest_point(sc: Scenario, r0, thetas: np.ndarray):
     hole), kept where it passes the feasibility check of `_objective_if_feasible`."""
     r0 = np.asarray(r0, dtype=float)
     pieces = np.stack([np.stack(slave_ranges.slave_box(sc, k, r0, r0, th, th) + (th, th)
-                                + slave_ranges.master_hole_box(sc, r0, r0, th, th))
+                                + slave_ranges.master_hole_box(sc, r0, r0, th, th)
+                                + (np.full_like(th, slave_ranges.c8_cap(sc, k)),))
                        for j, k in enumerate(sc.slaves) for th in [thetas[:, j]]])
     with np.errstate(invalid="ignore", divide="ignore"):
         ranges = chain_bound.forest_ranges(sc, r0, pieces)
