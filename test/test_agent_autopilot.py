@@ -125,11 +125,15 @@ def test_the_agents_pose_is_the_autopilots(flown):
         # the watcher matched the two topics at different moments: compare from the first
         # autopilot position it saw (a volatile topic loses what was sent before the match)
         agent = [pose for pose in agent if pose[:2] >= autopilot[0][:2]]
-        assert set(agent) <= set(autopilot), k  # nothing but the autopilot's positions
-        # in the autopilot's order, and (nearly) all of them once both were subscribed: the
-        # watcher's uavK/pose queue is DEPTH deep, so a busy host may cost it a few
+        # nothing but the autopilot's positions: every one the watcher also saw on
+        # uavK/mavlink/pose. Its queues are DEPTH deep, so on a busy host it may miss a few
+        # of the autopilot's (seen once in CI: 1 of about 300); the agent's own kinematics
+        # would match none.
+        seen = set(autopilot)
+        assert sum(pose not in seen for pose in agent) <= 0.02 * len(agent), k
+        # in the autopilot's order, and (nearly) all of them once both were subscribed
         order = {pose: i for i, pose in enumerate(autopilot)}
-        index = [order[pose] for pose in agent]
+        index = [order[pose] for pose in agent if pose in seen]
         assert index == sorted(index), k
         assert len(agent) >= 0.9 * (len(autopilot) - index[0]), (k, len(agent), len(autopilot))
 

@@ -178,11 +178,13 @@ def test_a_formation_beyond_float32_is_dropped_at_entry(watcher):
 
         assert watcher.spin_until(lambda: any(s.level == DiagnosticStatus.OK
                                               for s in bridge_says()), 20.0), "never linked"
-        good = PoseArray(poses=[Pose()])
+        # the smallest swarm, two UAVs; the bridge flies uav0, its one vehicle
+        good = PoseArray(poses=[Pose(), Pose()])
         good.header.stamp.sec = 7
         good.poses[0].position.x, good.poses[0].position.z = 3.0, 12.0
-        power = Float64MultiArray(data=[0.1])
-        power.layout.dim = [MultiArrayDimension(label="uav", size=1, stride=1),
+        good.poses[1].position.x, good.poses[1].position.z = 6.0, 12.0
+        power = Float64MultiArray(data=[0.1, 0.1])
+        power.layout.dim = [MultiArrayDimension(label="uav", size=2, stride=2),
                             MultiArrayDimension(label="slot", size=1, stride=1),
                             MultiArrayDimension(label=PlanId(7, 0, "/watcher").label, size=1,
                                                 stride=1)]
@@ -190,8 +192,9 @@ def test_a_formation_beyond_float32_is_dropped_at_entry(watcher):
         watcher.node.create_publisher(Float64MultiArray, "/formation/power",
                                       LATCHED).publish(power)
         assert watcher.spin_until(lambda: target_xz() == ("3.000", "12.000"), 10.0)
-        poison = PoseArray(poses=[Pose()])  # stamp 0: a plan of its own if it were valid
+        poison = PoseArray(poses=[Pose(), Pose()])  # stamp 0: a plan of its own if valid
         poison.poses[0].position.x, poison.poses[0].position.z = 1e39, 10.0
+        poison.poses[1].position.x, poison.poses[1].position.z = 6.0, 12.0
         pub.publish(poison)
         assert watcher.spin_until(
             lambda: value(bridge_says()[-1], "bad_plan_messages") == "1", 10.0), \

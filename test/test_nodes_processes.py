@@ -76,7 +76,8 @@ def test_bad_params_file_stops_the_planner_with_code_2_and_publishes_nothing(
     assert (w.formations, w.powers, w.diagnostics) == ([], [], [])
 
 
-@pytest.mark.parametrize("args,name", [(["-p", "uav_id:=5"], "uav_id"),
+@pytest.mark.parametrize("args,name", [(["-p", "uav_id:=6"], "uav_id"),
+                                       (["-p", "uav_id:=5"], "uav_id"),  # num_uavs is 3
                                        (["-p", "max_speed_mps:=2.0"], "max_speed_mps")])
 def test_bad_agent_parameter_exits_2(procs, args, name):
     agent = procs("agent", *args)

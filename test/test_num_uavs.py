@@ -70,7 +70,9 @@ def test_planner_publishes_one_pose_and_one_power_row_per_uav(ros_context, procs
     w = _watcher(ros_context, n)
     try:
         planner = procs("planner", *scenario(n, 10))
+        # an agent set up for a swarm one larger than the planner's
         beyond = procs("agent", "--params-file", CONFIG, "-p", f"uav_id:={n}",
+                       "-p", f"num_uavs:={n + 1}", "-p", f"rate_min_mbps:={[1.0] * (n + 1)}",
                        "-p", "num_slots:=10", "-r", f"__node:=agent{n}")
         assert w.spin_until(lambda: w.formations and w.powers, 60.0, [planner]), "no plan"
         formation = plan_msgs.decode_formation(w.formations[-1])

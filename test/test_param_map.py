@@ -125,7 +125,7 @@ BAD_MAP = {
               "map NAME1: value 'nope' is not allowed; expected a numeric parameter"),
     "name2 index": (("map", "z_max_m", "80", "90", "2", "rate_min_mbps", "1", "2", "2"),
                     "map NAME2: value 'rate_min_mbps' is not allowed; rate_min_mbps needs an "
-                    "index 0..2"),
+                    "index 0..5"),
     "same name": (("map", "z_max_m", "80", "90", "2", "z_max_m", "80", "90", "2"),
                   "map NAME2: value 'z_max_m' is not allowed; expected a parameter other"),
     "count1": (("map", "z_max_m", "80", "90", "0", "h_amb_min_m", "1", "2", "2"),

@@ -191,7 +191,7 @@ def test_a_second_bridge_for_a_flown_uav_is_refused_before_sending_a_byte(ros_do
 
 
 @pytest.mark.parametrize("args,field", [
-    (("-p", "uav_id:=3"), "uav_id"),
+    (("-p", "uav_id:=6"), "uav_id"),
     (("-p", "uav_id:=-2"), "uav_id"),
     (("-p", "uav_id:=1", "-p", "target_sysids:=[3, 4]"), "target_sysids"),
     (("-r", "__ns:=/uav2", "-p", "uav_id:=1"), "namespace"),

@@ -60,7 +60,9 @@ def test_three_arducopters_in_wind_carry_the_agents(ros_domain, tmp_path):
         autopilot = _bag_poses(tmp_path / "bag", f"/uav{k}/mavlink/pose")
         assert agent <= {tuple(r) for r in autopilot[:, 1:]}, k
         assert len(agent) >= 0.9 * len(autopilot), (k, len(agent), len(autopilot))
-        assert f[f"uav{k}_pass_poses"] > 5 * n, k  # ~10 Hz from the autopilot on the pass
+        # the autopilot feeds the agent through the pass: ~10 Hz, 4.6 Hz seen in CI on a
+        # loaded host (SITL at speedup 2 slows with it)
+        assert f[f"uav{k}_pass_poses"] > 3 * n, k
     planned = np.array(f["planned_xz"])
     for k, xz in f["flown_xz"].items():
         assert math.dist(xz, planned[k]) < DISPLACEMENT_M, (k, xz, planned[k])

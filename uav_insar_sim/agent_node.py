@@ -95,6 +95,9 @@ class AgentNode(Node):
             params = params_from_mapping(spec_values(self, SCENARIO_SPECS))
         except ParamError as exc:
             self.problems += exc.problems
+        if not self.problems and own["uav_id"] >= params.num_uavs:
+            self.problems.append(f"uav_id: value {own['uav_id']!r} is not allowed with "
+                                 f"num_uavs {params.num_uavs}; expected 0..{params.num_uavs - 1}")
         if self.problems:
             return
         try:
