@@ -511,6 +511,9 @@ def test_sitl_three_copters_fly_their_files(tmp_path):
         wall, _, x, z = at_zero[c.k]
         figures[f"uav{c.k}_pass_start_dx_m"] = round(float(x - plan.formation[c.k, 0]), 3)
         figures[f"uav{c.k}_pass_start_dz_m"] = round(float(z - plan.formation[c.k, 1]), 3)
+    # Figures only: each SITL's clock runs from its own start at its achieved speed-up, so
+    # under load they drift apart (1.8 s seen in CI) and so does where the vehicles are at
+    # one wall instant; real GNSS clocks agree. The claim is checked on the vehicles' clocks.
     first = min(v[0] for v in at_zero.values())
     ys = [np.interp(first, [r[0] for r in c.track], [r[3] for r in c.track]) for c in copters]
     figures["along_track_spread_at_pass_start_m"] = round(float(max(ys) - min(ys)), 3)
@@ -523,5 +526,4 @@ def test_sitl_three_copters_fly_their_files(tmp_path):
         assert 0.0 <= figures[f"uav{c.k}_depart_after_start_s"] < 2.0, figures
         assert abs(figures[f"uav{c.k}_pass_start_dx_m"]) < 0.5, figures
         assert abs(figures[f"uav{c.k}_pass_start_dz_m"]) < 0.5, figures
-    assert figures["along_track_spread_at_pass_start_m"] < 2.0, figures
     assert figures["along_track_spread_own_clocks_m"] < 1.0, figures
