@@ -11,6 +11,7 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
+from process_group import kill_group
 
 REPO = Path(__file__).resolve().parent.parent
 _counter = itertools.count()
@@ -43,7 +44,8 @@ def another_domain(ros_domain: int) -> int:
 
 
 class Children:
-    """Starts Python child processes with the test's environment; kills leftovers."""
+    """Starts Python child processes with the test's environment, each in a process group of
+    its own; kills the groups at the end."""
 
     def __init__(self) -> None:
         self.procs: list[subprocess.Popen] = []
@@ -53,19 +55,22 @@ class Children:
         env = dict(os.environ, PYTHONPATH=str(REPO), PYTHONUNBUFFERED="1")
         cmd = [sys.executable] + (["-m", module] if module else [str(script)])
         proc = subprocess.Popen(cmd + list(args), env=env, cwd=REPO, text=True,
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                start_new_session=True)
         self.procs.append(proc)
         return proc
 
     def run(self, *args: str, timeout: float = 20, **kw: object) -> subprocess.CompletedProcess:
         proc = self.start(*args, **kw)
-        out, err = proc.communicate(timeout=timeout)
+        try:
+            out, err = proc.communicate(timeout=timeout)
+        finally:
+            kill_group(proc)
         return subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
 
     def close(self) -> None:
         for proc in self.procs:
-            if proc.poll() is None:
-                proc.kill()
+            kill_group(proc)
             proc.communicate(timeout=10)
 
 
@@ -107,8 +112,7 @@ def procs(ros_domain: int):
 
     yield start
     for proc in started:
-        if proc.poll() is None:
-            proc.kill()
+        kill_group(proc)
         proc.communicate(timeout=10)
 
 

@@ -16,14 +16,13 @@ the plan's; the report's sigma_h planned and flown (report.recorded on the bag).
 from __future__ import annotations
 
 import math
-import os
-import signal
 import subprocess
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
+import process_group
 
 REPO = Path(__file__).resolve().parent.parent
 SITL_DIR = REPO.parent / "shared" / "sitl"
@@ -46,10 +45,7 @@ def start_sitl(k: int, workdir: Path, parm: Path) -> subprocess.Popen:
         stdin=subprocess.DEVNULL, start_new_session=True)
 
 
-def kill_group(proc: subprocess.Popen) -> None:
-    if proc.poll() is None:
-        os.killpg(proc.pid, signal.SIGKILL)
-    proc.wait(timeout=10)
+kill_group = process_group.kill_group
 
 
 def stats(values: np.ndarray) -> dict[str, float]:

@@ -10,10 +10,10 @@ geometry (and its sigma_h) is the one the autopilot flew."""
 from __future__ import annotations
 
 import math
-import subprocess
 import sys
 
 import numpy as np
+import process_group
 import pytest
 from conftest import REPO
 
@@ -160,7 +160,7 @@ def test_the_bag_and_the_report_show_the_autopilots_geometry(flown, tmp_path):
     sigma = evaluate(params, xz, record.power, figures.scheme).sigma_h
     assert figures.sigma_h_flown_m == pytest.approx(sigma, rel=1e-3)
     assert math.isfinite(figures.sigma_h_flown_m)
-    proc = subprocess.run([sys.executable, "-m", "uav_insar_planner.cli", "report",
+    proc = process_group.run([sys.executable, "-m", "uav_insar_planner.cli", "report",
                            str(flown["bag"]), "--out", str(tmp_path / "report"),
                            "--no-progress"], cwd=REPO, capture_output=True, text=True,
                           timeout=60)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 
+import process_group
 import pytest
 from rclpy.parameter import Parameter
 
@@ -105,11 +106,10 @@ def test_an_agent_whose_embedded_vehicle_dies_exits_1(ros_domain):
     after start, killing its thread; the agent must say so and exit 1, not fly on as a
     zombie publishing a frozen pose."""
     import os
-    import subprocess
     import sys
 
     fault = os.path.join(os.path.dirname(__file__), "fault_injection.py")
-    out = subprocess.run([sys.executable, fault, "2.0", "uav_insar_sim.agent_node",
+    out = process_group.run([sys.executable, fault, "2.0", "uav_insar_sim.agent_node",
                           "--ros-args", "-p", "mavlink_listen:=udpin:127.0.0.1:0"],
                          capture_output=True, text=True, timeout=40)
     assert out.returncode == 1, out

@@ -4,11 +4,11 @@ code with ours: `mcap` + `mcap-ros2-support`'s decoder, and `rosbags`."""
 from __future__ import annotations
 
 import math
-import subprocess
 import sys
 from collections import Counter
 from pathlib import Path
 
+import process_group
 import pytest
 import yaml
 from conftest import MISSION_SLOTS as SLOTS
@@ -186,7 +186,7 @@ def test_flown_markers_follow_the_agents_poses(mission):
 def test_record_refuses_an_existing_out_and_a_bad_duration(tmp_path):
     for args, field in ([str(tmp_path)], "OUT"), ([str(tmp_path / "b"), "--duration", "0"],
                                                   "--duration"):
-        proc = subprocess.run([sys.executable, "-m", "uav_insar_planner.cli", "record", *args],
+        proc = process_group.run([sys.executable, "-m", "uav_insar_planner.cli", "record", *args],
                               capture_output=True, text=True, timeout=30, cwd=REPO)
         assert proc.returncode == 2, proc.stderr
         assert len(proc.stderr.strip().splitlines()) == 1 and field in proc.stderr
@@ -194,7 +194,7 @@ def test_record_refuses_an_existing_out_and_a_bad_duration(tmp_path):
 
 
 def test_record_stops_after_duration_with_an_empty_bag(ros_domain, tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "uav_insar_planner.cli", "record",
+    proc = process_group.run([sys.executable, "-m", "uav_insar_planner.cli", "record",
                            str(tmp_path / "empty"), "--duration", "0.5"],
                           capture_output=True, text=True, timeout=30, cwd=REPO)
     assert proc.returncode == 0, proc.stderr
@@ -203,6 +203,6 @@ def test_record_stops_after_duration_with_an_empty_bag(ros_domain, tmp_path):
 
 
 def test_demo_refuses_an_existing_bag(tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "uav_insar_planner.demo", "--bag",
+    proc = process_group.run([sys.executable, "-m", "uav_insar_planner.demo", "--bag",
                            str(tmp_path)], capture_output=True, text=True, timeout=30, cwd=REPO)
     assert proc.returncode == 2 and "--bag" in proc.stderr and "exists" in proc.stderr

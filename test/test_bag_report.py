@@ -2,11 +2,11 @@
 type store (not our writer or our message definitions), so every figure is known beforehand."""
 from __future__ import annotations
 
-import subprocess
 import sys
 from pathlib import Path
 
 import numpy as np
+import process_group
 import pytest
 from conftest import REPO
 
@@ -123,7 +123,7 @@ def test_figures_of_a_known_bag(known_bag):
 
 def test_report_cli_prints_the_table_and_writes_the_plots(known_bag, tmp_path):
     out = tmp_path / "plots"
-    proc = subprocess.run([sys.executable, "-m", "uav_insar_planner.cli", "report",
+    proc = process_group.run([sys.executable, "-m", "uav_insar_planner.cli", "report",
                            str(known_bag), "--out", str(out), "--no-progress"],
                           capture_output=True, text=True, timeout=60, cwd=REPO)
     assert proc.returncode == 0, proc.stderr
@@ -149,7 +149,7 @@ def test_report_refuses_bad_bags_with_one_line(case, tmp_path):
         bag.mkdir()
     elif case == "no plan":
         write_known_bag(bag, with_plan=False)
-    proc = subprocess.run([sys.executable, "-m", "uav_insar_planner.cli", "report", str(bag),
+    proc = process_group.run([sys.executable, "-m", "uav_insar_planner.cli", "report", str(bag),
                            "--no-progress"], capture_output=True, text=True, timeout=60,
                           cwd=REPO)
     assert proc.returncode == 2

@@ -6,11 +6,11 @@ read back with `mcap` (+ `mcap-ros2-support`'s decoder), `rosbags` and PyYAML, w
 code with the writer, and with `uav-insar report`."""
 from __future__ import annotations
 
-import subprocess
 import sys
 from collections import Counter
 from pathlib import Path
 
+import process_group
 import pytest
 import yaml
 from conftest import REPO
@@ -276,7 +276,7 @@ def test_uav_insar_report_reads_our_bag_as_it_reads_rosbags_own(bags, tmp_path):
     out = {}
     for bag in (reference, ours):
         plots = tmp_path / bag.name
-        proc = subprocess.run([sys.executable, "-m", "uav_insar_planner.cli", "report",
+        proc = process_group.run([sys.executable, "-m", "uav_insar_planner.cli", "report",
                                str(bag), "--out", str(plots), "--no-progress"],
                               capture_output=True, text=True, timeout=60, cwd=REPO)
         assert proc.returncode == 0, proc.stderr

@@ -1,10 +1,10 @@
 """`uav-insar` as a user runs it: exit codes, JSON shape, sweep CSV and plots."""
 import csv
 import json
-import subprocess
 import sys
 
 import numpy as np
+import process_group
 
 from uav_insar_planner.params import default_params
 from uav_insar_planner.solver import solve
@@ -13,7 +13,7 @@ CLI = [sys.executable, "-m", "uav_insar_planner.cli"]
 
 
 def run(*args, timeout=120):
-    return subprocess.run([*CLI, *args], capture_output=True, text=True, timeout=timeout)
+    return process_group.run([*CLI, *args], capture_output=True, text=True, timeout=timeout)
 
 
 def test_solve_json_matches_library_plan():

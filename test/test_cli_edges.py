@@ -7,6 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import process_group
 import pytest
 
 from uav_insar_planner.cli import verbs
@@ -22,7 +23,7 @@ SLOW = ("--samples", "10000000")
 
 
 def run(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
-    return subprocess.run([*CLI, *args], capture_output=True, text=True, timeout=300, cwd=cwd)
+    return process_group.run([*CLI, *args], capture_output=True, text=True, timeout=300, cwd=cwd)
 
 
 def assert_refused(proc: subprocess.CompletedProcess, says: str) -> None:
@@ -160,7 +161,7 @@ def test_ros_arguments_are_split_by_rcl_rule() -> None:
 
 
 def test_the_vehicle_usage_error_is_one_line() -> None:
-    proc = subprocess.run([sys.executable, "-m", "uav_insar_sim.vehicle", "--sysid", "two",
+    proc = process_group.run([sys.executable, "-m", "uav_insar_sim.vehicle", "--sysid", "two",
                            "--listen", "udpin:127.0.0.1:0"], capture_output=True, text=True,
                           timeout=60)
     assert proc.returncode == 2 and proc.stdout == ""
@@ -182,9 +183,12 @@ def test_bad_ros_arguments_are_one_line_before_rcl_starts(tmp_path: Path, verb: 
 def test_a_reader_that_stops_early_gets_no_traceback() -> None:
     # `uav-insar solve --json | head -1`: the pipe closes after the first line
     proc = subprocess.Popen([*CLI, "solve", "--json"], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
-    assert proc.stdout.readline().strip() == "{"
-    proc.stdout.close()
-    err = proc.stderr.read()
-    assert proc.wait(timeout=60) == 0, err
+                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        assert proc.stdout.readline().strip() == "{"
+        proc.stdout.close()
+        err = proc.stderr.read()
+        assert proc.wait(timeout=60) == 0, err
+    finally:
+        process_group.kill_group(proc)
     assert "Traceback" not in err and "BrokenPipe" not in err, err

@@ -4,12 +4,11 @@ agents on position_source:=autopilot take their positions from the bridge-flown 
 the same brought up as one stack per UAV (`--per-uav-stacks`)."""
 from __future__ import annotations
 
-import os
 import re
-import signal
 import subprocess
 import sys
 
+import process_group
 import pytest
 
 pytestmark = pytest.mark.timeout(90)
@@ -21,7 +20,7 @@ MAVLINK_LINE = re.compile(r"uav(\d) via MAVLink: across-track error max ([\d.]+)
 
 def test_demo_flies_the_whole_chain_and_exits_0(ros_domain, repo, tmp_path):
     bag = tmp_path / "demo_bag"
-    proc = subprocess.run(
+    proc = process_group.run(
         [sys.executable, "-m", "uav_insar_planner.demo", "--num-slots", "10",
          "--domain-id", str(ros_domain), "--bag", str(bag)],
         cwd=repo, capture_output=True, text=True, timeout=60)
@@ -50,7 +49,7 @@ def test_demo_flies_the_whole_chain_and_exits_0(ros_domain, repo, tmp_path):
 
 
 def test_demo_without_mavlink_starts_no_bridge(ros_domain, repo):
-    proc = subprocess.run(
+    proc = process_group.run(
         [sys.executable, "-m", "uav_insar_planner.demo", "--num-slots", "5",
          "--time-scale", "40", "--no-mavlink", "--no-bag", "--domain-id", str(ros_domain)],
         cwd=repo, capture_output=True, text=True, timeout=60)
@@ -60,7 +59,7 @@ def test_demo_without_mavlink_starts_no_bridge(ros_domain, repo):
 
 
 def test_bad_demo_option_exits_2(repo):
-    proc = subprocess.run([sys.executable, "-m", "uav_insar_planner.demo",
+    proc = process_group.run([sys.executable, "-m", "uav_insar_planner.demo",
                            "--mavlink-base-port", "70000"], cwd=repo, capture_output=True,
                           text=True, timeout=30)
     assert proc.returncode == 2 and "--mavlink-base-port" in proc.stderr
@@ -70,7 +69,7 @@ def test_self_flown_options_without_no_mavlink_exit_2(repo):
     """--time-scale, --noise-std and --wind move self-flown agents only; the MAVLink path's
     agents ride on the vehicles, so they are refused there, not silently ignored."""
     for option in (["--time-scale", "5"], ["--noise-std", "0.1"], ["--wind", "1", "0", "0"]):
-        proc = subprocess.run([sys.executable, "-m", "uav_insar_planner.demo", *option],
+        proc = process_group.run([sys.executable, "-m", "uav_insar_planner.demo", *option],
                               cwd=repo, capture_output=True, text=True, timeout=30)
         assert proc.returncode == 2, option
         (line,) = proc.stderr.strip().splitlines()[-1:]
@@ -78,7 +77,7 @@ def test_self_flown_options_without_no_mavlink_exit_2(repo):
 
 
 def test_demo_flies_closed_loop_under_fading_and_wind(ros_domain, repo):
-    proc = subprocess.run(
+    proc = process_group.run(
         [sys.executable, "-m", "uav_insar_planner.demo", "--num-slots", "8", "--time-scale",
          "40", "--no-mavlink", "--offloading", "closed", "--fading", "--wind", "5", "0", "0",
          "--seed", "3", "--no-bag", "--domain-id", str(ros_domain)],
@@ -91,7 +90,7 @@ def test_demo_flies_closed_loop_under_fading_and_wind(ros_domain, repo):
 
 
 def test_bad_wind_exits_2(repo):
-    proc = subprocess.run([sys.executable, "-m", "uav_insar_planner.demo", "--wind", "99", "0",
+    proc = process_group.run([sys.executable, "-m", "uav_insar_planner.demo", "--wind", "99", "0",
                            "0"], cwd=repo, capture_output=True, text=True, timeout=30)
     assert proc.returncode == 2 and "--wind" in proc.stderr
 
@@ -100,17 +99,11 @@ def test_demo_flies_one_stack_per_uav(ros_domain, repo, tmp_path):
     """--per-uav-stacks: a bridge per UAV in /uavK flying its own vehicle, the agents in
     /uavK, and the planner's one start for every pass; the mission still completes."""
     bag = tmp_path / "stacks_bag"
-    proc = subprocess.Popen(
+    proc = process_group.run(
         [sys.executable, "-m", "uav_insar_planner.demo", "--per-uav-stacks", "--num-slots",
          "6", "--domain-id", str(ros_domain), "--bag", str(bag)],
-        cwd=repo, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-        start_new_session=True)
-    try:
-        out, _ = proc.communicate(timeout=80)
-    finally:
-        if proc.poll() is None:  # the demo and every node it started, by their group
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.communicate()
+        cwd=repo, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=80)
+    out = proc.stdout
     assert proc.returncode == 0, out[-4000:]
     starts = re.findall(r"\[uav(\d)\.mavlink_bridge\]: swarm: pass start from the planner "
                         r"\(plan (\S+ \S+)\): in [\d.]+ s, wall clock ([\d.]+)", out)
@@ -132,7 +125,7 @@ def test_demo_flies_one_stack_per_uav(ros_domain, repo, tmp_path):
 
 
 def test_per_uav_stacks_need_the_mavlink_path(repo):
-    proc = subprocess.run([sys.executable, "-m", "uav_insar_planner.demo", "--per-uav-stacks",
+    proc = process_group.run([sys.executable, "-m", "uav_insar_planner.demo", "--per-uav-stacks",
                            "--no-mavlink"], cwd=repo, capture_output=True, text=True,
                           timeout=30)
     assert proc.returncode == 2, proc.stderr
@@ -143,7 +136,7 @@ def test_per_uav_stacks_need_the_mavlink_path(repo):
 def test_a_uav_id_in_a_params_file_is_refused_for_the_stacks_bridges(repo, tmp_path):
     params = tmp_path / "params.yaml"
     params.write_text("/uav1/mavlink_bridge:\n  ros__parameters:\n    uav_id: 2\n")
-    proc = subprocess.run([sys.executable, "-m", "uav_insar_planner.demo", "--per-uav-stacks",
+    proc = process_group.run([sys.executable, "-m", "uav_insar_planner.demo", "--per-uav-stacks",
                            "--params-file", str(params)], cwd=repo, capture_output=True,
                           text=True, timeout=30)
     assert proc.returncode == 2, proc.stdout + proc.stderr

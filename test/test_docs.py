@@ -7,10 +7,10 @@ from __future__ import annotations
 
 import os
 import re
-import subprocess
 import sys
 from pathlib import Path
 
+import process_group
 import pytest
 import yaml
 
@@ -26,7 +26,7 @@ def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("site")
     if not MKDOCS.exists():
         pytest.fail("mkdocs is not installed beside this Python; run `make venv`")
-    proc = subprocess.run([str(MKDOCS), "build", "--strict", "-d", str(out)], cwd=REPO,
+    proc = process_group.run([str(MKDOCS), "build", "--strict", "-d", str(out)], cwd=REPO,
                           capture_output=True, text=True, timeout=300,
                           env=dict(os.environ, NO_MKDOCS_2_WARNING="1"))
     assert proc.returncode == 0, proc.stdout + proc.stderr

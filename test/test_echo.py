@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from process_group import kill_group
 
 from uav_insar_planner.ros.tools.msg_yaml import message_to_yaml
 
@@ -29,7 +30,8 @@ class Child:
     def __init__(self, args: tuple[str, ...], pythonpath: str) -> None:
         env = dict(os.environ, PYTHONPATH=pythonpath, PYTHONUNBUFFERED="1")
         self.proc = subprocess.Popen([sys.executable, *args], env=env, cwd=REPO, text=True,
-                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                     start_new_session=True)
         self.out = self.err = ""
         self._changed = threading.Condition()
         self._readers = [threading.Thread(target=self._read, args=(name,), daemon=True)
@@ -57,9 +59,8 @@ class Child:
         return self.proc.returncode, self.out, self.err
 
     def close(self) -> None:
-        """Kill it if it still runs, and release its pipes."""
-        if self.proc.poll() is None:
-            self.proc.kill()
+        """Kill its process group, and release its pipes."""
+        kill_group(self.proc)
         self.finish(10)
         self.proc.stdout.close()
         self.proc.stderr.close()

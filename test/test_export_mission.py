@@ -20,6 +20,7 @@ from datetime import datetime, timedelta, timezone
 from pathlib import Path
 
 import numpy as np
+import process_group
 import pytest
 
 from uav_insar_planner import load_params
@@ -349,12 +350,8 @@ class Copter:
                                             retries=60)
 
     def stop(self) -> None:
-        import os
-        import signal
 
-        if self.proc.poll() is None:
-            os.killpg(self.proc.pid, signal.SIGKILL)
-        self.proc.wait(timeout=10)
+        process_group.kill_group(self.proc)
         if self.m is not None:
             self.m.close()
         self.log.close()

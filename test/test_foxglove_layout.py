@@ -7,10 +7,10 @@ from __future__ import annotations
 
 import math
 import re
-import subprocess
 import sys
 from pathlib import Path
 
+import process_group
 import pytest
 import yaml
 from conftest import REPO
@@ -165,7 +165,7 @@ def test_a_missing_field_is_caught():
 
 
 def test_report_names_the_layout(mission, tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "uav_insar_planner.cli", "report",
+    proc = process_group.run([sys.executable, "-m", "uav_insar_planner.cli", "report",
                            str(mission.bag), "--out", str(tmp_path / "out"), "--no-progress"],
                           capture_output=True, text=True, timeout=90, cwd=REPO)
     assert proc.returncode == 0, proc.stderr

@@ -4,12 +4,12 @@ The nodes run as separate processes on real rclpy,
 the vehicles in this process; each test gets its own ROS_DOMAIN_ID (conftest `ros_domain`)."""
 import math
 import os
-import signal
 import subprocess
 import sys
 
 import pytest
 from diagnostic_msgs.msg import DiagnosticStatus
+from process_group import interrupt_group
 
 from uav_insar_planner.ros.claims import DISCOVERY_WINDOW_S
 from uav_insar_sim.vehicle.simulator import SimVehicle
@@ -33,13 +33,7 @@ def start(module: str, env: dict, *ros_args: str) -> subprocess.Popen:
 
 
 def finish(proc: subprocess.Popen) -> str:
-    if proc.poll() is None:
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(timeout=8)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait(timeout=5)
+    interrupt_group(proc)
     return proc.stdout.read()
 
 

@@ -3,6 +3,7 @@ import time
 
 import pytest
 from mavlink_fakes import MAV, FakePeer, wait_until
+from process_group import kill_group
 
 from uav_insar_planner.mavlink.autopilots import px4_custom_mode
 from uav_insar_sim.vehicle.cli import main
@@ -378,13 +379,17 @@ def test_cli_starts_a_booting_vehicle_with_a_home():
     probe.close()
     proc = subprocess.Popen([sys.executable, "-m", "uav_insar_sim.vehicle", "--sysid", "5",
                              "--listen", f"udpin:127.0.0.1:{port}", "--boot-s", "0",
-                             "--home", "47.0,8.0,400"], stdout=subprocess.PIPE, text=True)
+                             "--home", "47.0,8.0,400"], stdout=subprocess.PIPE, text=True,
+                            start_new_session=True)
     gcs = FakePeer(255, 191, dest=("127.0.0.1", port), heartbeat_hz=2.0)
     try:
         gpi = gcs.wait_for("GLOBAL_POSITION_INT", 10.0)
         assert (gpi.lat, gpi.lon, gpi.alt) == (470000000, 80000000, 400000)
     finally:
         gcs.close()
-        proc.terminate()
-        assert proc.wait(10) == 0
+        proc.terminate()  # the vehicle itself, as a service manager stops it
+        try:
+            assert proc.wait(10) == 0
+        finally:
+            kill_group(proc)
     assert main(["--sysid", "2", "--listen", "udpin:127.0.0.1:0", "--home", "95,0,0"]) == 2

@@ -2,10 +2,10 @@
 import csv
 import json
 import math
-import subprocess
 import sys
 
 import numpy as np
+import process_group
 import pytest
 
 from uav_insar_planner import model
@@ -119,7 +119,7 @@ def test_seeded_and_reproducible():
 
 
 def run(*args):
-    return subprocess.run([*CLI, *args], capture_output=True, text=True, timeout=120)
+    return process_group.run([*CLI, *args], capture_output=True, text=True, timeout=120)
 
 
 @pytest.mark.parametrize("args,field", [

@@ -7,11 +7,11 @@ import json
 import math
 import queue
 import statistics
-import subprocess
 import sys
 import threading
 import time
 
+import process_group
 import pytest
 from conftest import REPO
 
@@ -113,7 +113,7 @@ def test_bad_control_commands_are_refused_with_one_line_and_change_nothing(lab):
 def test_bad_switch_arguments_exit_2_with_one_line():
     for args in (["--port", "ground"], ["--port", "a=way-too-long-ifname0"],
                  ["--port", "a=x", "--port", "a=y"]):
-        done = subprocess.run([sys.executable, "-m", "uav_insar_sim.netlab.switch",
+        done = process_group.run([sys.executable, "-m", "uav_insar_sim.netlab.switch",
                                "--control", "/nonexistent/ctl", *args], cwd=REPO,
                               capture_output=True, text=True, timeout=30)
         assert done.returncode == EXIT_BAD_INPUT, done
@@ -121,7 +121,7 @@ def test_bad_switch_arguments_exit_2_with_one_line():
 
 
 def test_a_port_that_vanishes_kills_the_switch_with_exit_1(lab):
-    subprocess.run(["ip", "-n", lab.namespaces["uav0"], "link", "del", "eth0"], check=True)
+    process_group.run(["ip", "-n", lab.namespaces["uav0"], "link", "del", "eth0"], check=True)
     deadline = time.monotonic() + 10
     while lab.switch_exit_code() is None and time.monotonic() < deadline:
         time.sleep(0.05)
@@ -230,15 +230,15 @@ def test_nothing_is_discovered(lab, ros_domain, another_domain, case):
 
 def test_the_lab_touches_nothing_outside_and_tears_down_after_an_exception():
     dead = "nl999999x0-ground"  # a lab namespace of a process that no longer exists
-    subprocess.run(["ip", "netns", "add", dead], capture_output=True)
+    process_group.run(["ip", "netns", "add", dead], capture_output=True)
     lab = NetLab(["ground", "uav0"])
     try:
         with pytest.raises(RuntimeError, match="a failing test"), lab:
-            names = subprocess.run(["ip", "netns", "list"], capture_output=True,
+            names = process_group.run(["ip", "netns", "list"], capture_output=True,
                                    text=True).stdout
             assert dead not in names and all(ns in names for ns in lab.namespaces.values())
-            root = subprocess.run(["ip", "-4", "addr"], capture_output=True, text=True).stdout
-            root += subprocess.run(["ip", "-4", "route", "show", "table", "all"],
+            root = process_group.run(["ip", "-4", "addr"], capture_output=True, text=True).stdout
+            root += process_group.run(["ip", "-4", "route", "show", "table", "all"],
                                    capture_output=True, text=True).stdout
             assert lab.subnet + "." not in root
             sleeper = lab.start("uav0", ["sleep", "600"])
@@ -246,8 +246,8 @@ def test_the_lab_touches_nothing_outside_and_tears_down_after_an_exception():
     except LabUnavailable as exc:
         pytest.skip(str(exc))
     finally:
-        subprocess.run(["ip", "netns", "del", dead], capture_output=True)
+        process_group.run(["ip", "netns", "del", dead], capture_output=True)
     assert sleeper.poll() is not None
-    names = subprocess.run(["ip", "netns", "list"], capture_output=True, text=True).stdout
+    names = process_group.run(["ip", "netns", "list"], capture_output=True, text=True).stdout
     assert not any(ns in names for ns in lab.namespaces.values())
     assert lab.switch_exit_code() is not None

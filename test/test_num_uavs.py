@@ -15,6 +15,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import process_group
 import pytest
 from geometry_msgs.msg import Pose, PoseArray
 
@@ -135,15 +136,12 @@ def test_a_slave_lost_from_five_is_replanned_to_four_and_the_survivors_finish(ro
 
 def _run_group(cmd: list[str], timeout: float) -> tuple[int, str]:
     """Run `cmd` in its own process group; on timeout the whole group is killed."""
-    proc = subprocess.Popen(cmd, cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                            text=True, start_new_session=True)
     try:
-        out, _ = proc.communicate(timeout=timeout)
-    except subprocess.TimeoutExpired:
-        os.killpg(proc.pid, signal.SIGKILL)
-        out, _ = proc.communicate(timeout=20)
-        pytest.fail("timed out:\n" + out[-3000:])
-    return proc.returncode, out
+        done = process_group.run(cmd, cwd=REPO, stdout=subprocess.PIPE,
+                                 stderr=subprocess.STDOUT, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired as timed_out:
+        pytest.fail(f"timed out:\n{(timed_out.output or '')[-3000:]}")
+    return done.returncode, done.stdout
 
 
 def test_demo_flies_five_vehicles_and_the_report_follows_the_bag(ros_domain, tmp_path):
@@ -189,7 +187,7 @@ def test_demo_flies_two_uavs_on_the_mission_clock(ros_domain):
     (["--uavs", "7"], "--uavs: value 7"), (["--uavs", "1"], "--uavs: value 1"),
     (["--uavs", "2", "--kill-uav", "2"], "--kill-uav: value 2")])
 def test_a_bad_swarm_size_for_the_demo_exits_2_in_one_line(argv, field):
-    proc = subprocess.run([sys.executable, "-m", "uav_insar_planner.demo", *argv, "--no-bag"],
+    proc = process_group.run([sys.executable, "-m", "uav_insar_planner.demo", *argv, "--no-bag"],
                           cwd=REPO, capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2 and field in proc.stderr, proc.stderr
     assert len(proc.stderr.strip().splitlines()) <= 2  # argparse's usage line, then ours

@@ -5,8 +5,6 @@ from __future__ import annotations
 
 import csv
 import math
-import os
-import signal
 import socket
 import subprocess
 import sys
@@ -14,6 +12,7 @@ import time
 from dataclasses import fields
 from pathlib import Path
 
+import process_group
 import pytest
 from test_bad_input_cli import assert_one_line, run
 
@@ -32,15 +31,7 @@ SMALL_SWEEP = ("sweep", "h_amb_min_m", "0.9", "1.2", "3", "--schemes", "proposed
 
 def cli(*args: str, timeout: float = 120) -> subprocess.CompletedProcess:
     """`uav-insar ARGS` in its own process group, stopped by it (workers too) if it hangs."""
-    proc = subprocess.Popen([*CLI, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, start_new_session=True)
-    try:
-        out, err = proc.communicate(timeout=timeout)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
-    return subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
+    return process_group.run([*CLI, *args], capture_output=True, text=True, timeout=timeout)
 
 
 def csv_rows(path: Path) -> list[dict[str, str]]:

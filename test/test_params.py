@@ -1,9 +1,9 @@
 """Parameter files: Table I defaults, SI conversion in one place, and one clear line per error."""
 import math
-import subprocess
 import sys
 from pathlib import Path
 
+import process_group
 import pytest
 
 from uav_insar_planner.params import PARAM_SPECS, ParamError, default_params
@@ -78,7 +78,7 @@ def test_bad_params_file_cli(tmp_path, case):
     text, expected = BAD_FILES[case]
     f = tmp_path / "bad.yaml"
     f.write_text(text)
-    proc = subprocess.run([sys.executable, "-m", "uav_insar_planner.cli", "solve", "--params",
+    proc = process_group.run([sys.executable, "-m", "uav_insar_planner.cli", "solve", "--params",
                            str(f)], capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2
     assert proc.stdout == ""
@@ -94,17 +94,17 @@ def test_unreadable_kinds_of_params_file_are_one_line(tmp_path, path, expected):
     if path == "latin1":
         path = tmp_path / "p.yaml"
         path.write_bytes(b'"/**":\n  ros__parameters:\n    scheme: "\xe9"\n')
-    proc = subprocess.run([sys.executable, "-m", "uav_insar_planner.cli", "solve", "--params",
+    proc = process_group.run([sys.executable, "-m", "uav_insar_planner.cli", "solve", "--params",
                            str(path)], capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2 and expected in proc.stderr, proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1
 
 
 def test_missing_file_and_bad_set(tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "uav_insar_planner.cli", "solve", "--params",
+    proc = process_group.run([sys.executable, "-m", "uav_insar_planner.cli", "solve", "--params",
                            str(tmp_path / "nope.yaml")], capture_output=True, text=True,
                           timeout=60)
     assert proc.returncode == 2 and "cannot be read" in proc.stderr
-    proc = subprocess.run([sys.executable, "-m", "uav_insar_planner.cli", "solve", "--set",
+    proc = process_group.run([sys.executable, "-m", "uav_insar_planner.cli", "solve", "--set",
                            "looks"], capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2 and "expected NAME=VALUE" in proc.stderr

@@ -10,6 +10,7 @@ import signal
 import subprocess
 import sys
 
+import process_group
 import pytest
 from rcl_interfaces.msg import ParameterType
 from rcl_interfaces.srv import GetParameters, ListParameters
@@ -123,7 +124,7 @@ def test_refused_file_gets_one_line_and_exit_2_from_every_reader(procs, tmp_path
                 "demo": [sys.executable, "-m", "uav_insar_planner.demo", "--params-file", path]}
     prefixes = {"demo": ""}
     for name, cmd in commands.items():
-        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
+        proc = process_group.run(cmd, capture_output=True, text=True, timeout=60)
         assert proc.returncode == 2, (name, proc.stderr)
         assert _error_lines(proc.stderr, prefixes.get(name, "uav-insar: error: ")) == [line], \
             (name, proc.stderr)
@@ -156,7 +157,7 @@ def test_accepted_file_gives_the_node_the_values_the_reader_returns(watcher, pro
     assert {k: params.raw[k] for k in expected} == expected
     assert {k for k in read_params_file(path, fqn) if k in SPEC_BY_NAME} <= set(expected)
     if not namespace:
-        cli = subprocess.run([*CLI, "solve", "--params", path, "--json"], capture_output=True,
+        cli = process_group.run([*CLI, "solve", "--params", path, "--json"], capture_output=True,
                              text=True, timeout=120)
         assert cli.returncode == 0, cli.stderr
     args = ["-r", f"__ns:={namespace}"] if namespace else []
@@ -200,7 +201,7 @@ def _started(watcher, proc: subprocess.Popen, node: str) -> set[str]:
 
 
 def _demo(ros_domain: int, *args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "uav_insar_planner.demo", "--num-slots",
+    return process_group.run([sys.executable, "-m", "uav_insar_planner.demo", "--num-slots",
                            str(N), "--time-scale", "40", "--no-mavlink", "--no-bag",
                            "--domain-id", str(ros_domain), *args],
                           capture_output=True, text=True, timeout=90)
@@ -227,7 +228,7 @@ OVERRIDES = {
 @pytest.mark.parametrize("case", sorted(OVERRIDES))
 def test_an_override_gets_the_same_verdict_from_every_reader(watcher, procs, ros_domain, case):
     text, verdicts = OVERRIDES[case]
-    solve = subprocess.run([*CLI, "solve", "--set", text.replace(":=", "="), "--set",
+    solve = process_group.run([*CLI, "solve", "--set", text.replace(":=", "="), "--set",
                             f"num_slots={N}"], capture_output=True, text=True, timeout=120)
     demo = _demo(ros_domain, "-p", text)
     for name, proc, prefix in (("solve", solve, "uav-insar: error: "), ("demo", demo, "")):
@@ -260,7 +261,7 @@ def test_the_demo_refuses_a_value_it_would_override_itself(tmp_path):
     path = tmp_path / "closed.yaml"
     path.write_text(BASE + "agent1:\n  ros__parameters:\n    offloading: closed\n")
     assert load_params(path).num_slots == N  # the planner's scenario: not its parameter
-    demo = subprocess.run([sys.executable, "-m", "uav_insar_planner.demo", "--params-file",
+    demo = process_group.run([sys.executable, "-m", "uav_insar_planner.demo", "--params-file",
                            str(path)], capture_output=True, text=True, timeout=60)
     assert demo.returncode == 2 and demo.stdout == "", demo.stdout
     assert demo.stderr.splitlines() == [

@@ -8,12 +8,12 @@ Ports 29000-29999 (this file's own), a private ROS domain per test (conftest `ro
 from __future__ import annotations
 
 import os
-import signal
 import socket
 import subprocess
 import time
 
 import numpy as np
+import process_group
 import pytest
 from std_msgs.msg import Header
 from std_srvs.srv import Trigger
@@ -44,13 +44,7 @@ def start(name: str, *args: str) -> subprocess.Popen:
 
 def stop(proc: subprocess.Popen) -> str:
     """Ctrl-C its process group, SIGKILL after 8 s; its output."""
-    if proc.poll() is None:
-        os.killpg(proc.pid, signal.SIGINT)
-        try:
-            proc.wait(timeout=8)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait(timeout=5)
+    process_group.interrupt_group(proc)
     return proc.stdout.read()
 
 

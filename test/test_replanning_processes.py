@@ -11,6 +11,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+import process_group
 import pytest
 from diagnostic_msgs.msg import DiagnosticStatus
 
@@ -156,10 +157,9 @@ def test_killed_master_stops_the_mission_and_the_slaves_hold(watcher, procs):
 
 def test_demo_kill_uav_shows_the_replan_in_its_summary(ros_domain, repo):
     import re
-    import subprocess
     import sys
 
-    proc = subprocess.run(
+    proc = process_group.run(
         [sys.executable, "-m", "uav_insar_planner.demo", "--num-slots", "30", "--no-mavlink",
          "--no-bag", "--kill-uav", "2", "--at", "3", "--uav-timeout", str(TIMEOUT_S),
          "--domain-id", str(ros_domain)],

@@ -15,13 +15,12 @@ vehicles move faster, so the bridge's 5 s loss timeout and its pass clock stay w
 from __future__ import annotations
 
 import math
-import os
-import signal
 import subprocess
 import threading
 import time
 from pathlib import Path
 
+import process_group
 import pytest
 
 REPO = Path(__file__).resolve().parent.parent
@@ -54,10 +53,7 @@ def start_sitl(k: int, workdir) -> subprocess.Popen:
         stdin=subprocess.DEVNULL, start_new_session=True)
 
 
-def kill(proc: subprocess.Popen) -> None:
-    if proc.poll() is None:
-        os.killpg(proc.pid, signal.SIGKILL)
-    proc.wait(timeout=10)
+kill = process_group.kill_group
 
 
 def read_lines(proc: subprocess.Popen, into: list[str]) -> None:

@@ -7,11 +7,11 @@ Skipped when the SITL binary is absent."""
 from __future__ import annotations
 
 import os
-import signal
 import subprocess
 import time
 from pathlib import Path
 
+import process_group
 import pytest
 
 from uav_insar_planner.mavlink.bridge import Bridge, BridgeConfig
@@ -81,6 +81,4 @@ def test_arducopter_obeys_only_the_signed_bridge(tmp_path):
     finally:
         for link in links:
             (link.stop if isinstance(link, Bridge) else link.close)()
-        if sitl.poll() is None:
-            os.killpg(sitl.pid, signal.SIGKILL)
-        sitl.wait(timeout=10)
+        process_group.kill_group(sitl)

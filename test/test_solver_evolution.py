@@ -2,10 +2,10 @@
 from __future__ import annotations
 
 import math
-import subprocess
 import sys
 
 import numpy as np
+import process_group
 import pytest
 
 from uav_insar_planner.evaluate import evaluate
@@ -76,10 +76,10 @@ def test_multilook_is_refused_in_one_line():
 
 def test_cli_solves_with_evolution_and_refuses_a_bad_solver_in_one_line():
     cli = [sys.executable, "-m", "uav_insar_planner.cli", "solve"]
-    ok = subprocess.run([*cli, "--set", "solver=evolution"], capture_output=True, text=True,
+    ok = process_group.run([*cli, "--set", "solver=evolution"], capture_output=True, text=True,
                         timeout=120)
     assert ok.returncode == 0 and "solver evolution: FEASIBLE" in ok.stdout, ok.stderr
-    bad = subprocess.run([*cli, "--set", "solver=evolutoin"], capture_output=True, text=True,
+    bad = process_group.run([*cli, "--set", "solver=evolutoin"], capture_output=True, text=True,
                          timeout=60)
     lines = bad.stderr.strip().splitlines()
     assert bad.returncode == 2 and len(lines) == 1

@@ -4,10 +4,10 @@ topics page shows) is what the nodes create: the real `planner`, an `agent` and 
 node, holds exactly the registry's topics and services of each, with its types and QoS."""
 from __future__ import annotations
 
-import os
 import signal
 import subprocess
 
+import process_group
 import pytest
 
 from uav_insar_planner.demo.processes import free_udp_ports
@@ -130,13 +130,13 @@ def _stop(procs: list[subprocess.Popen], timeout: float = 10.0) -> None:
     """Ctrl-C to each node's process group (each has a session of its own), then SIGKILL."""
     for proc in procs:
         if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGINT)
+            process_group.kill_group(proc, signal.SIGINT)
     for proc in procs:
         try:
             proc.wait(timeout)
         except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait(timeout)
+            pass
+        process_group.kill_group(proc)
 
 
 def test_the_running_nodes_create_exactly_the_registry(watcher, procs):

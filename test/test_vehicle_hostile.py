@@ -3,11 +3,11 @@ bare pymavlink ground station: every bad value is refused with the right MAV_RES
 ignored, counted, and the position never turns NaN; bad command lines are one line and exit
 2; a vehicle loop that dies is recorded and makes the program exit 1."""
 import math
-import subprocess
 import sys
 import time
 from pathlib import Path
 
+import process_group
 import pytest
 from mavlink_fakes import MAV, FakePeer, wait_until
 
@@ -172,7 +172,7 @@ def test_a_dead_vehicle_loop_is_recorded_not_silent(rig):
 
 def test_the_vehicle_program_exits_1_when_its_loop_dies():
     """FAULT INJECTION (test/fault_injection.py): its link starts raising after 1 s."""
-    out = subprocess.run([sys.executable, str(FAULT), "1.0", "uav_insar_sim.vehicle.cli",
+    out = process_group.run([sys.executable, str(FAULT), "1.0", "uav_insar_sim.vehicle.cli",
                           "--sysid", "2", "--listen", "udpin:127.0.0.1:0"],
                          capture_output=True, text=True, timeout=30)
     assert out.returncode == 1, out
