@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from rcl_interfaces.msg import Parameter as ParameterMsg
 from rcl_interfaces.msg import ParameterType, ParameterValue
-from rcl_interfaces.srv import GetParameters, SetParameters
+from rcl_interfaces.srv import GetParameters, SetParameters, SetParametersAtomically
 from std_srvs.srv import Trigger
 
 from uav_insar_planner import load_params, solve
@@ -99,6 +99,34 @@ def test_runtime_sets_replan_refuse_or_convert_as_ros2_param_set_would(watcher, 
         assert not refused.successful and "read-only" in refused.reason, refused.reason
     assert probe.get("agent0", "uav_id").integer_value == 0
     assert [stop_node(p) for p in (planner, agent)] == [0, 0]
+
+
+def test_the_swarm_size_changes_at_run_time_in_one_atomic_set(watcher, procs):
+    """num_uavs and its per-UAV list change together or not at all: alone, each is refused
+    with the length it needs (ros2 param set sends one at a time); in one
+    set_parameters_atomically call (ros2 service call) the planner replans the new swarm."""
+    planner = procs("planner", "-p", f"num_slots:={N}")
+    probe = Probe(watcher)
+    assert probe.spin_until(lambda: probe.formations, 30.0), "no /formation"
+    assert len(probe.formations[0].poses) == 3
+
+    alone = probe.set("planner", "num_uavs", integer(5))
+    assert not alone.successful and "rate_min_mbps" in alone.reason, alone.reason
+    assert "list of 5" in alone.reason, alone.reason
+    rates = [10.0, 16.95, 1.0, 1.0, 1.0]
+    rate_list = ParameterValue(type=ParameterType.PARAMETER_DOUBLE_ARRAY,
+                               double_array_value=rates)
+    both = probe.call(SetParametersAtomically, "/planner/set_parameters_atomically",
+                      SetParametersAtomically.Request(parameters=[
+                          ParameterMsg(name="num_uavs", value=integer(5)),
+                          ParameterMsg(name="rate_min_mbps", value=rate_list)])).result
+    assert both.successful, both.reason
+    assert probe.spin_until(lambda: len(probe.formations) >= 2, 30.0), "no replan"
+    expected = solve(load_params(overrides={"num_slots": N, "num_uavs": 5,
+                                            "rate_min_mbps": rates})).formation
+    assert np.allclose(xz(probe.formations[-1]), expected, atol=1e-6)
+    assert probe.get("planner", "num_uavs").integer_value == 5
+    assert stop_node(planner) == 0
 
 
 def test_integer_in_params_file_is_the_double_meant(watcher, procs, tmp_path):
