@@ -186,7 +186,7 @@ class SwarmMonitor:
 
     def _slot_flown(self, k: int, rate: float, slot: int, power: float, left: float) -> None:
         p, u = self.params, self.uavs[k]
-        if k >= len(p.rate_min_bps) or (self.plan_power_w is not None
+        if k >= p.num_uavs or (self.plan_power_w is not None
                                          and k >= len(self.plan_power_w)):
             return  # a UAV beyond the scenario (num_uavs made smaller): nothing to check
         at_p_max = power >= p.p_max_w * (1.0 - SATURATION_RTOL)
