@@ -272,3 +272,16 @@ def test_agrees_with_multistart_slsqp(scheme, params):
     theirs, _ = _multistart(params, scheme, 100)
     assert ours <= theirs * (1 + 1e-6)  # never beaten by a local search
     assert theirs <= ours * (1 + 1e-6)  # and the local search reaches it
+
+
+@pytest.mark.parametrize("num_uavs", [4, 5, 6])
+def test_the_bound_minimisers_band_is_sampled_for_more_than_two_slaves(num_uavs):
+    """With K > 2 slaves the band spans the C8-tight set (no longer a zero-width point): it
+    holds the bound-optimal plan, and the exact optimum is below all of it."""
+    p = default_params().replace(num_uavs=num_uavs,
+                                 rate_min_mbps=[10.0, 16.95] + [1.0] * (num_uavs - 2))
+    exact = solve(p, scheme="proposed", objective="exact").sigma_h_m
+    bound_plan = solve(p, scheme="proposed", objective="bound").sigma_h_m
+    lo, hi = bound_minimizer_band(p, "proposed")
+    assert exact <= lo * (1 + 1e-9) and lo <= bound_plan <= hi
+    assert hi > lo * 1.05, (lo, hi)

@@ -7,6 +7,7 @@ sweeps draw as a band (see its docstring).
 from __future__ import annotations
 
 import math
+from itertools import combinations
 
 import numpy as np
 
@@ -28,9 +29,11 @@ def bound_minimizer_band(p: Params, scheme: str, samples: int = 160) -> tuple[fl
     formations with every C8 tight. When the bound's global minimum equals that value (Table I
     and the figure sweeps), the minimisers are that whole set: each slave on the curve
     r_k = b_max(r0) / |sin(theta_k - theta_0)|, any r0 and angles keeping C1-C11. The band is
-    sampled on a (r0, theta_1, theta_2) grid and polished; otherwise the minimiser found by
-    the global solver is reported as a zero-width band, as it is with more than two slaves
-    (the grid spans two angles). (nan, nan) if infeasible.
+    sampled: on a (r0, theta_1, theta_2) grid for up to two slaves; for more, where a grid over
+    K angles is too large, at `samples`^2 * 8 seeded random points of (r0, theta_1..K), an
+    inner estimate that always holds the solver's minimiser. When the bound's minimum is not
+    that value, the global solver's minimiser is reported as a zero-width band. (nan, nan) if
+    infeasible.
     """
     res = solve_global(p, scheme, "bound")
     if not res.feasible:
@@ -42,10 +45,13 @@ def bound_minimizer_band(p: Params, scheme: str, samples: int = 160) -> tuple[fl
     c8_value = sigma_phi_a / (2.0 * math.pi * math.sqrt(sum(model.h_amb_min_of(p, k) ** -2
                                                             for k in sc.slaves)))
     bound_value = _objective(p, res, scheme)
-    # The grid below spans at most two slave angles; with more slaves the band is not sampled.
-    if not (sc.on("C8") and bound_value <= c8_value * (1.0 + 1e-6)) or n > 2:
+    if not (sc.on("C8") and bound_value <= c8_value * (1.0 + 1e-6)):
         s = _exact_sigma(p, res, scheme)
         return s, s
+    if n > 2:  # the solver's minimiser is in the set too, whatever the draws miss
+        s = _exact_sigma(p, res, scheme)
+        lo, hi = _band_sampled(sc, samples * samples * 8)
+        return (s, s) if math.isnan(lo) else (min(lo, s), max(hi, s))
     r0s = (np.array([sc.r0_lo]) if sc.r0_lo == sc.r0_hi
            else np.linspace(sc.r0_lo, sc.r0_hi, samples // 2))
     th = np.linspace(sc.th_lo, sc.th_hi, samples)
@@ -92,3 +98,30 @@ def _band_on_grid(sc: rays.Scenario, r0s, th):
         return math.nan, math.nan
     return float(np.nanmin(s)), float(np.nanmax(s))
 
+
+
+def _band_sampled(sc: rays.Scenario, draws: int, seed: int = 0,
+                  chunk: int = 50_000) -> tuple[float, float]:
+    """The band's range over `draws` uniform random (r0, theta_1..K), each slave on its
+    C8-tight curve; C4 between every two slaves (the master's disk is in each slave's
+    ray). Seeded, so a sweep's band is the same run after run."""
+    rng = np.random.default_rng(seed)
+    lo, hi = math.inf, -math.inf
+    for start in range(0, draws, chunk):
+        m = min(chunk, draws - start)
+        r0 = rng.uniform(sc.r0_lo, sc.r0_hi, m)
+        ok, w, at = np.ones(m, bool), np.zeros(m), []
+        for k in sc.slaves:
+            th = rng.uniform(sc.th_lo, sc.th_hi, m)
+            ok_k, r_k, w_k = _c8_tight_sigma(sc, k, r0, th)
+            ok &= ok_k
+            w += np.where(ok_k, w_k, 0.0)
+            at.append((r_k, th))
+        if sc.on("C4"):
+            for (ri, ti), (rj, tj) in combinations(at, 2):
+                with np.errstate(invalid="ignore"):
+                    ok &= ri * ri + rj * rj - 2 * np.cos(ti - tj) * ri * rj >= sc.p.d_min**2
+        if ok.any():
+            s = rays.objective_from_weights(sc, r0[ok], w[ok])
+            lo, hi = min(lo, float(s.min())), max(hi, float(s.max()))
+    return (lo, hi) if math.isfinite(lo) else (math.nan, math.nan)
