@@ -164,10 +164,13 @@ def test_a_second_bridge_for_a_flown_uav_is_refused_before_sending_a_byte(ros_do
         while first_port.poll() == 0 and time.monotonic() < end:
             time.sleep(0.1)  # its heartbeats: it passed its discovery window and flies
         assert first_port.bytes > 0, "the first bridge never sent"
+        # one after the other: started together, each may see the other's (younger than the
+        # first's, still older than its own) claim before the first's, and name that one
         twin = bridge(1, f"udpout:127.0.0.1:{others[0].port}", 3)  # same UAV, same name
+        codes = [twin.wait(timeout=30)]
         all_in_one = start("mavlink_bridge", "--ros-args", "-p", "connections:=[" + ", ".join(
             f"'udpout:127.0.0.1:{c.port}'" for c in others[1:]) + "]")
-        codes = [p.wait(timeout=30) for p in (twin, all_in_one)]
+        codes.append(all_in_one.wait(timeout=30))
         outs = [stop(p) for p in (twin, all_in_one)]
         assert first.poll() is None  # the older one keeps flying
         sent = first_port.poll()

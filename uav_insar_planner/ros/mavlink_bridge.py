@@ -127,6 +127,7 @@ class MavlinkBridgeNode(Node):
     def stop(self) -> None:
         if self.bridge is not None:
             self.bridge.stop()
+            self._log_events()  # what the I/O thread did since the last tick is still said
 
     def _on_plan(self, formation: Formation, power: PowerSchedule) -> None:
         poses = list(formation.points)
@@ -146,7 +147,8 @@ class MavlinkBridgeNode(Node):
                 f"{power.plan_id} flies {len(poses)} UAVs; this bridge has target_sysids for "
                 f"{len(self.bridge.uavs)} and flies only those")
 
-    def _publish_poses(self) -> None:
+    def _log_events(self) -> None:
+        """Logs the bridge's events since the last call (its I/O thread cannot log)."""
         logger = self.get_logger()
         for event in self.bridge.drain_events():
             text = ("swarm" if event.uav < 0 else uav_name(event.uav)) + ": " + event.text
@@ -157,6 +159,9 @@ class MavlinkBridgeNode(Node):
                 logger.warning(text)
             else:
                 logger.info(text)
+
+    def _publish_poses(self) -> None:
+        self._log_events()
         stamp = self.get_clock().now().to_msg()
         for s in self.bridge.status():
             age = s.position_age_s
