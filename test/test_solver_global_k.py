@@ -308,6 +308,35 @@ def test_agrees_with_cartesian_multistart(k_slaves, scheme, d_min, ratio):
     assert res.lower_bound <= min(found)
 
 
+# Certificates that stopped at the 400 000-box limit before the split rule weighed r0 widths
+# by branch_bound.R0_WEIGHT_MANY (benchmarks/global_solver_hard.py): the five-UAV C8 ladder at
+# d_min 6 m (U2..U4 on different rungs: no symmetry cut; 400 148 boxes, gap 1.4e-4, now
+# about 107 000) and a random four-slave swarm pressed together near theta_max and on a
+# second common ray (about 403 000 boxes, gap 6.0e-5 without every box closed; now about
+# 354 000).
+HARD = {
+    "five UAVs, ladder 1.25, d_min 6 m": {"h_amb_ratio": 1.25, "d_min_m": 6.0},
+    "four slaves, d_min 5.54 m, h_amb_min 0.90 m": {"d_min_m": 5.54, "h_amb_min_m": 0.90},
+}
+
+
+@pytest.mark.parametrize("name", HARD)
+def test_hard_scenarios_close_their_certificate(name):
+    p = default_params().replace(num_uavs=5, rate_min_mbps=[10, 16.95, 1, 1, 1], **HARD[name])
+    res = solve_global(p, "proposed", "exact")
+    assert res.feasible and res.message == "" and res.certificate.endswith("all closed"), \
+        (res.message, res.iterations)
+    assert res.iterations < 400_000 and 0.0 <= res.gap <= 1e-4
+    assert violations(p, res.formation, res.p_com, "proposed") == []
+    ours = fused_sigma(p, res.formation, "proposed")
+    assert res.lower_bound <= ours * (1 + 1e-12)
+    found = reference_optima(p, "proposed", _starts(p, "proposed", res.formation,
+                                                    np.random.default_rng(4), 3, 6))
+    assert found, "no reference run ended feasible"
+    assert all(ours <= f * (1 + 1e-6) for f in found), (ours, min(found))
+    assert res.lower_bound <= min(found)
+
+
 def test_k_slave_infeasibility_is_proven_with_blocking_constraints():
     p = default_params()
     # static power above P_max: C9 fails for every UAV wherever it flies

@@ -83,13 +83,28 @@ def _order(boxes: np.ndarray, pairs: list[tuple[int, int]]) -> np.ndarray:
     return boxes[keep]
 
 
+# Weight of a box's relative r0 width against its angle widths in _split_dim, by the number
+# of slaves. The objective moves by about 2 per relative change of r0, and for one or two
+# slaves (the exact inner solve) that is the weight. With three or more the bound loosens
+# faster: it takes each slave's C8 top at the box's largest r0 (b_max grows with r0) and its
+# weight at the smallest, and C4 passes that slack on to the slaves pressed below a
+# C8-capped neighbour. 8 was chosen by measurement (boxes to close; Table I grown to K = 3..5,
+# the five-UAV d_min 6 m h_amb_ratio 1.25 scenario, 30 random three- and four-slave swarms at
+# d_min 4-6 m of benchmarks/global_solver_hard.py): it needed 0.23-0.95x the boxes of 2 on
+# all of them but one random swarm (1.6x), and 1.13x at h_amb_ratio 1 with five UAVs at
+# d_min 6 m; 4, 10 and 16 did worse than 8 overall. For K = 2 it does not pay (a
+# static-power sweep point of test_solver_global went past the node limit).
+R0_WEIGHT_FEW, R0_WEIGHT_MANY = 2.0, 8.0
+
+
 def _split_dim(sc: Scenario, b: np.ndarray) -> np.ndarray:
     """Which coordinate to halve (0: r0, j + 1: slave j's angle): the one whose width most
-    loosens the bound. The objective's relative sensitivity is about 2 per relative change of
-    r0 and about 1/|tan(theta - theta_0)| per radian of a slave angle (b_perp), plus the
-    coherence terms."""
+    loosens the bound. The objective's relative sensitivity is about 1/|tan(theta - theta_0)|
+    per radian of a slave angle (b_perp), plus the coherence terms; the bound's per relative
+    change of r0 is R0_WEIGHT_FEW or R0_WEIGHT_MANY (see there)."""
+    weight = R0_WEIGHT_MANY if len(sc.slaves) >= 3 else R0_WEIGHT_FEW
     with np.errstate(divide="ignore"):  # a box from r0 = 0 is infinitely wide: split r0
-        r0w = 2.0 * (b[:, R0B] - b[:, R0A]) / b[:, R0A]
+        r0w = weight * (b[:, R0B] - b[:, R0A]) / b[:, R0A]
     scores = [r0w]
     for j in range(len(sc.slaves)):
         a, z = slave_sets.angle_cols(j)
