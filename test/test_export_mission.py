@@ -7,7 +7,9 @@ every file; the tangent-plane error bound of mission_file/geodesy.py; bad input 
 2, nothing written) and an infeasible plan (exit 3). MAVSDK 3.17.4 imports each file
 (`mission_raw.import_qgroundcontrol_mission`) and uploads it to the simulated vehicle, which
 stores it. Where ArduCopter SITL exists (../shared/sitl), three copters fly their files in AUTO
-and start the pass together at the common UTC time (test_sitl_three_copters_fly_their_files).
+and start the pass together at the common UTC time (test_sitl_three_copters_fly_their_files);
+one of them stands RAISED_M above the track origin and flies the pass at its planned height
+above the origin all the same (the files' heights are AMSL).
 """
 from __future__ import annotations
 
@@ -27,7 +29,7 @@ from uav_insar_planner import load_params
 from uav_insar_planner.cli import main as cli
 from uav_insar_planner.exit_codes import EXIT_BAD_INPUT, EXIT_INFEASIBLE, EXIT_OK
 from uav_insar_planner.mission_file.geodesy import WGS84_A, WGS84_E2, latlon_to_ned, ned_to_latlon
-from uav_insar_planner.mission_file.qgc_plan import PREFLIGHT_S, RUN_UP_S
+from uav_insar_planner.mission_file.qgc_plan import PREFLIGHT_S, PX4_PASS_SEQ, RUN_UP_S
 from uav_insar_planner.solver import solve
 from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, uav_name, uavs
 
@@ -116,28 +118,50 @@ def test_every_position_is_the_planned_one_and_the_start_is_common(tmp_path):
         for item, y in zip([items[j] for j in (0, 1, 4, 5)], (-run_up, -run_up, length, length),
                            strict=True):
             lat, lon, alt = item["params"][4:7]
-            assert item["frame"] == 3 and item["Altitude"] == alt
+            # AMSL (MAV_FRAME_GLOBAL, QGroundControl's AltitudeMode 2): z_k above the origin
+            # wherever the UAV was armed
+            assert (item["frame"], item["AltitudeMode"], item["Altitude"]) == (0, 2, alt)
             x, y_back = track_xy(*exact_ne(HOME[0], HOME[1], lat, lon), BEARING)
             assert math.hypot(x - x_k, y_back - y) < 0.01, (k, item, x, y_back)
-            assert alt == pytest.approx(z_k, abs=0.01)
+            assert alt == pytest.approx(HOME[2] + z_k, abs=0.01)
+            # yaw: null on take-off and waypoints, as QGroundControl writes NaN there; 0 on
+            # the loiter, which ArduPilot refuses with NaN
+            assert item["params"][3] == (0.0 if item["command"] == 17 else None)
         delay = items[2]["params"]
-        assert delay[0] == -1 and delay[4:] == [None, None, None]
+        # no coordinate: 0 in params 5-7, as QGroundControl writes them, not null
+        assert delay[0] == -1 and delay[4:] == [0, 0, 0] and items[2]["frame"] == 2
         delays.add(tuple(delay[1:4]))
-        assert items[3]["params"][:2] == [1.0, pytest.approx(params.speed)]
+        assert items[3]["params"] == [1.0, pytest.approx(params.speed), -1.0, 0, 0, 0, 0]
+        assert doc["mission"]["globalPlanAltitudeMode"] == 2
     assert delays == {(start.hour, start.minute, start.second)}
 
 
-def test_rtl_px4_and_a_given_formation(tmp_path):
+def test_rtl_px4_and_a_given_formation(tmp_path, capsys):
+    """PX4 ignores NAV_DELAY's UTC time: its files hold at the start (LOITER_UNLIM) until
+    MISSION_START with first item PX4_PASS_SEQ, and say so."""
     assert export(tmp_path, "--formation", "-30,40,-36,45", "--end", "rtl", "--autopilot",
                   "px4", "--run-up-m", "0") == EXIT_OK
+    assert "uav-insar start-missions" in capsys.readouterr().out
     assert sorted(p.name for p in tmp_path.iterdir()) == ["uav0.plan", "uav1.plan"]
     doc = json.loads((tmp_path / "uav1.plan").read_text())
     items = doc["mission"]["items"]
     assert doc["mission"]["firmwareType"] == 12
-    assert [i["command"] for i in items] == [22, 16, 93, 178, 16, 20]
+    assert [i["command"] for i in items] == [22, 16, 17, 178, 16, 20]
+    assert items[PX4_PASS_SEQ]["command"] == 178  # PX4 missions have no home item: seq = index
+    assert items[2]["params"][4:] == items[1]["params"][4:]  # the hold is at the start
     x, y = track_xy(*exact_ne(HOME[0], HOME[1], *items[1]["params"][4:6]), BEARING)
     assert (x, y, items[1]["params"][6]) == (pytest.approx(-36, abs=0.01),
-                                             pytest.approx(0, abs=0.01), 45.0)
+                                             pytest.approx(0, abs=0.01), HOME[2] + 45.0)
+    assert items[5]["params"] == [0] * 7
+
+
+def test_the_relative_frame_writes_heights_above_each_uavs_home(tmp_path):
+    assert export(tmp_path, "--formation", "-30,40,-36,45", "--altitude-frame",
+                  "relative") == EXIT_OK
+    doc = json.loads((tmp_path / "uav0.plan").read_text())
+    assert doc["mission"]["globalPlanAltitudeMode"] == 1
+    for item in (doc["mission"]["items"][j] for j in (0, 1, 4, 5)):
+        assert (item["frame"], item["AltitudeMode"], item["params"][6]) == (3, 1, 40.0)
 
 
 def test_the_default_start_leaves_time_to_arm_climb_and_reach_the_start(tmp_path):
@@ -180,12 +204,14 @@ BAD = [
     (["--start-utc", "FAR"], "--start-utc"), (["--formation", "1,2,3"], "--formation"),
     (["--formation", "-30,40,-36,45", "--scheme", "fixed-master"], "--scheme"),
     (["--set", "speed_mps=0"], "speed_mps"), (["--run-up-m", "-1"], "--run-up-m"),
+    (["--autopilot", "px4", "--start-utc", "SOON"], "--start-utc"),
 ]
 
 
 @pytest.mark.parametrize(("extra", "named"), BAD, ids=[f"{b[1]}{i}" for i, b in enumerate(BAD)])
 def test_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path, capsys, extra, named):
-    table = {"PAST": (utc_in(-3600)).isoformat(), "FAR": utc_in(25 * 3600).isoformat()}
+    table = {"PAST": (utc_in(-3600)).isoformat(), "FAR": utc_in(25 * 3600).isoformat(),
+             "SOON": utc_in(600).isoformat()}
     extra = [table.get(a, a) for a in extra]
     args = {"--home": HOME_ARG, "--bearing": str(BEARING), "--out": str(tmp_path / "out")}
     for i in range(0, len(extra), 2):
@@ -283,7 +309,7 @@ def test_mavsdk_imports_each_file_and_uploads_it_to_the_vehicle(tmp_path, autopi
         for item, got in zip(items, stored[home:], strict=True):
             assert got.command == item["command"] and got.frame == item["frame"]
             p = item["params"]
-            if item["frame"] == 3:
+            if item["frame"] != 2:
                 assert (got.x, got.y) == (round(p[4] * 1e7), round(p[5] * 1e7))
                 assert got.z == pytest.approx(p[6], abs=1e-4)
             want = [math.nan if v is None else v for v in p[:4]]
@@ -297,7 +323,10 @@ SITL_DIR = Path(__file__).resolve().parent.parent.parent / "shared" / "sitl"
 ARDUCOPTER = SITL_DIR / "arducopter"
 SITL_SPEEDUP = 2  # as test_sitl.py
 SITL_INSTANCES = (7, 8, 9)  # TCP 5830, 5840, 5850: clear of the other SITL tests' -I0..-I2
-SITL_HOME = "-35.363261,149.165230,584,353"
+# uav1 stands on ground RAISED_M above the track origin (--home's altitude): the AMSL heights
+# fly it at z_1 above the origin all the same (relative ones would fly it RAISED_M too high)
+RAISED_M = 5.0
+RAISED = 1
 # AUTO takes off without a pilot raising the throttle (bit 1), as no RC is connected here
 SITL_PARM = "AUTO_OPTIONS 2\n"
 LEAD_SIM_S = 80.0  # vehicle (simulated) seconds from choosing the start to the start
@@ -322,7 +351,7 @@ def mission_item_ints(doc: dict) -> list[tuple]:
 class Copter:
     """One SITL instance: its process, its pymavlink link and what it reported."""
 
-    def __init__(self, k: int, instance: int, workdir: Path):
+    def __init__(self, k: int, instance: int, workdir: Path, ground_m: float = 0.0):
         import subprocess
 
         (workdir / "mission.parm").write_text(SITL_PARM)
@@ -331,7 +360,8 @@ class Copter:
         self.proc = subprocess.Popen(
             [str(ARDUCOPTER), "--model", "+", "--speedup", str(SITL_SPEEDUP), f"-I{instance}",
              "--sysid", str(self.sysid), "--defaults",
-             f"{SITL_DIR / 'copter.parm'},{workdir / 'mission.parm'}", "--home", SITL_HOME],
+             f"{SITL_DIR / 'copter.parm'},{workdir / 'mission.parm'}", "--home",
+             f"{HOME[0]},{HOME[1]},{HOME[2] + ground_m:g},353"],
             cwd=workdir, stdout=self.log, stderr=subprocess.STDOUT,
             stdin=subprocess.DEVNULL, start_new_session=True)
         self.port = 5760 + 10 * instance
@@ -339,7 +369,7 @@ class Copter:
         self.clock_ms: float | None = None  # vehicle unix ms - time_boot_ms (GPS-set RTC)
         self.using_gps = False
         self.mode, self.armed = -1, False
-        self.track: list[tuple] = []  # (wall, vehicle unix s, x, y, z)
+        self.track: list[tuple] = []  # (wall, vehicle unix s, x, y, z above the origin)
         self.acks: list = []
         self.requests: list = []
 
@@ -379,7 +409,7 @@ class Copter:
                 n, e = exact_ne(HOME[0], HOME[1], msg.lat / 1e7, msg.lon / 1e7)
                 x, y = track_xy(n, e, bearing)
                 self.track.append((time.monotonic(), (msg.time_boot_ms + self.clock_ms) / 1e3,
-                                   x, y, msg.relative_alt / 1e3))
+                                   x, y, msg.alt / 1e3 - HOME[2]))
 
     def vehicle_now(self) -> float:
         import time
@@ -448,7 +478,8 @@ def test_sitl_three_copters_fly_their_files(tmp_path):
     try:
         for k, instance in zip(UAVS, SITL_INSTANCES, strict=True):
             (tmp_path / f"copter{k}").mkdir()
-            copters.append(Copter(k, instance, tmp_path / f"copter{k}"))
+            copters.append(Copter(k, instance, tmp_path / f"copter{k}",
+                                  RAISED_M if k == RAISED else 0.0))
         t_boot = time.monotonic()
         for c in copters:  # all started first: a SITL's clock runs from its own start
             c.connect()
@@ -499,6 +530,7 @@ def test_sitl_three_copters_fly_their_files(tmp_path):
         # left the hold: the first sample 0.1 m along-track past the last one before t0
         depart = next(r for r in c.track if r[1] >= t0 and r[3] > held[-1][3] + 0.1)
         figures[f"uav{c.k}_depart_after_start_s"] = round(depart[1] - t0, 3)
+        figures[f"uav{c.k}_ground_above_origin_m"] = round(c.track[0][4], 3)
         figures[f"uav{c.k}_clock_ahead_s"] = round(clocks[c.k] - min(clocks), 3)
         ys_own.append(np.interp(t0 + 3.0, [r[1] for r in c.track], [r[3] for r in c.track]))
         figures[f"uav{c.k}_hold_error_m"] = round(math.dist(
@@ -520,6 +552,8 @@ def test_sitl_three_copters_fly_their_files(tmp_path):
     figures["along_track_spread_own_clocks_m"] = round(float(max(ys_own) - min(ys_own)), 3)
     print("SITL export-mission figures:", figures)
     for c in copters:
+        ground = RAISED_M if c.k == RAISED else 0.0
+        assert abs(figures[f"uav{c.k}_ground_above_origin_m"] - ground) < 1.0, figures
         assert 0.0 <= figures[f"uav{c.k}_depart_after_start_s"] < 2.0, figures
         assert abs(figures[f"uav{c.k}_pass_start_dx_m"]) < 0.5, figures
         assert abs(figures[f"uav{c.k}_pass_start_dz_m"]) < 0.5, figures

@@ -36,12 +36,13 @@ def verbs() -> dict[str, ModuleType]:
         record,
         report,
         solve,
+        start_missions,
         sweep,
     )
 
     return {"solve": solve, "sweep": sweep, "map": param_map, "plot-formation": plot_formation,
             "montecarlo": montecarlo, "export-mission": export_mission, "echo": echo,
-            "record": record, "report": report}
+            "record": record, "report": report, "start-missions": start_missions}
 
 
 def build_parser(table: dict[str, ModuleType]) -> tuple[argparse.ArgumentParser,

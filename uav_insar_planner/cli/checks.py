@@ -10,6 +10,7 @@ import math
 import os
 import shutil
 import tempfile
+from datetime import datetime, timedelta, timezone
 from pathlib import Path
 from urllib.parse import urlsplit
 
@@ -20,6 +21,9 @@ SWEEP_COUNT_MAX = 10_000  # evenly spaced values per sweep; each costs a solve p
 # Solves of a map (COUNT1 x COUNT2 x schemes): as many as the largest sweep may ask for.
 MAP_SOLVES_MAX = SWEEP_COUNT_MAX * len(SCHEMES)
 SCHEDULER_SCHEMES = ("tcp", "tls", "ws", "wss")  # the Dask transports a scheduler listens on
+# How far ahead a UTC instant may be: NAV_DELAY holds an hour of day, not a date, and a
+# HH:MM:SS instant is today's.
+INSTANT_AHEAD_MAX = timedelta(hours=24)
 
 
 def sweep_count(text: str) -> int:
@@ -126,3 +130,23 @@ def check_output_folder(option: str, path: Path) -> None:
     except OSError as exc:
         raise ParamError([f"{where}; {shown(str(parent))} cannot be written "
                           f"({exc.strerror or exc}); expected a writable folder"]) from None
+
+
+def utc_instant(option: str, text: str, now: datetime) -> datetime:
+    """`HH:MM:SS` (today, UTC) or an ISO 8601 time (UTC unless it has an offset) -> an aware
+    UTC datetime in (now, now + INSTANT_AHEAD_MAX), whole seconds; else one ParamError line
+    naming `option`."""
+    bad = (f"{option}: value {shown(text)} is not allowed; expected HH:MM:SS (UTC, today) "
+           "or an ISO 8601 time, whole seconds, after now and less than 24 h ahead (now "
+           f"{now:%Y-%m-%dT%H:%M:%SZ})")
+    try:
+        if text.count(":") == 2 and "T" not in text and " " not in text.strip():
+            t = datetime.combine(now.date(), datetime.strptime(text, "%H:%M:%S").time())
+        else:
+            t = datetime.fromisoformat(text.strip().replace("Z", "+00:00"))
+    except ValueError:
+        raise ParamError([bad]) from None
+    t = t.replace(tzinfo=timezone.utc) if t.tzinfo is None else t.astimezone(timezone.utc)
+    if t.microsecond or not now < t < now + INSTANT_AHEAD_MAX:
+        raise ParamError([bad])
+    return t

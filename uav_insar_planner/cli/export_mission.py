@@ -1,6 +1,7 @@
 """`uav-insar export-mission`: one QGroundControl `.plan` per flown UAV, for autopilots that fly
 the pass on their own (no companion computer, no ROS): take off, wait at the pass start until
-one UTC time common to all UAVs, fly the pass at v_y, hold or return (mission_file/qgc_plan).
+one UTC time common to all UAVs (ArduPilot) or until `uav-insar start-missions` (PX4), fly the
+pass at v_y, hold or return (mission_file/qgc_plan).
 
 The formation is the solved plan's (default) or `--formation`'s, as `uav-insar montecarlo`
 takes it. `--home` is the track origin (x = y = 0 on the ground), `--bearing` points the
@@ -14,19 +15,21 @@ from __future__ import annotations
 import argparse
 import json
 import math
-from datetime import datetime, timedelta, timezone
+from datetime import datetime, timezone
 from pathlib import Path
 
 import numpy as np
 
-from uav_insar_planner.cli.checks import check_output_folder
+from uav_insar_planner.cli.checks import check_output_folder, utc_instant
 from uav_insar_planner.cli.montecarlo import FORMATION_HELP, parse_formation
 from uav_insar_planner.cli.scenario import add_scenario_arguments, scenario_params
 from uav_insar_planner.exit_codes import EXIT_INFEASIBLE, EXIT_OK
 from uav_insar_planner.mission_file.geodesy import POLE_MARGIN_DEG
 from uav_insar_planner.mission_file.qgc_plan import (
+    ALTITUDE_FRAMES,
     ENDS,
     FIRMWARE_TYPES,
+    PX4_PASS_SEQ,
     RUN_UP_S,
     Home,
     Pass,
@@ -40,7 +43,6 @@ HELP = "write a QGroundControl .plan per UAV (the pass without a companion compu
 HOME_ALT_MAX_M = 1.0e4
 BEARING_MAX_DEG = 360.0
 LAT_MAX_DEG = 90.0 - POLE_MARGIN_DEG
-START_AHEAD_MAX = timedelta(hours=24)  # NAV_DELAY holds an hour of day, not a date
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -56,11 +58,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="fly this formation (metres) instead of planning one")
     parser.add_argument("--start-utc", metavar="HH:MM:SS|ISO",
                         help="when the passes start (UTC; HH:MM:SS is today); default: now + "
-                        "time to arm, climb and reach the start")
+                        "time to arm, climb and reach the start. ArduPilot only: PX4 ignores "
+                        "NAV_DELAY's time, its UAVs hold until `uav-insar start-missions`")
     parser.add_argument("--end", choices=ENDS, default="hold",
                         help="after the pass: hold at its end (default) or return to launch")
     parser.add_argument("--autopilot", choices=tuple(FIRMWARE_TYPES), default="ardupilot",
-                        help="the plan's firmwareType (default ardupilot)")
+                        help="the plan's firmwareType (default ardupilot); px4: each UAV holds "
+                        f"at its start until MISSION_START with first item {PX4_PASS_SEQ} "
+                        "(`uav-insar start-missions`)")
+    parser.add_argument("--altitude-frame", choices=tuple(ALTITUDE_FRAMES), default="amsl",
+                        help="amsl (default): heights AMSL, --home's altitude + z_k, right "
+                        "wherever a UAV is armed; relative: z_k above each UAV's own home, "
+                        "right only if every UAV arms at --home's altitude")
     parser.add_argument("--run-up-m", metavar="M",
                         help=f"start this far before y = 0 to reach v_y (default {RUN_UP_S:g} s "
                         "of v_y)")
@@ -98,25 +107,6 @@ def parse_bounded(option: str, text: str, lo: float, hi: float) -> float:
     return value
 
 
-def parse_start(text: str, now: datetime) -> datetime:
-    """`HH:MM:SS` (today, UTC) or an ISO 8601 time (UTC unless it has an offset) -> an aware
-    UTC datetime in (now, now + 24 h), whole seconds."""
-    bad = (f"--start-utc: value {shown(text)} is not allowed; expected HH:MM:SS (UTC, today) "
-           "or an ISO 8601 time, whole seconds, after now and less than 24 h ahead (now "
-           f"{now:%Y-%m-%dT%H:%M:%SZ})")
-    try:
-        if text.count(":") == 2 and "T" not in text and " " not in text.strip():
-            t = datetime.combine(now.date(), datetime.strptime(text, "%H:%M:%S").time())
-        else:
-            t = datetime.fromisoformat(text.strip().replace("Z", "+00:00"))
-    except ValueError:
-        raise ParamError([bad]) from None
-    t = t.replace(tzinfo=timezone.utc) if t.tzinfo is None else t.astimezone(timezone.utc)
-    if t.microsecond or not now < t < now + START_AHEAD_MAX:
-        raise ParamError([bad])
-    return t
-
-
 def _formation(args: argparse.Namespace, params) -> np.ndarray | None:
     if args.formation is not None:
         return parse_formation(args.formation)
@@ -136,9 +126,15 @@ def main(args: argparse.Namespace) -> int:
     bearing = parse_bounded("--bearing", args.bearing, -BEARING_MAX_DEG, BEARING_MAX_DEG)
     run_up = (RUN_UP_S * params.speed if args.run_up_m is None
               else parse_bounded("--run-up-m", args.run_up_m, 0.0, LENGTH_MAX_M))
-    start = parse_start(args.start_utc, now) if args.start_utc is not None else None
+    start = (utc_instant("--start-utc", args.start_utc, now) if args.start_utc is not None
+             else None)
     if args.formation is not None and args.scheme:
         raise ParamError(["--scheme: not allowed with --formation (the formation is given)"])
+    px4 = args.autopilot == "px4"
+    if px4 and start is not None:
+        raise ParamError(["--start-utc: not allowed with --autopilot px4 (PX4 ignores "
+                          "NAV_DELAY's UTC time; give the instant to `uav-insar start-missions "
+                          "--at`)"])
     out = Path(args.out)
     check_output_folder("--out", out)
     formation = _formation(args, params)
@@ -146,17 +142,23 @@ def main(args: argparse.Namespace) -> int:
         return EXIT_INFEASIBLE
     flown = {k: (float(formation[k, 0]), float(formation[k, 1])) for k in uavs(len(formation))
              if np.all(np.isfinite(formation[k]))}
-    if start is None:
+    if start is None and not px4:
         start = default_start(now, flown, run_up)
     flight = Pass(params.speed, params.num_slots * params.slot_duration_s * params.speed,
                   run_up, bearing)
-    texts = {k: json.dumps(plan_document(home, flight, x, z, start, args.end, args.autopilot),
-                           indent=2) + "\n" for k, (x, z) in flown.items()}
+    texts = {k: json.dumps(plan_document(home, flight, x, z, start, args.end, args.autopilot,
+                                         args.altitude_frame), indent=2) + "\n"
+             for k, (x, z) in flown.items()}
     out.mkdir(parents=True, exist_ok=True)
     for k, text in texts.items():
         (out / f"{uav_name(k)}.plan").write_text(text)
         x, z = flown[k]
         print(f"wrote {out / (uav_name(k) + '.plan')}: x {x:.3f} m, z {z:.3f} m")
-    print(f"passes start at {start:%Y-%m-%dT%H:%M:%SZ} (UTC), {flight.length_m:g} m at "
-          f"{flight.speed_mps:g} m/s after a {run_up:g} m run-up; bearing {bearing:g} deg")
+    heights = (f"heights AMSL (z + {home.alt_m:g} m)" if args.altitude_frame == "amsl" else
+               "heights above each UAV's home: arm every UAV at the home's altitude")
+    when = ("each UAV holds at its start until `uav-insar start-missions --at HH:MM:SS "
+            "CONNECTION...` starts them together (PX4 ignores NAV_DELAY's UTC time)" if px4
+            else f"passes start at {start:%Y-%m-%dT%H:%M:%SZ} (UTC)")
+    print(f"{when}; {flight.length_m:g} m at {flight.speed_mps:g} m/s after a {run_up:g} m "
+          f"run-up; bearing {bearing:g} deg; {heights}")
     return EXIT_OK

@@ -12,6 +12,8 @@
 - `report`: the bridge's events and per-UAV snapshots.
 - `sequencer`: the optional arm-and-take-off sequence with ACK retries.
 - `bridge`: the I/O loop that ties them together (`Bridge`).
+- `mission_start`: MAV_CMD_MISSION_START to every vehicle at one instant (`uav-insar
+  start-missions`: PX4's common start of the mission files).
 
 The ROS node `uav_insar_planner.ros.mavlink_bridge` is a thin adapter over `bridge.Bridge`.
 """

@@ -1,20 +1,34 @@
 """One QGroundControl `.plan` file per UAV: the pass flown by the autopilot on its own.
 
-The items, in order (MAVLink mission, `frame` 3 = MAV_FRAME_GLOBAL_RELATIVE_ALT for the
-positions, 2 = MAV_FRAME_MISSION for the others, as QGroundControl writes them):
+The items, in order (MAVLink mission; `frame` 0 = MAV_FRAME_GLOBAL, AMSL heights, or 3 =
+MAV_FRAME_GLOBAL_RELATIVE_ALT for the positions (`ALTITUDE_FRAMES`), 2 = MAV_FRAME_MISSION for
+the others, as QGroundControl writes them):
 
 1. MAV_CMD_NAV_TAKEOFF to z_k (its coordinate is the pass start: ArduCopter climbs where it
    stands, PX4 climbs and then flies there);
 2. MAV_CMD_NAV_WAYPOINT at the pass start (x_k, -run_up, z_k): the run-up lets the vehicle
    reach v_y before y = 0 (`run_up_m`, default RUN_UP_S of v_y);
-3. MAV_CMD_NAV_DELAY with param1 = -1 and param2..4 = hour, minute, second UTC: every UAV
-   waits at its start until that time on its own (GNSS-synced) clock, so the passes start
-   together without a link between them; a vehicle that arrives after that time waits for it
-   on the next day (ArduPilot), so the time must leave room for take-off and transit;
+3. the wait for the common start:
+   - ArduPilot: MAV_CMD_NAV_DELAY with param1 = -1 and param2..4 = hour, minute, second UTC:
+     every UAV waits at its start until that time on its own (GNSS-synced) clock, so the
+     passes start together without a link between them; a vehicle that arrives after that
+     time waits for it on the next day, so the time must leave room for take-off and transit;
+   - PX4: MAV_CMD_NAV_LOITER_UNLIM at the pass start. PX4 keeps only NAV_DELAY's param1 (a
+     hold time, clamped to 0) and ignores the UTC fields, so each UAV holds there until
+     MAV_CMD_MISSION_START with first item PX4_PASS_SEQ (`uav-insar start-missions`) moves it
+     on, at one instant for all;
 4. MAV_CMD_DO_CHANGE_SPEED (ground speed) to v_y, then MAV_CMD_NAV_WAYPOINT at the pass end
    y = num_slots * slot_duration_s * v_y;
 5. MAV_CMD_NAV_LOITER_UNLIM at the pass end (`end="hold"`) or MAV_CMD_NAV_RETURN_TO_LAUNCH
    (`end="rtl"`).
+
+Heights: "amsl" (the default) writes home.alt_m + z_k in MAV_FRAME_GLOBAL, so every UAV flies
+z_k above the track origin wherever it was armed, given that its AMSL altitude is as good as
+the baselines need. "relative" writes z_k above each UAV's own home (where it armed): right
+only when every UAV arms on ground at the origin's altitude (docs/hardware.md).
+
+Unused params: null where QGroundControl writes NaN (the waypoints' yaw), 0 where it writes 0
+(the coordinate of an item without one: its `_setDefaultsForCommand`).
 
 Track frame (x across-track, y along-track, z up) -> local NED about the home with
 `mavlink.frames.TrackFrame` (bearing of y from north), NED -> latitude / longitude with
@@ -34,7 +48,12 @@ from uav_insar_planner.mission_file.geodesy import ned_to_latlon
 FIRMWARE_TYPES = {"ardupilot": 3, "px4": 12}  # MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_AUTOPILOT_PX4
 VEHICLE_TYPE = 2  # MAV_TYPE_QUADROTOR
 ENDS = ("hold", "rtl")
-FRAME_MISSION, FRAME_RELATIVE_ALT = 2, 3
+FRAME_GLOBAL, FRAME_MISSION, FRAME_RELATIVE_ALT = 0, 2, 3
+#: height frame -> (MAV_FRAME, QGroundControl's AltitudeMode: 1 relative, 2 absolute)
+ALTITUDE_FRAMES = {"amsl": (FRAME_GLOBAL, 2), "relative": (FRAME_RELATIVE_ALT, 1)}
+#: Where a PX4 file's pass begins: the mission sequence number of its DO_CHANGE_SPEED (PX4
+#: missions have no home item, so the .plan's first item is seq 0), MISSION_START's param1.
+PX4_PASS_SEQ = 3
 CMD_WAYPOINT, CMD_LOITER_UNLIM, CMD_RTL, CMD_TAKEOFF = 16, 17, 20, 22
 CMD_DELAY, CMD_CHANGE_SPEED = 93, 178
 RUN_UP_S = 3.0  # ArduCopter's jerk-limited start (WPNAV_ACCEL 2.5 m/s^2) needs ~2.5 s to 5 m/s
@@ -83,44 +102,53 @@ def default_start(now: datetime, xz: dict[int, tuple[float, float]], run_up_m: f
     return t.replace(microsecond=0) + timedelta(seconds=1 if t.microsecond else 0)
 
 
-def _item(seq: int, command: int, params: list[float], altitude: float | None = None) -> dict:
+def _item(seq: int, command: int, params: list[float], frame: str | None) -> dict:
     item = {"type": "SimpleItem", "command": command,
-            "frame": FRAME_MISSION if altitude is None else FRAME_RELATIVE_ALT,
+            "frame": FRAME_MISSION if frame is None else ALTITUDE_FRAMES[frame][0],
             "params": [None if math.isnan(p) else p for p in params],
             "autoContinue": True, "doJumpId": seq}
-    if altitude is not None:
-        item |= {"AMSLAltAboveTerrain": None, "Altitude": altitude, "AltitudeMode": 1}
+    if frame is not None:
+        item |= {"AMSLAltAboveTerrain": None, "Altitude": params[6],
+                 "AltitudeMode": ALTITUDE_FRAMES[frame][1]}
     return item
 
 
-def mission_items(home: Home, flight: Pass, x: float, z: float, start: datetime, end: str
-                  ) -> list[dict]:
-    """The `.plan` items of the UAV flying across-track position x at height z."""
+def mission_items(home: Home, flight: Pass, x: float, z: float, start: datetime | None,
+                  end: str, frame: str = "amsl") -> list[dict]:
+    """The `.plan` items of the UAV flying across-track position x at height z above the
+    track origin; `start` is the NAV_DELAY time (ArduPilot), None for PX4's hold."""
     nan = math.nan
-    begin = track_to_latlon(home, flight.bearing_deg, x, -flight.run_up_m)
-    finish = track_to_latlon(home, flight.bearing_deg, x, flight.length_m)
-    items = [(CMD_TAKEOFF, [0.0, 0.0, 0.0, nan, *begin, z], z),
-             (CMD_WAYPOINT, [0.0, 0.0, 0.0, nan, *begin, z], z),
-             (CMD_DELAY, [-1.0, start.hour, start.minute, start.second, nan, nan, nan], None),
-             (CMD_CHANGE_SPEED, [1.0, flight.speed_mps, -1.0, 0.0, nan, nan, nan], None),
-             (CMD_WAYPOINT, [0.0, 0.0, 0.0, nan, *finish, z], z)]
+    alt = z + home.alt_m if frame == "amsl" else z
+    begin = (*track_to_latlon(home, flight.bearing_deg, x, -flight.run_up_m), alt)
+    finish = (*track_to_latlon(home, flight.bearing_deg, x, flight.length_m), alt)
+    # yaw 0 on the loiters, not NaN: ArduPilot refuses a NaN param4 on every command but a few
+    wait = ((CMD_LOITER_UNLIM, [0.0, 0.0, 0.0, 0.0, *begin], frame) if start is None else
+            (CMD_DELAY, [-1.0, start.hour, start.minute, start.second, 0.0, 0.0, 0.0], None))
+    items = [(CMD_TAKEOFF, [0.0, 0.0, 0.0, nan, *begin], frame),
+             (CMD_WAYPOINT, [0.0, 0.0, 0.0, nan, *begin], frame), wait,
+             (CMD_CHANGE_SPEED, [1.0, flight.speed_mps, -1.0, 0.0, 0.0, 0.0, 0.0], None),
+             (CMD_WAYPOINT, [0.0, 0.0, 0.0, nan, *finish], frame)]
     if end == "hold":
-        # yaw 0, not NaN: ArduPilot refuses a NaN param4 on every command but a few
-        items.append((CMD_LOITER_UNLIM, [0.0, 0.0, 0.0, 0.0, *finish, z], z))
+        items.append((CMD_LOITER_UNLIM, [0.0, 0.0, 0.0, 0.0, *finish], frame))
     else:
         items.append((CMD_RTL, [0.0] * 7, None))
-    return [_item(i + 1, cmd, [float(p) for p in params], alt)
-            for i, (cmd, params, alt) in enumerate(items)]
+    return [_item(i + 1, cmd, [float(p) for p in params], f)
+            for i, (cmd, params, f) in enumerate(items)]
 
 
-def plan_document(home: Home, flight: Pass, x: float, z: float, start: datetime, end: str,
-                  autopilot: str) -> dict:
-    """The whole `.plan` JSON object of one UAV (geofence and rally points empty)."""
+def plan_document(home: Home, flight: Pass, x: float, z: float, start: datetime | None,
+                  end: str, autopilot: str, frame: str = "amsl") -> dict:
+    """The whole `.plan` JSON object of one UAV (geofence and rally points empty); `start`
+    is ignored for PX4 (no NAV_DELAY: it holds for MISSION_START)."""
+    start = None if autopilot == "px4" else start
+    if start is None and autopilot != "px4":
+        raise ValueError("start: None; an ArduPilot file waits for a UTC time (NAV_DELAY)")
     return {"fileType": "Plan", "version": 1, "groundStation": "QGroundControl",
             "mission": {"version": 2, "firmwareType": FIRMWARE_TYPES[autopilot],
                         "vehicleType": VEHICLE_TYPE, "cruiseSpeed": flight.speed_mps,
-                        "hoverSpeed": flight.speed_mps, "globalPlanAltitudeMode": 1,
+                        "hoverSpeed": flight.speed_mps,
+                        "globalPlanAltitudeMode": ALTITUDE_FRAMES[frame][1],
                         "plannedHomePosition": [home.lat_deg, home.lon_deg, home.alt_m],
-                        "items": mission_items(home, flight, x, z, start, end)},
+                        "items": mission_items(home, flight, x, z, start, end, frame)},
             "geoFence": {"version": 2, "circles": [], "polygons": []},
             "rallyPoints": {"version": 2, "points": []}}

@@ -11,11 +11,15 @@ ground station sends can raise.
 Commands: COMPONENT_ARM_DISARM (force 21196), DO_SET_MODE, NAV_TAKEOFF (ArduPilot: param 7
 metres above home; PX4: param 7 AMSL, NaN for MIS_TAKEOFF_ALT), NAV_LAND,
 NAV_RETURN_TO_LAUNCH, SET_MESSAGE_INTERVAL, REQUEST_MESSAGE (512), GET_HOME_POSITION (410),
-REQUEST_AUTOPILOT_CAPABILITIES (520); anything else is UNSUPPORTED.
+REQUEST_AUTOPILOT_CAPABILITIES (520), MISSION_START (300: recorded in `mission_starts` with
+its UTC arrival, not flown; ACCEPTED as PX4's commander does, with a stored mission and
+-1 <= first item < its count, else DENIED; as ArduCopter, DENIED with a first or last item,
+FAILED without a mission); anything else is UNSUPPORTED.
 """
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Sequence
 
 from uav_insar_planner.mavlink.link import MAV
@@ -66,6 +70,8 @@ def _dispatch(vehicle, command: int, p: list[float], now: float) -> int:
         return ap.set_mode(custom, custom, sub, now)
     if command == MAV.MAV_CMD_NAV_TAKEOFF:
         return _takeoff(vehicle, p[6], now)
+    if command == MAV.MAV_CMD_MISSION_START:
+        return _mission_start(vehicle, p)
     if command == MAV.MAV_CMD_NAV_LAND:
         return ap.land()
     if command == MAV.MAV_CMD_NAV_RETURN_TO_LAUNCH:
@@ -109,3 +115,15 @@ def _takeoff(vehicle, param7: float, now: float) -> int:
     if not 0.0 < param7 < 10000.0:
         return refused
     return ap.takeoff(param7, now)
+
+
+def _mission_start(vehicle, p: list[float]) -> int:
+    first = as_int(p[0], -1, 65535, default=0, name="param1 (first item)")
+    last = as_int(p[1], -1, 65535, default=0, name="param2 (last item)")
+    count = len(vehicle.mission.items)
+    if vehicle._ap.px4:
+        result = ACCEPTED if count and first < count else DENIED
+    else:
+        result = DENIED if first or last else ACCEPTED if count else FAILED
+    vehicle.mission_starts.append((time.time(), first, result))
+    return result

@@ -117,6 +117,8 @@ class SimVehicle:
         self.commands: deque[tuple[int, int]] = deque(maxlen=MAX_COMMANDS_KEPT)
         self.errors = 0  # messages whose handling raised (answered FAILED, never fatal)
         self.mission = MissionStore()  # accepted and stored, not flown
+        #: (UTC arrival [s], first item, MAV_RESULT) of each MISSION_START, bounded as `commands`
+        self.mission_starts: deque[tuple[float, int, int]] = deque(maxlen=MAX_COMMANDS_KEPT)
 
     # ------------------------------------------------------------------------- public API
     @property
