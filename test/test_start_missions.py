@@ -168,3 +168,27 @@ def test_bad_input_is_one_line_exit_2_and_nothing_sent(vehicles, capsys, at, ext
     assert len(err.splitlines()) == 1 and named in err, err
     time.sleep(0.1)
     assert vehicle.stats.rx_bytes == 0, vehicle.stats
+
+
+@pytest.mark.timeout(30)
+def test_a_link_lost_after_the_heartbeats_is_retried_then_reported(vehicles, capsys):
+    """Heard, then silent from 1 s before the instant: MISSION_START goes out TRIES times,
+    ACK_TIMEOUT_S apart, and the vehicle is reported without an ACK (exit 1)."""
+    import threading
+
+    from uav_insar_planner.mavlink.mission_start import ACK_TIMEOUT_S, TRIES
+
+    vehicle = vehicles("px4", 2)
+    at = instant_in(3.0)
+    cut = threading.Timer(at.timestamp() - 1.0 - time.time(), vehicle.set_radio, (False,))
+    cut.start()
+    try:
+        assert cli(["start-missions", "--at", at.isoformat(),
+                    f"udpout:127.0.0.1:{vehicle.port}"]) == EXIT_CRASH
+        done = time.time()
+    finally:
+        cut.cancel()
+    line = capsys.readouterr().out.splitlines()[-1]
+    assert f"({TRIES} tries), no COMMAND_ACK" in line and "sysid 2" in line, line
+    assert (TRIES - 0.5) * ACK_TIMEOUT_S < done - at.timestamp() < (TRIES + 1) * ACK_TIMEOUT_S
+    assert not vehicle.mission_starts
