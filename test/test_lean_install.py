@@ -113,13 +113,13 @@ def test_the_lean_venv_has_the_nodes_and_none_of_the_planner_libraries(lean: Pat
     assert all((lean / name).exists() for name in ("agent", "mavlink_bridge"))
 
 
-def test_the_lean_venv_names_the_extra_for_the_planner_and_the_tools(lean: Path):
+def test_the_lean_venv_names_the_extra_for_the_planner_and_the_tools(lean: Path,
+                                                                     ros_domain: int):
     for cmd, prefix, modules in (
             ([str(lean / "uav-insar"), "solve"], "uav-insar solve: error: needs ",
              PLANNER_MODULES),
             ([str(lean / "planner"), "--ros-args"], "[ERROR] [planner]: needs ", SOLVER_MODULES)):
-        done = process_group.run(cmd, capture_output=True, text=True, timeout=60,
-                                 env=dict(os.environ, ROS_DOMAIN_ID="0"))
+        done = process_group.run(cmd, capture_output=True, text=True, timeout=60)
         assert done.returncode == 1 and done.stdout == "", (done.stdout, done.stderr)
         assert done.stderr == (f"{prefix}{', '.join(modules)}, which this install leaves out "
                                "(a UAV's lean install has only what agent and mavlink_bridge "
