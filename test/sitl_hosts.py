@@ -180,6 +180,8 @@ def truth_rows(path: Path, frame: TrackFrame) -> np.ndarray:
     raw = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
     lat0, lon0 = home()
     ground = raw[0, 3]
+    off = math.hypot(*latlon_to_ned(lat0, lon0, raw[0, 1] * 1e-7, raw[0, 2] * 1e-7))
+    assert off < 0.1, f"{path}: the first truth row is {off:.2f} m from home, not on it"
     rows = []
     for t, lat, lng, alt in raw:
         n, e = latlon_to_ned(lat0, lon0, lat * 1e-7, lng * 1e-7)
