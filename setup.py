@@ -7,6 +7,28 @@ package_name = "uav_insar_planner"
 # The Foxglove layout for the default swarm (report/foxglove_layout.py writes it): beside its
 # module for pip users, and in share/ for colcon's.
 FOXGLOVE_LAYOUT = "report/foxglove_layout.json"
+# The planner and the uav-insar tools, beyond what the UAV's nodes need (install_requires).
+PLANNER = [
+    # the solvers: scipy for `global` and `evolution`, CVXPY + Clarabel for `paper-ao`
+    "scipy>=1.10",
+    "cvxpy>=1.4",
+    "clarabel>=0.6",
+    # the figures and the progress bars of uav-insar
+    "matplotlib>=3.6",
+    "tqdm>=4.60",
+    # uav-insar record writes and uav-insar report reads rosbag2 bags with it; the report
+    # runs without ROS, so this is no `ros` wheel (pure Python, no ROS packages pulled).
+    "rosbags>=0.11",
+    # uav-insar record writes the bag's MCAP file with it (bag/writer.py): rosbags' writer
+    # cannot write what rosbag2 Jazzy writes (topic_type_hash, header, metadata records)
+    "mcap>=1.1",
+]
+ROS_WHEELS = [
+    "ros-jazzy-rclpy[fastrtps]>=7.1",
+    "ros-jazzy-common-interfaces>=5.3",
+    "ros-jazzy-std-srvs>=5.3",
+    "ros-jazzy-rcl-interfaces>=2.0",
+]
 
 setup(
     name=package_name,
@@ -20,36 +42,26 @@ setup(
     ],
     package_data={package_name: [FOXGLOVE_LAYOUT]},
     python_requires=">=3.10",
-    install_requires=[
-        "numpy>=1.24",
-        "cvxpy>=1.4",
-        "clarabel>=0.6",
-        "pyyaml>=6",
-        "matplotlib>=3.6",
-        "tqdm>=4.60",
-        "pymavlink>=2.4.40",
-        # uav-insar record writes and uav-insar report reads rosbag2 bags with it; the report
-        # runs without ROS, so this is no `ros` extra (pure Python, no ROS packages pulled).
-        "rosbags>=0.11",
-        # uav-insar record writes the bag's MCAP file with it (bag/writer.py): rosbags' writer
-        # cannot write what rosbag2 Jazzy writes (topic_type_hash, header, metadata records)
-        "mcap>=1.1",
-    ],
+    # What the UAV's nodes (agent, mavlink_bridge) import, and no more: a companion computer
+    # installs this (docs/hardware.md); pyserial for the autopilot on a serial port.
+    install_requires=["numpy>=1.24", "pyyaml>=6", "pymavlink>=2.4.40", "pyserial>=3.5"],
     extras_require={
-        # ROS 2 Jazzy from PyPI wheels (x86_64 Linux, CPython 3.10-3.13). Not for a sourced
-        # Jazzy: colcon installs no extras, so that rclpy stays the only one (see README).
-        "ros": [
-            "ros-jazzy-rclpy[fastrtps]>=7.1",
-            "ros-jazzy-common-interfaces>=5.3",
-            "ros-jazzy-std-srvs>=5.3",
-            "ros-jazzy-rcl-interfaces>=2.0",
-        ],
-        "test": ["pytest>=7", "pytest-timeout>=2", "ruff>=0.4", "scipy>=1.10", "mavsdk==3.17.4",
-                 "hypothesis>=6",
-                 # independent readers of the recorded bags (test/test_bag_record.py)
-                 "mcap>=1.1", "mcap-ros2-support>=0.5",
-                 # `--scheduler` of sweep / map on a local Dask cluster (test/test_param_map.py)
-                 "dask[distributed]>=2024.1"],
+        # The planner node and the uav-insar tools: cli/extras.py PLANNER_MODULES names them
+        # all, for the one line a lean install gives instead of a traceback.
+        "planner": PLANNER,
+        # ROS 2 Jazzy from PyPI wheels (x86_64 Linux, CPython 3.10-3.13), with the planner's
+        # libraries: the whole node suite. Not for a sourced Jazzy: colcon installs no
+        # extras, so that rclpy stays the only one (see README).
+        "ros": ROS_WHEELS + PLANNER,
+        # One UAV's companion computer: agent and mavlink_bridge on the ROS wheels, without
+        # the solver, plotting and bag libraries (docs/hardware.md).
+        "uav": ROS_WHEELS,
+        "test": PLANNER + [
+            "pytest>=7", "pytest-timeout>=2", "ruff>=0.4", "mavsdk==3.17.4", "hypothesis>=6",
+            # independent reader of the recorded bags (test/test_bag_record.py)
+            "mcap-ros2-support>=0.5",
+            # `--scheduler` of sweep / map on a local Dask cluster (test/test_param_map.py)
+            "dask[distributed]>=2024.1"],
         # `uav-insar sweep/map --scheduler ADDRESS`: the solves on a Dask cluster's workers
         "cluster": ["dask[distributed]>=2024.1"],
         # the documentation site (mkdocs.yml); its strict build is part of the tests
@@ -58,7 +70,7 @@ setup(
     zip_safe=True,
     maintainer="uav_insar_planner developers",
     maintainer_email="dev@example.invalid",
-    description="Three-UAV dual-baseline InSAR swarm planner (ROS 2 Jazzy node suite)",
+    description="Plan and fly a multi-baseline InSAR swarm of 2 to 6 UAVs (ROS 2 Jazzy nodes)",
     license="Apache-2.0",
     entry_points={
         "console_scripts": [

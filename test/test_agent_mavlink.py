@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import process_group
 import pytest
 from rclpy.parameter import Parameter
@@ -22,21 +23,99 @@ SCENARIO = {"num_slots": 4, "slot_duration_s": 0.5}
 def test_slots_start_where_the_vehicle_crosses_their_lines():
     params = load_params(overrides=SCENARIO)
     mission = ObservedMission(1, params)
-    assert mission.observe((0.0, -5.0, 10.0)) == [] and mission.phase == "wait"
+    assert mission.observe((0.0, -5.0, 10.0), 0.0) == [] and mission.phase == "wait"
     mission.set_plan((-30.0, 50.0), [1.0, 2.0, 3.0, 4.0], y_start=0.0)
+    mission.set_pass_start(1.0)
     step = params.speed * params.slot_duration_s  # 2.15 m between slot lines
-    assert mission.observe((-30.0, -0.5, 50.0)) == [] and mission.phase == "transit"
+    assert mission.observe((-30.0, -0.5, 50.0), 1.0) == [] and mission.phase == "transit"
     # one observation past two lines: both slots, each at its own crossing point
-    started = mission.observe((-29.0, step + 0.5, 52.0))
+    started = mission.observe((-29.0, step + 0.5, 52.0), 1.1)
     assert [s.slot for s in started] == [0, 1] and mission.phase == "track"
     assert started[1].position == pytest.approx(
         interpolate((-30.0, -0.5, 50.0), (-29.0, step + 0.5, 52.0), step))
     expected = model.fdma_rate(2.0, model.distance_to_station(
         *started[1].position, params.ground_station), params.comm_bandwidth_hz, params.beta_c)
     assert started[1].rate_bps == pytest.approx(float(expected))
-    assert mission.observe((-29.0, step, 52.0)) == []  # backwards: nothing
-    assert [s.slot for s in mission.observe((-29.0, 4 * step, 52.0))] == [2, 3]
+    assert mission.observe((-29.0, step, 52.0), 1.2) == []  # backwards: nothing
+    assert [s.slot for s in mission.observe((-29.0, 4 * step, 52.0), 1.3)] == [2, 3]
     assert mission.phase == "done"
+
+
+def _mission(pass_start_s: float | None = 10.0) -> ObservedMission:
+    mission = ObservedMission(1, load_params(overrides=SCENARIO))
+    mission.set_plan((-30.0, 50.0), [1.0, 2.0, 3.0, 4.0], y_start=0.0)
+    if pass_start_s is not None:
+        mission.set_pass_start(pass_start_s)
+    return mission
+
+
+@pytest.mark.parametrize("take_off_y", [-20.0, 0.0, 15.0])
+def test_no_slot_before_the_pass_start_wherever_the_uav_took_off(take_off_y):
+    """Behind, beside or ahead of the start: the UAV climbs, crosses the track forward on its
+    way to its formation point and holds there, jittering about the slot 0 line (a copter in
+    wind with GNSS noise), all before the pass start: no slot. Then slot 0 at the start."""
+    mission = _mission(pass_start_s=10.0)
+    rng = np.random.default_rng(int(take_off_y) + 100)
+    t = 0.0
+    # transit: from the take-off point to the formation point, through y = 0 and beyond
+    for y in np.linspace(take_off_y, 3.0, 20).tolist() + np.linspace(3.0, 0.0, 10).tolist():
+        assert mission.observe((-30.0, y, 50.0), t) == [], (take_off_y, y)
+        t += 0.1
+    # holding the line: +-0.3 m of jitter either side of y = 0 for 5 s
+    while t < 9.95:
+        assert mission.observe((-30.0, float(rng.normal(0.0, 0.15)), 50.0), t) == []
+        t += 0.1
+    assert mission.samples == [] and mission.phase == "transit"
+    # the pass starts: the first position at or past the line starts slot 0
+    held = (-30.0, -0.12, 50.0)
+    assert mission.observe(held, 10.0) == []  # at the start, still behind the line
+    first = mission.observe((-30.0, 0.31, 50.0), 10.1)
+    assert [s.slot for s in first] == [0]
+    assert first[0].position == pytest.approx(interpolate(held, (-30.0, 0.31, 50.0), 0.0))
+    assert mission.slot_times_s == [10.1]
+
+
+def test_a_uav_holding_just_ahead_of_the_line_starts_slot_0_at_the_start_where_it_is():
+    mission = _mission(pass_start_s=10.0)
+    assert mission.observe((-30.0, 0.2, 50.0), 9.9) == []
+    started = mission.observe((-30.0, 0.25, 50.1), 10.05)
+    assert [s.slot for s in started] == [0] and started[0].position == (-30.0, 0.25, 50.1)
+    # jitter back behind the line changes nothing; slot 1 waits for its own line
+    assert mission.observe((-30.0, -0.1, 50.0), 10.15) == []
+    assert mission.observe((-30.0, 2.0, 50.0), 10.5) == []
+    assert [s.slot for s in mission.observe((-30.0, 2.2, 50.0), 10.6)] == [1]
+
+
+def test_no_pass_start_no_slot_and_the_lag_is_told():
+    mission = _mission(pass_start_s=None)
+    for i, y in enumerate(np.linspace(-10.0, 20.0, 31)):
+        assert mission.observe((-30.0, float(y), 50.0), 0.1 * i) == []
+    assert mission.lag(100.0) is None  # no start: nothing is late, the agent says so itself
+    mission = _mission(pass_start_s=10.0)
+    mission.observe((-30.0, -4.0, 50.0), 11.0)
+    assert mission.lag(9.0) is None  # before the start
+    n, late, to_go = mission.lag(13.0)
+    assert (n, late, to_go) == (0, pytest.approx(3.0), pytest.approx(4.0))
+    assert mission.observe((-30.0, 0.0, 50.0), 13.1)[0].slot == 0
+    step = mission.params.speed * mission.params.slot_duration_s
+    # slot 1 was due at 10 s + 0.5 s: 2.7 s late, a whole slot still to go
+    assert mission.lag(13.2) == (1, pytest.approx(2.7), pytest.approx(step))
+    mission.observe((-30.0, step - 1.0, 50.0), 14.0)
+    assert mission.lag(14.0) == (1, pytest.approx(3.5), pytest.approx(1.0))
+    mission.observe((-30.0, 4 * step, 50.0), 14.1)
+    assert mission.phase == "done" and mission.lag(20.0) is None
+
+
+def test_a_new_pass_needs_a_new_start():
+    """A re-plan with the same y_start keeps the running pass; another y_start is another
+    pass, which starts only at its own pass start."""
+    mission = _mission(pass_start_s=10.0)
+    mission.set_plan((-31.0, 50.0), [1.0, 2.0, 3.0, 4.0], y_start=0.0)
+    assert mission.pass_start_s == 10.0
+    mission.set_plan((-31.0, 50.0), [1.0, 2.0, 3.0, 4.0], y_start=5.0)
+    assert mission.pass_start_s is None
+    mission.observe((-31.0, 4.0, 50.0), 20.0)
+    assert mission.observe((-31.0, 6.0, 50.0), 20.1) == []
 
 
 @pytest.mark.parametrize("bearing_deg, origin", [(0.0, [0.0, 0.0, 0.0]),

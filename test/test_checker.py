@@ -13,7 +13,7 @@ import pytest
 from uav_insar_planner import model
 from uav_insar_planner.evaluate import evaluate
 from uav_insar_planner.params import default_params
-from uav_insar_planner.schemes import static_power_w
+from uav_insar_planner.schemes import planned_rate_bps, static_power_w
 from uav_insar_planner.solver.power import power_schedule, schedules, station_radius_sq
 
 DEG = math.pi / 180
@@ -136,7 +136,8 @@ def test_station_disk_is_exact(scheme):
             d = model.distance_to_station(x, p.y_track, z, p.ground_station)
             rate = model.fdma_rate(sched, d, p.comm_bandwidth_hz, p.beta_c)
             met = (sched.max() <= p.p_max_w and sched.sum() * p.slot_duration_s
-                   <= p.e_max_j * (1 + 1e-12) and rate.min() >= p.rate_min_bps[k] * (1 - 1e-9))
+                   <= p.e_max_j * (1 + 1e-12)
+                   and rate.min() >= planned_rate_bps(p, k, scheme) * (1 - 1e-9))
             assert met == ok, (k, scale, scheme)
 
 

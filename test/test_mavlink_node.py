@@ -82,6 +82,10 @@ def test_planner_bridge_vehicles_end_to_end(watcher):
     try:
         assert spin_until(lambda: watcher.formations, 40.0), "no /formation from the planner"
         assert spin_until(in_formation, 30.0), [v.position_ned for v in vehicles]
+        # the pass starts at the planner's formation/start, start_delay_s after its capture
+        held = [v.position_ned[0] for v in vehicles]
+        assert spin_until(lambda: all(v.position_ned[0] - a > 0.2 for v, a in zip(
+            vehicles, held, strict=True)), 10.0), "the pass did not start"
         y0 = [v.position_ned[0] for v in vehicles]
         spin_until(lambda: False, 2.0)
         assert in_formation()
@@ -103,7 +107,7 @@ def test_planner_bridge_vehicles_end_to_end(watcher):
         finish(planner)
         for v in vehicles:
             v.stop()
-    assert "formation established" in bridge_out, bridge_out
+    assert "pass start from the planner" in bridge_out, bridge_out
 
 
 def test_a_dead_mavlink_thread_turns_the_bridge_error_and_exits_1(watcher):

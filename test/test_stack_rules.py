@@ -21,7 +21,7 @@ from uav_insar_planner.ros.start_msgs import PLAUSIBLE_S, decode_start, encode_s
 DEFAULTS = {s.name: s.default for s in BRIDGE_SPECS}
 
 
-def test_a_uav_id_takes_that_uavs_default_entry_and_the_planners_start():
+def test_a_uav_id_takes_that_uavs_default_entry_and_every_bridge_the_planners_start():
     config = from_parameters(dict(DEFAULTS, uav_id=2))
     config.validate()
     assert config.connections == ("udpout:127.0.0.1:14572",)
@@ -29,7 +29,8 @@ def test_a_uav_id_takes_that_uavs_default_entry_and_the_planners_start():
     assert config.uavs() == (2,)
     assert config.pass_start == "planner"
     everyone = from_parameters(DEFAULTS)
-    assert everyone.uavs() == (0, 1, 2) and everyone.pass_start == "capture"
+    # the all-in-one bridge too: one mission clock, which the agents' slots follow
+    assert everyone.uavs() == (0, 1, 2) and everyone.pass_start == "planner"
     own = from_parameters(dict(DEFAULTS, uav_id=1, connections=["tcp:10.0.0.2:5760"],
                                target_sysids=[7], pass_start="capture"))
     assert own.connections == ("tcp:10.0.0.2:5760",) and own.target_sysids == (7,)

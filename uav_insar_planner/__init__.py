@@ -1,4 +1,5 @@
-"""uav_insar_planner: plan and fly a three-UAV dual-baseline InSAR swarm (Lahmeri et al.).
+"""uav_insar_planner: plan and fly a multi-baseline InSAR swarm of 2 to 6 UAVs (swarm.py), after
+Lahmeri et al.'s dual-baseline three.
 
 Library use:
     >>> from uav_insar_planner import load_params, solve

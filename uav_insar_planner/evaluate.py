@@ -15,7 +15,7 @@ import numpy as np
 from uav_insar_planner import model
 from uav_insar_planner.params import Params
 from uav_insar_planner.plan import ConstraintStatus
-from uav_insar_planner.schemes import active_uavs, slave_uavs, static_power_w
+from uav_insar_planner.schemes import active_uavs, planned_rate_bps, slave_uavs, static_power_w
 from uav_insar_planner.swarm import uav_name
 
 # Relative feasibility tolerance: a constraint counts as met when its slack is at least
@@ -124,8 +124,10 @@ def evaluate(p: Params, formation: np.ndarray, p_com: np.ndarray, scheme: str) -
                       for k in slaves}, p.h_amb_min)
     c["C9"] = status({f"P{k}": float(min(power[k].min(), p.p_max_w - power[k].max()))
                       for k in uavs}, max(p.p_max_w, 1e-9))
-    c["C10"] = status({f"R{k}": float((rates[k] - p.rate_min_bps[k]).min()) for k in uavs},
-                      max(max(p.rate_min_bps), 1.0))
+    # C10 as planned: the rate margin on top of R_min,k (schemes.planned_rate_bps)
+    planned = {k: planned_rate_bps(p, k, scheme) for k in uavs}
+    c["C10"] = status({f"R{k}": float((rates[k] - planned[k]).min()) for k in uavs},
+                      max(max(planned.values()), 1.0))
     c["C11"] = status({f"E{k}": p.energy_budget_j(k) - float(power[k].sum()
                                                              * p.slot_duration_s)
                        for k in uavs}, p.e_max_j)

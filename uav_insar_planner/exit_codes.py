@@ -14,7 +14,8 @@ EXIT_CODE_TABLE: tuple[tuple[str, int, str], ...] = (
      "failed: a crash or a dead worker thread (a bug, one line naming it, never a zombie that "
      "looks alive), or a run that did not finish what it set out to do (the demo's mission; "
      "for `uav-insar echo`, as for `ros2 topic echo`, nothing to echo: no publisher or "
-     "message within --timeout, a type it cannot import)"),
+     "message within --timeout, a type it cannot import); or an install without the "
+     "`planner` extra the command needs (one line naming what is missing and the pip command)"),
     ("EXIT_BAD_INPUT", EXIT_BAD_INPUT,
      "bad input: one line per problem, on stderr, before any work and with nothing written"),
     ("EXIT_INFEASIBLE", EXIT_INFEASIBLE,

@@ -114,6 +114,11 @@ PARAM_SPECS: tuple[ParamSpec, ...] = (
        0.0, None, True),
     _f("rate_min_mbps", [10.0, 16.95, 1.0], "R_min,k, minimum data rate of each UAV, U0 first "
        "[Mbit/s] (C10)", 0.0, None, per_uav=True),
+    _f("rate_margin", 0.05, "mu, rate margin: plans size P_com so that R_k[n] >= (1 + mu) "
+       "R_min,k (C10 as planned), so a UAV a few metres off its planned point, or a link a "
+       "little weaker, still offloads R_min,k; 0 is the paper's C10. Costs power and energy, "
+       "and sigma_h only where C9 or C11 then limit the formation", 0.0, 1.0,
+       why="at 1 the plan doubles every rate"),
     _f("comm_bandwidth_hz", 1.0e9, "B_c, FDMA bandwidth per UAV [Hz]", 0.0, None, True),
     _f("ref_snr_db", 18.69, "beta_c, channel gain at 1 m over noise power [dB]", -200.0, 200.0),
     _f("coherence_rg_min", 0.8, "gamma_Rg^min, minimum baseline coherence (C7)", 0.01, 1.0,
@@ -239,7 +244,8 @@ PLANNER_SPECS = (
 #: The scenario parameters an agent needs (P_max and E_max for the closed loop).
 AGENT_SCENARIO_SPECS = tuple(SPEC_BY_NAME[n] for n in (
     "num_uavs", "num_slots", "slot_duration_s", "speed_mps", "ground_station_m",
-    "comm_bandwidth_hz", "ref_snr_db", "rate_min_mbps", "p_com_max_db", "e_com_max_j"))
+    "comm_bandwidth_hz", "ref_snr_db", "rate_min_mbps", "rate_margin", "p_com_max_db",
+    "e_com_max_j"))
 
 #: The planner's gcs/heartbeat period [s] (ros/gcs_link.py): 2 Hz is ~100 bytes/s on the
 #: radio, and a timeout of a few seconds then spans several heartbeats.
@@ -257,9 +263,11 @@ BRIDGE_SPECS = (
     ParamSpec("uav_id", int, -1, "fly this UAV only (0..num_uavs - 1: one stack per UAV, one "
               "connection and one sysid, default that UAV's); -1: every UAV (one ground radio)",
               -1, MAX_UAVS - 1),
-    ParamSpec("pass_start", str, "auto", "who starts the pass: capture = this bridge once "
-              "every UAV it flies is captured, planner = at the planner's formation/start; "
-              "auto = planner with uav_id, else capture", choices=PASS_STARTS),
+    ParamSpec("pass_start", str, "auto", "who starts the pass: planner = at the planner's "
+              "formation/start, the one mission clock the agents' slots follow too; capture = "
+              "this bridge once every UAV it flies is captured (flown without a planner: agents "
+              "on position_source autopilot then start no slot); auto = planner",
+              choices=PASS_STARTS),
     ParamSpec("connections", list,
               [vehicle_connection(k) for k in uavs(DEFAULT_NUM_UAVS)],
               "pymavlink connection string per UAV (or one shared): udpout:HOST:PORT, "

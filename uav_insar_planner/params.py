@@ -73,7 +73,8 @@ class Params:
     speed: float
     p_max_w: float
     e_max_j: float
-    rate_min_bps: tuple[float, ...]  # one per UAV (num_uavs)
+    rate_min_bps: tuple[float, ...]  # one per UAV (num_uavs): what a flight must deliver
+    rate_margin: float  # C10 as planned: schemes.planned_rate_bps
     comm_bandwidth_hz: float
     beta_c: float
     coherence_rg_min: float
@@ -308,6 +309,7 @@ def params_from_mapping(values: Mapping[str, Any]) -> Params:
         p_max_w=db_to_linear(v["p_com_max_db"]),
         e_max_j=v["e_com_max_j"],
         rate_min_bps=tuple(r * 1e6 for r in v["rate_min_mbps"]),
+        rate_margin=v["rate_margin"],
         comm_bandwidth_hz=v["comm_bandwidth_hz"],
         beta_c=db_to_linear(v["ref_snr_db"]),
         coherence_rg_min=v["coherence_rg_min"],

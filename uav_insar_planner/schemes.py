@@ -4,6 +4,9 @@
 - "single-baseline" (benchmark 1): U0 and U1 only;
 - "fixed-master" (benchmark 2): q_0 = q0_fixed, the master only allocates P_com,0;
 - "static-power" (benchmark 3): P_com,k[n] = E_max / (N delta_t) in every slot.
+
+C10 as planned (`planned_rate_bps`) keeps the rate margin mu (`rate_margin`) on top of R_min,k
+where the planner chooses the power; a flown slot is judged against R_min,k itself.
 """
 from __future__ import annotations
 
@@ -27,3 +30,11 @@ def slave_uavs(scheme: str, num_uavs: int) -> tuple[int, ...]:
 def static_power_w(p: Params) -> float:
     """Benchmark 3's constant power: the energy budget spread evenly, E_max / (N delta_t)."""
     return p.e_max_j / (p.num_slots * p.slot_duration_s)
+
+
+def planned_rate_bps(p: Params, k: int, scheme: str) -> float:
+    """The rate C10 holds for UAV k in a plan of `scheme`: (1 + mu) R_min,k, mu = rate_margin;
+    R_min,k for the static-power benchmark, whose fixed power E_max / (N delta_t) cannot buy a
+    margin (the paper's benchmark 3 stays as the paper has it)."""
+    margin = 0.0 if scheme == "static-power" else p.rate_margin
+    return p.rate_min_bps[k] * (1.0 + margin)

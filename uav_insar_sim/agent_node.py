@@ -33,6 +33,14 @@ sees it). A non-finite pose, or one in another frame than insar_track, is droppe
 (`bad_autopilot_poses`) and logged at most once per guard.DROP_LOG_PERIOD_S.
 `position_source: autopilot` with `mavlink_listen` is refused.
 
+In both watched modes the slots run on the planner's pass start (`formation/start`, the
+instant every bridge sets its vehicle moving; ros/start_msgs.py, for the plan flown): none
+before it, whatever the UAV does on its way to its formation point or while it holds there,
+then slot n at the first position at or past its line (observed_mission.py). An agent with a
+plan and no pass start says so once; one whose UAV has not reached its next line LAG_WARN_S
+after the clock put it there says so, with how far it is behind, every LAG_LOG_PERIOD_S
+until it does.
+
 Parameters (param_specs.py, all read-only: a mission is set up once): uav_id, time_scale
 (mission seconds per wall second), position_noise_std_m, noise_seed, max_speed_mps,
 max_accel_mps2, offloading, position_source, the simulated link's shadowing_std_db,
@@ -46,7 +54,9 @@ exit with code 1.
 """
 from __future__ import annotations
 
+import math
 import sys
+import time
 
 from geometry_msgs.msg import PoseStamped
 from rclpy.node import Node
@@ -69,11 +79,15 @@ from uav_insar_planner.ros.parameters import (
 from uav_insar_planner.ros.plan_gate import PlanGate
 from uav_insar_planner.ros.plan_msgs import Formation, PowerSchedule
 from uav_insar_planner.ros.run import run_node
+from uav_insar_planner.ros.start_msgs import StartFollower
 from uav_insar_planner.swarm import uav_name
 from uav_insar_sim.flight import choose_flight
 from uav_insar_sim.vehicle.simulator import SimVehicle
 
 TICK_PERIOD_S = 0.05  # wall clock; the mission clock advances time_scale times faster
+# A UAV this late at its next slot line is behind the pass, not merely jittering about it.
+LAG_WARN_S = 2.0
+LAG_LOG_PERIOD_S = 10.0
 
 
 class AgentNode(Node):
@@ -125,6 +139,11 @@ class AgentNode(Node):
                 self.k)), self._on_autopilot_pose, topics.RATE_DEPTH)
         self.gate = PlanGate(self, self._adopt_plan, f"{self.uav_name}: ",  # one plan at a time
                              topics.flown_plan(self.k), swarm_ns=ns)
+        self._starts = (StartFollower(self, ns, lambda: self.gate.current, self._on_pass_start,
+                                      f"{self.uav_name}: ") if self.flight.observed else None)
+        self._told_no_start = False
+        self._rate_tol = rate_tolerance_bps(params.rate_min_bps)
+        self._lag_logged_at = -LAG_LOG_PERIOD_S
         self.create_timer(TICK_PERIOD_S, self._tick)
         note = self.flight.start()
         if note:
@@ -161,6 +180,22 @@ class AgentNode(Node):
             self._announced = True
             self.get_logger().info(f"{self.uav_name}: plan received, {self.flight.how} to "
                                    f"x={x:.3f} m, z={z:.3f} m for {n} slots")
+        if self._starts is not None:
+            self._starts.plan_adopted()
+            if (self.mission.pass_start_s is None and self.mission.phase == "transit"
+                    and not self._told_no_start):
+                self._told_no_start = True
+                self.get_logger().info(f"{self.uav_name}: no pass start yet: no slot starts "
+                                       f"before the planner's {topics.FORMATION_START}")
+
+    def _on_pass_start(self, wall_time_s: float, label: str) -> None:
+        if self.mission.pass_start_s == wall_time_s:
+            return
+        self.mission.set_pass_start(wall_time_s)
+        ahead = wall_time_s - time.time()
+        when = f"in {ahead:.2f} s" if ahead >= 0 else f"{-ahead:.2f} s ago"
+        self.get_logger().info(f"{self.uav_name}: pass start {when}, wall clock "
+                               f"{wall_time_s:.3f} ({label}): slots from then on")
 
     # --- flight --------------------------------------------------------------------------
     def _tick(self) -> None:
@@ -173,11 +208,31 @@ class AgentNode(Node):
                 self._publish_pose(sample.position)
             self._rate_pub.publish(Float64(data=sample.rate_bps))
             self._publish_offload(sample)
+            if sample.margin_bps < -self._rate_tol:
+                self.get_logger().warning(f"{self.uav_name}: "
+                                          f"{self.mission.miss_reason(sample)}")
         if self.flight.own_poses:
             self._publish_pose(self.mission.actual_position())
         if self.mission.phase != self._phase:
             self._phase = self.mission.phase
             self._log_phase()
+        if self._starts is not None:
+            self._say_lag()
+
+    def _say_lag(self) -> None:
+        """A pass start whose line the UAV does not reach is never silent."""
+        now = time.monotonic()
+        lag = self.mission.lag(time.time())
+        if lag is None or lag[1] < LAG_WARN_S or now - self._lag_logged_at < LAG_LOG_PERIOD_S:
+            return
+        self._lag_logged_at = now
+        n, late, to_go = lag
+        where = ("no position from the autopilot yet" if math.isnan(to_go) else
+                 f"{to_go:.2f} m short of it")
+        self.get_logger().warning(f"{self.uav_name}: the pass started at wall clock "
+                                  f"{self.mission.pass_start_s:.3f}; slot {n}'s line "
+                                  f"(y = {self.mission.slot_line(n):.2f} m) is {late:.1f} s "
+                                  f"overdue, {where}")
 
     def _on_autopilot_pose(self, msg: PoseStamped) -> None:
         """position_source autopilot: validate, feed the schedule, republish as uav{K}/pose."""
@@ -192,7 +247,7 @@ class AgentNode(Node):
             if line:
                 self.get_logger().warning(f"{self.uav_name}: {line}")
             return
-        self.flight.feed(position)
+        self.flight.feed(position, msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec)
         out = PoseStamped()
         out.header.stamp = msg.header.stamp  # when the autopilot's position was read
         out.header.frame_id = topics.FRAME_ID
@@ -220,7 +275,11 @@ class AgentNode(Node):
     def _log_phase(self) -> None:
         log = self.get_logger()
         if self._phase == "track":
-            log.info(f"{self.uav_name}: {self.flight.track_started_text()}")
+            since = ""
+            if self.flight.observed and self.mission.slot_times_s:
+                since = (f", {self.mission.slot_times_s[0] - self.mission.pass_start_s:+.2f} s "
+                         "from the pass start")
+            log.info(f"{self.uav_name}: {self.flight.track_started_text()}{since}")
         elif self._phase == "hold":
             log.warning(f"{self.uav_name}: the plan took this UAV out in mid-flight (NaN target): "
                         f"holding position after {len(self.mission.samples)} slots")
@@ -228,8 +287,7 @@ class AgentNode(Node):
             log.info(f"{self.uav_name}: this scheme does not fly {self.uav_name}; holding at home")
         elif self._phase == "done":
             samples = self.mission.samples
-            tol = rate_tolerance_bps(self.mission.params.rate_min_bps)
-            met = sum(s.margin_bps >= -tol for s in samples)
+            met = sum(s.margin_bps >= -self._rate_tol for s in samples)
             worst = min(s.margin_bps for s in samples) / 1e6 if samples else float("nan")
             log.info(f"{self.uav_name}: mission complete: {len(samples)} slots flown, rate met in "
                      f"{met}, worst margin {worst:+.4g} Mbit/s")

@@ -4,18 +4,21 @@
   when the plan arrives and runs `time_scale` mission seconds per wall second.
 - `MavlinkFlight`: an embedded SITL-style vehicle (`vehicle.SimVehicle`) that the MAVLink
   bridge flies; the agent reads its position, converted to the track frame, and runs the
-  schedule on it (`observed_mission.ObservedMission`). time_scale, the position noise and
-  the wind do not apply then.
+  schedule on it (`observed_mission.ObservedMission`) from the planner's pass start. time_scale,
+  the position noise and the wind do not apply then.
 - `AutopilotFlight` (`position_source: autopilot`): the UAV's own autopilot, flown by the
   MAVLink bridge, whose positions the node feeds in (`feed`, from uavK/mavlink/pose, already
-  in the track frame) and the schedule runs on (`ObservedMission`); nothing is simulated but
-  the link. time_scale, the position noise and the wind do not apply then.
+  in the track frame, with the instant each was read) and the schedule runs on
+  (`ObservedMission`, from the planner's pass start); nothing is simulated but the link.
+  time_scale, the position noise and the wind do not apply then.
 
 In all three, the simulated link fading (`fading.LinkFading`) and the offloading law (open loop:
 the plan's powers; closed: `offload.ClosedLoopOffload`) are the agent parameters' (`link_of`).
 
 All offer the same calls: `start()` (returns a line to log, or ""), `stop()`,
 `set_plan(x, y, z, powers)`, `tick() -> started slots`, and `mission` (the slot schedule);
+`observed` says whether the slots wait for the planner's pass start (`mission.set_pass_start`:
+both watched flights) or run on the agent's own mission clock (SelfFlight);
 `own_poses` says whether the node publishes the mission's position on uavK/pose each tick and
 at each slot start (True), or republishes the autopilot's positions as they arrive (False:
 no fresh position, no pose, so a silent autopilot goes silent on uavK/pose too).
@@ -46,6 +49,7 @@ class SelfFlight:
     how = "flying"
     vehicle: SimVehicle | None = None
     own_poses = True
+    observed = False
 
     def __init__(self, mission: Mission, time_scale: float):
         self.mission = mission
@@ -78,6 +82,7 @@ class MavlinkFlight:
 
     how = "the bridge flies it"
     own_poses = True
+    observed = True
 
     def __init__(self, mission: ObservedMission, vehicle: SimVehicle, frame: TrackFrame,
                  listen: str):
@@ -98,10 +103,10 @@ class MavlinkFlight:
         self.mission.set_plan((x, z), powers, y_start=y)
 
     def tick(self) -> list[SlotSample]:
-        return self.mission.observe(self.frame.from_ned(*self.vehicle.position_ned))
+        return self.mission.observe(self.frame.from_ned(*self.vehicle.position_ned), time.time())
 
     def track_started_text(self) -> str:
-        return f"slot 0 started at y = {self.mission.y_start:g} m"
+        return f"slot 0 started at y = {self.mission.samples[0].position[1]:.3f} m"
 
 
 class AutopilotFlight:
@@ -110,10 +115,11 @@ class AutopilotFlight:
     how = "its autopilot flies it"
     vehicle: SimVehicle | None = None
     own_poses = False
+    observed = True
 
     def __init__(self, mission: ObservedMission):
         self.mission = mission
-        self._fed: list[Vec3] = []  # positions since the last tick, oldest first
+        self._fed: list[tuple[Vec3, float]] = []  # (position, read at) since the last tick
 
     def start(self) -> str:
         return "position_source autopilot: slots run on the autopilot's uavK/mavlink/pose"
@@ -121,19 +127,21 @@ class AutopilotFlight:
     def stop(self) -> None:
         pass
 
-    def feed(self, position: Vec3) -> None:
-        """One finite autopilot position (x, y, z) in the track frame, as it arrived."""
-        self._fed.append(position)
+    def feed(self, position: Vec3, wall_time_s: float) -> None:
+        """One finite autopilot position (x, y, z) in the track frame, as it arrived, and the
+        wall-clock instant the autopilot's position was read (its message's stamp)."""
+        self._fed.append((position, wall_time_s))
 
     def set_plan(self, x: float, y: float, z: float, powers: Sequence[float]) -> None:
         self.mission.set_plan((x, z), powers, y_start=y)
 
     def tick(self) -> list[SlotSample]:
         fed, self._fed = self._fed, []
-        return [sample for position in fed for sample in self.mission.observe(position)]
+        return [sample for position, t in fed for sample in self.mission.observe(position, t)]
 
     def track_started_text(self) -> str:
-        return f"slot 0 started at y = {self.mission.y_start:g} m (autopilot position)"
+        return (f"slot 0 started at y = {self.mission.samples[0].position[1]:.3f} m "
+                "(autopilot position)")
 
 
 Flight = SelfFlight | MavlinkFlight | AutopilotFlight

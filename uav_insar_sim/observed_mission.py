@@ -1,16 +1,23 @@
 """Position source for a UAV that something else flies (a MAVLink vehicle under the bridge).
 
-The agent only watches: it is given the UAV's actual position (`observe`) and applies the
-schedule where the plan puts it. Slot n starts when the UAV crosses, moving forward along the
-track, the line y = y_start + n v_y delta_t (`SlotSchedule.slot_line`), so the slots follow
-the vehicle's real progress whatever its clock or speed. The position at the crossing is
-interpolated between two observations, and the rate is computed there with P_com[k][n].
-A line already behind the UAV when the plan arrives waits until the UAV crosses it forward
-(the bridge brings every vehicle back to y_start before the pass begins). The mission is
-`done` once the line after the last slot is crossed.
+The agent only watches: it is given the UAV's actual position and when it was read
+(`observe`), and applies the schedule where the plan puts it. The pass runs on one mission
+clock, the planner's pass start (`formation/start`, wall clock, `set_pass_start`), which is
+also when every bridge sets its vehicle moving along the track. Before that instant no slot
+starts, whatever the UAV does: it may climb, cross the track on its way to its formation
+point, or hold that point jittering about the slot 0 line. From that instant on, slot n
+starts at the first position at or past its line y = y_start + n v_y delta_t
+(`SlotSchedule.slot_line`): interpolated onto the line when the observation before was behind
+it, else where the UAV is (it held just ahead of the line). So the slots follow the vehicle's
+real progress whatever its clock or speed, and wherever it took off. The mission is `done`
+once the line after the last slot is reached.
+
+`lag` tells how far the UAV is behind the mission clock: the pass start passed, its next line
+not reached while the clock says it should have been, for the agent to say so.
 """
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 from uav_insar_planner.mavlink.frames import Vec3
@@ -19,38 +26,74 @@ from uav_insar_sim.fading import LinkFading
 from uav_insar_sim.offload import ClosedLoopOffload
 from uav_insar_sim.slots import SlotSample, SlotSchedule
 
+# A new plan whose y_start differs by more than this is another pass (as the bridge's
+# trajectory.PassTrajectory): the pass start of the old one no longer applies.
+SAME_Y_START_M = 1e-3
+
 
 class ObservedMission(SlotSchedule):
-    """Slots of UAV `uav_id` under `params` (SI), triggered by the observed position."""
+    """Slots of UAV `uav_id` under `params` (SI), triggered by the observed position once the
+    pass has started."""
 
     def __init__(self, uav_id: int, params: Params, fading: LinkFading | None = None,
                  controller: ClosedLoopOffload | None = None):
         super().__init__(uav_id, params, fading, controller)
         self._last: Vec3 | None = None
+        self._last_t: float | None = None
+        self.pass_start_s: float | None = None  # wall clock; None: not (yet) known
+        self.slot_times_s: list[float] = []  # wall clock of the observation that started each
 
     def actual_position(self) -> Vec3 | None:
         """The last observed position (None before the first)."""
         return self._last
 
-    def observe(self, position: Sequence[float]) -> list[SlotSample]:
-        """Record the UAV at `position` (x, y, z); return the slots that started since the
-        last observation, in order."""
+    def set_plan(self, target_xz: tuple[float, float], powers: Sequence[float],
+                 y_start: float = 0.0) -> None:
+        if self.target_xz is not None and abs(float(y_start) - self.y_start) > SAME_Y_START_M:
+            self.pass_start_s = None
+        super().set_plan(target_xz, powers, y_start)
+
+    def set_pass_start(self, wall_time_s: float) -> None:
+        """The pass of the flown plan starts (started) at `wall_time_s` (time.time())."""
+        self.pass_start_s = float(wall_time_s)
+
+    def observe(self, position: Sequence[float], wall_time_s: float) -> list[SlotSample]:
+        """Record the UAV at `position` (x, y, z), read at `wall_time_s`; return the slots that
+        started with it, in order."""
         here = (float(position[0]), float(position[1]), float(position[2]))
         before, self._last = self._last, here
+        self._last_t = float(wall_time_s)
         started: list[SlotSample] = []
-        if before is None or self.phase not in ("transit", "track") or here[1] <= before[1]:
+        if (self.phase not in ("transit", "track") or self.pass_start_s is None
+                or wall_time_s < self.pass_start_s):
             return started
         while not self.all_flown:
             line = self.slot_line(len(self.samples))
-            if not before[1] < line <= here[1]:
+            if here[1] < line:
                 break
-            started.append(self.start_slot(interpolate(before, here, line)))
+            crossed = before is not None and before[1] < line
+            started.append(self.start_slot(interpolate(before, here, line) if crossed else here))
+            self.slot_times_s.append(self._last_t)
         if self.all_flown and here[1] >= self.slot_line(self.num_slots):
             self.phase = "done"
         return started
 
+    def lag(self, wall_now_s: float) -> tuple[int, float, float] | None:
+        """(next slot n, seconds since the clock put the UAV on its line, metres still to go
+        to it) while the pass has started and the UAV has not reached slot n's line by its
+        time pass_start + n delta_t; None otherwise (no start yet, on time, done, held)."""
+        if (self.pass_start_s is None or self.phase not in ("transit", "track")
+                or self.all_flown):
+            return None
+        n = len(self.samples)
+        late = wall_now_s - (self.pass_start_s + n * self.params.slot_duration_s)
+        if late <= 0.0:
+            return None
+        to_go = self.slot_line(n) - self._last[1] if self._last is not None else math.nan
+        return n, late, to_go
+
 
 def interpolate(a: Vec3, b: Vec3, y: float) -> Vec3:
-    """The point of segment a-b (a[1] < b[1]) where the along-track coordinate equals y."""
+    """The point of segment a-b (a[1] < y <= b[1]) where the along-track coordinate equals y."""
     s = (y - a[1]) / (b[1] - a[1])
     return (a[0] + s * (b[0] - a[0]), y, a[2] + s * (b[2] - a[2]))

@@ -21,8 +21,10 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from uav_insar_planner import model
 from uav_insar_planner.mavlink.frames import Vec3
 from uav_insar_planner.params import Params
+from uav_insar_planner.schemes import planned_rate_bps
 from uav_insar_sim.fading import LinkFading
 from uav_insar_sim.offload import ClosedLoopOffload
 from uav_insar_sim.radio import achieved_rate
@@ -96,6 +98,34 @@ class SlotSchedule:
         """Along-track position y at which slot n starts (n = num_slots: the pass's end)."""
         return self.y_start + n * self.params.speed * self.params.slot_duration_s
 
+    def miss_reason(self, sample: SlotSample) -> str:
+        """Why `sample` fell short of R_min, in words: where the UAV was against the plan's
+        point for that slot, the power applied against the plan's, the simulated link's gain."""
+        p = self.params
+        station = tuple(p.ground_station)
+        d = float(model.distance_to_station(*sample.position, station))
+        why = [f"slot {sample.slot} missed R_min by {-sample.margin_bps:.0f} bit/s "
+               f"({sample.rate_bps / 1e6:.6g} of {sample.rate_min_bps / 1e6:g} Mbit/s)"]
+        if self.target_xz is not None:
+            x, z = self.target_xz
+            planned = float(model.distance_to_station(x, self.slot_line(sample.slot), z, station))
+            # the plan's power meets (1 + mu) R_min at `planned`: how much farther it still holds
+            reach = planned * math.sqrt(_snr(planned_rate_bps(p, self.uav_id, "proposed"), p) /
+                                        _snr(sample.rate_min_bps, p)) if sample.rate_min_bps else d
+            why.append(f"{d - planned:+.2f} m from the ground station against the plan's point "
+                       f"(its rate margin covers {reach - planned:+.2f} m)")
+        if not math.isclose(sample.power_w, sample.planned_power_w, rel_tol=1e-9):
+            caps = [f"P_max {p.p_max_w:.3g} W"] if sample.power_w >= p.p_max_w * (1 - 1e-9) else []
+            energy_left = sample.energy_left_j + sample.power_w * p.slot_duration_s
+            if sample.power_w * p.slot_duration_s >= energy_left * (1 - 1e-9):
+                caps.append(f"the {energy_left:.3g} J left of E_max")
+            why.append(f"power {sample.power_w:.4g} W against the plan's "
+                       f"{sample.planned_power_w:.4g} W" + (f", capped by {' and '.join(caps)}"
+                                                           if caps else ""))
+        if sample.gain != 1.0:
+            why.append(f"link gain {10 * math.log10(sample.gain):+.2f} dB (fading)")
+        return "; ".join(why)
+
     def start_slot(self, position: Vec3) -> SlotSample:
         """Start the next slot with the UAV at `position`: the power applied (the plan's, or
         the controller's) and the rate there over the (possibly faded) link."""
@@ -116,3 +146,8 @@ class SlotSchedule:
         self.samples.append(sample)
         self.phase = "track"
         return sample
+
+
+def _snr(rate_bps: float, p: Params) -> float:
+    """The SNR that carries `rate_bps` over B_c (eq. 17 inverted)."""
+    return math.expm1(rate_bps / p.comm_bandwidth_hz * math.log(2.0))

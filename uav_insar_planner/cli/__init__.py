@@ -2,7 +2,8 @@
 report missions.
 
 One module per verb, as ros2cli's: `HELP` (one line), `add_arguments(parser)` and
-`main(args) -> int`. A verb with `ROS_ARGS = True` also takes `--ros-args ...`, which the
+`main(args) -> int`. A verb needs the `planner` extra (cli/extras.py) unless it says `LEAN =
+True`. A verb with `ROS_ARGS = True` also takes `--ros-args ...`, which the
 dispatcher takes out before argparse (parser.split_ros_args) and hands over as `args.ros_args`;
 the rclpy work of such a verb is in ros/tools/, imported only when it runs. The exit codes are
 exit_codes.py's for every verb; errors are one line on stderr: a ParamError line as
@@ -16,6 +17,7 @@ import sys
 from collections.abc import Sequence
 from types import ModuleType
 
+from uav_insar_planner.cli.extras import missing_line
 from uav_insar_planner.cli.parser import OneLineParser, one_line, split_ros_args
 from uav_insar_planner.exit_codes import EXIT_BAD_INPUT, EXIT_CRASH, EXIT_OK, CommandFailed
 from uav_insar_planner.params import ParamError
@@ -73,6 +75,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if unknown:  # said by the verb's parser, as its other usage errors
             verb_parsers[args.verb].error("unrecognized arguments: " + " ".join(unknown))
         args.ros_args = ros_args
+        if not getattr(table[args.verb], "LEAN", False) and (line := missing_line()):
+            raise CommandFailed(line, EXIT_CRASH)
         return table[args.verb].main(args)
     except CommandFailed as exc:
         print(one_line(f"{PROG} {argv[0]}: error: {exc}"), file=sys.stderr)

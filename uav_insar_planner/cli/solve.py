@@ -37,8 +37,14 @@ def main(args: argparse.Namespace) -> int:
     if not (limit >= 0.0 and math.isfinite(limit)):
         raise ParamError([f"--min-separation-m: value {limit!r} is not allowed; expected a "
                           "finite number >= 0"])
-    plan = solve(scenario_params(args))
-    print(json.dumps(plan.to_dict(), indent=2) if args.json else format_plan(plan))
+    params = scenario_params(args)
+    plan = solve(params)
+    price = margin_price(params, plan, solve)
+    if args.json:
+        print(json.dumps({**plan.to_dict(), "rate_margin": price}, indent=2))
+    else:
+        print(format_plan(plan))
+        print(price["text"])
     closest = closest_pair(plan.formation) if plan.feasible else None
     if closest is not None and closest[0] < limit:
         d, j, k = closest
@@ -46,3 +52,28 @@ def main(args: argparse.Namespace) -> int:
               f"apart, closer than {limit:g} m: with standard GNSS (1.5-3 m error) they may "
               "collide; fly RTK or raise d_min_m", file=sys.stderr)
     return EXIT_OK if plan.feasible else EXIT_INFEASIBLE
+
+
+def margin_price(params, plan, solve) -> dict:
+    """What the rate margin costs in sigma_h: `plan` (solved with params.rate_margin) against
+    the same scenario solved at margin 0; {"margin", "sigma_h_m", "sigma_h_without_m",
+    "price" (relative), "text"}. No second solve when the margin is 0."""
+    mu = params.rate_margin
+    out = {"margin": mu, "sigma_h_m": plan.sigma_h_m if plan.feasible else None,
+           "sigma_h_without_m": None, "price": None}
+    if mu == 0.0:
+        return {**out, "text": "rate margin 0: C10 holds R_min exactly (the paper's)"}
+    bare = solve(params.replace(rate_margin=0.0))
+    if bare.feasible:
+        out["sigma_h_without_m"] = bare.sigma_h_m
+    head = f"rate margin {mu:.3g} (C10 at {1 + mu:.3g} R_min): "
+    if plan.feasible and bare.feasible:
+        out["price"] = plan.sigma_h_m / bare.sigma_h_m - 1.0
+        text = (f"{head}sigma_h {plan.sigma_h_m * 100:.4g} cm, {bare.sigma_h_m * 100:.4g} cm "
+                f"without it ({out['price']:+.2%})")
+    elif bare.feasible:
+        text = (f"{head}infeasible; without it feasible at sigma_h "
+                f"{bare.sigma_h_m * 100:.4g} cm (--set rate_margin=0, or a smaller margin)")
+    else:
+        text = f"{head}infeasible with or without it"
+    return {**out, "text": text}

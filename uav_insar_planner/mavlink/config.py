@@ -45,8 +45,9 @@ class BridgeConfig:
       else at least GCS_TIMEOUT_MIN_S.
     - uav_id: -1 flies UAV k = 0.. of `target_sysids` each (N entries for N UAVs);
       0..MAX_UAVS-1 flies that UAV alone (one sysid, one connection: a stack per UAV).
-    - pass_start: "capture" (the bridge's own capture gate) or "planner" (`Bridge.set_start`,
-      the planner's formation/start).
+    - pass_start: "capture" (the bridge's own capture gate, for a bridge flown without a
+      planner) or "planner" (`Bridge.set_start`, the planner's formation/start, which the
+      agents' slots follow too).
     """
 
     connections: tuple[str, ...]
@@ -132,7 +133,8 @@ def from_parameters(values: dict[str, Any]) -> BridgeConfig:
     """The config of the node's parameter values (lists as given). With `uav_id` K >= 0,
     `connections` and `target_sysids` left at their defaults (Table I's three UAVs') mean UAV
     K's own default (param_specs.vehicle_connection(K), sysid FIRST_SYSID + K, any K < 6);
-    "auto" `pass_start` is planner with a uav_id, else capture, and "auto" (-1) `gcs_timeout_s`
+    "auto" `pass_start` is planner (one mission clock, which the agents' slots follow too), and
+    "auto" (-1) `gcs_timeout_s`
     GCS_TIMEOUT_DEFAULT_S with a uav_id, else off. TypeError or ValueError (one line) when a
     value is bad."""
     values = {name: tuple(v) if isinstance(v, list) else v for name, v in values.items()}
@@ -146,5 +148,5 @@ def from_parameters(values: dict[str, Any]) -> BridgeConfig:
         values["gcs_timeout_s"] = (GCS_TIMEOUT_DEFAULT_S if isinstance(k, int) and k >= 0
                                    else 0.0)
     if values.get("pass_start", "auto") == "auto":
-        values["pass_start"] = "planner" if isinstance(k, int) and k >= 0 else "capture"
+        values["pass_start"] = "planner"
     return BridgeConfig(**values)

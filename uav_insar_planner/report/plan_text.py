@@ -17,7 +17,7 @@ CONSTRAINT_TEXT = {
     "C7": "baseline coherence >= gamma_Rg^min",
     "C8": "height of ambiguity >= h_amb,k^min = h_amb^min h_amb_ratio^(k-1)",
     "C9": "0 <= P_com <= P_max",
-    "C10": "rate >= R_min in every slot",
+    "C10": "rate >= (1 + rate_margin) R_min in every slot",
     "C11": "energy <= E_max",
 }
 

@@ -46,6 +46,7 @@ from rclpy.parameter import Parameter
 from std_msgs.msg import Float64, Float64MultiArray
 from std_srvs.srv import Trigger
 
+from uav_insar_planner.cli.extras import SOLVER_MODULES, missing_line
 from uav_insar_planner.exit_codes import EXIT_CRASH
 from uav_insar_planner.param_specs import PLANNER_SPECS
 from uav_insar_planner.params import (
@@ -293,7 +294,11 @@ class PlannerNode(Node):
 
 
 def main(args: list[str] | None = None) -> int:
-    """Run the planner until Ctrl-C / SIGTERM; exit code 2 when the parameters are invalid."""
+    """Run the planner until Ctrl-C / SIGTERM; exit code 2 when the parameters are invalid, 1
+    on an install without the solvers (cli/extras.py)."""
+    if line := missing_line(SOLVER_MODULES):
+        print(f"[ERROR] [planner]: {line}", file=sys.stderr, flush=True)
+        return EXIT_CRASH
     return run_node(PlannerNode, "planner", args)
 
 

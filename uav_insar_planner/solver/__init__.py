@@ -61,9 +61,10 @@ def solve(params: Params, scheme: str | None = None, objective: str | None = Non
                               + ", ".join(allowed)])
     if problems := objective_problems(objective, solver):
         raise ParamError(problems)
+    backend = _backend(solver)  # a lean install's ModuleNotFoundError is no solver bug
     start = time.perf_counter()
     try:
-        result = _backend(solver)(params, scheme, objective)
+        result = backend(params, scheme, objective)
         elapsed = time.perf_counter() - start
         ev = evaluate(params, result.formation, result.p_com, scheme) if np.isfinite(
             result.formation[0, 0]) else None

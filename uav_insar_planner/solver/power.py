@@ -1,7 +1,8 @@
 """Communication power: the cheapest schedule for a position, and the distance limits it implies.
 
 For a fixed position the least power meeting C10 in slot n is
-P_k[n] = c_k d_k,n^2 with c_k = (2^(R_min,k / B_c) - 1) / beta_c. With
+P_k[n] = c_k d_k,n^2 with c_k = (2^(R_k / B_c) - 1) / beta_c, R_k = (1 + mu) R_min,k the rate
+a plan holds (`schemes.planned_rate_bps`, mu = rate_margin). With
 d_k,n^2 = rho_k^2 + (y[n] - g_y)^2 (rho_k the x-z distance to the station), C9 and C11 hold
 for that schedule iff rho_k^2 <= station_radius_sq(k); any other feasible schedule uses at least
 as much power in every slot, so this disk is exact, not a relaxation. For the static-power scheme
@@ -16,12 +17,13 @@ import numpy as np
 
 from uav_insar_planner import model
 from uav_insar_planner.params import Params
-from uav_insar_planner.schemes import static_power_w
+from uav_insar_planner.schemes import planned_rate_bps, static_power_w
 
 
-def rate_cost(p: Params, k: int) -> float:
-    """c_k = (2^(R_min,k/B_c) - 1) / beta_c, watts per square metre of distance."""
-    return float(model.power_for_rate(p.rate_min_bps[k], 1.0, p.comm_bandwidth_hz, p.beta_c))
+def rate_cost(p: Params, k: int, scheme: str) -> float:
+    """c_k = (2^(R_k/B_c) - 1) / beta_c, watts per square metre of distance."""
+    return float(model.power_for_rate(planned_rate_bps(p, k, scheme), 1.0, p.comm_bandwidth_hz,
+                                      p.beta_c))
 
 
 def station_radius_sq(p: Params, k: int, scheme: str, off: frozenset[str] = frozenset()) -> float:
@@ -35,7 +37,7 @@ def station_radius_sq(p: Params, k: int, scheme: str, off: frozenset[str] = froz
     position).
     """
     dy2 = (p.y_track - p.ground_station[1]) ** 2
-    c = 0.0 if "C10" in off else rate_cost(p, k)
+    c = 0.0 if "C10" in off else rate_cost(p, k, scheme)
     if scheme == "static-power":
         power = static_power_w(p)
         if power > p.p_max_w and "C9" not in off:
@@ -56,7 +58,8 @@ def power_schedule(p: Params, k: int, x: float, z: float, scheme: str) -> np.nda
     if scheme == "static-power":
         return np.full(p.num_slots, static_power_w(p))
     d = model.distance_to_station(x, p.y_track, z, p.ground_station)
-    return model.power_for_rate(p.rate_min_bps[k], d, p.comm_bandwidth_hz, p.beta_c)
+    return model.power_for_rate(planned_rate_bps(p, k, scheme), d, p.comm_bandwidth_hz,
+                                p.beta_c)
 
 
 def schedules(p: Params, formation: np.ndarray, scheme: str) -> np.ndarray:

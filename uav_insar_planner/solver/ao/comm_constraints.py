@@ -15,7 +15,7 @@ import cvxpy as cp
 import numpy as np
 
 from uav_insar_planner.params import Params
-from uav_insar_planner.schemes import static_power_w
+from uav_insar_planner.schemes import planned_rate_bps, static_power_w
 
 
 def comm_constraints(p: Params, k: int, q: cp.Expression, scheme: str
@@ -29,7 +29,7 @@ def comm_constraints(p: Params, k: int, q: cp.Expression, scheme: str
         power = cp.Variable(n, name=f"P_com_{k}")
         cons = [power >= 0, power <= p.p_max_w,                                      # C9
                 cp.sum(power) * p.slot_duration_s <= p.energy_budget_j(k)]            # C11
-    spectral = math.expm1(p.rate_min_bps[k] / p.comm_bandwidth_hz * math.log(2.0))
+    spectral = math.expm1(planned_rate_bps(p, k, scheme) / p.comm_bandwidth_hz * math.log(2.0))
     gxz = np.array([p.ground_station[0], p.ground_station[2]])
     dy2 = (p.y_track - p.ground_station[1]) ** 2
     if spectral > 0.0 and scheme == "static-power":
