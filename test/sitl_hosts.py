@@ -218,12 +218,19 @@ def uav_figures(flight: Flight, timed: dict, k: int, t_start: float, target: np.
     ap_pass, true_pass = (on_pass(rows, t_start, *y_lines) for rows in (autopilot, truth))
     reached = autopilot[(autopilot[:, 0] >= t_start) & (autopilot[:, 2] >= y_lines[0])]
     agent = flight.out[f"agent{k}"]
-    logged = agent.first(r"slot 0 start")
+
+    def logged(proc: str, pattern: str) -> float:
+        t = flight.out[f"{proc}{k}"].first(pattern)
+        return math.nan if t is None else t - t_start
+
     return {
+        # when the agent and the bridge heard the planner's start (their log lines' stamps)
+        "start_heard_s": logged("agent", r"pass start .*wall clock"),
+        "bridge_heard_s": logged("bridge", r"pass start from the planner"),
         "slots": [int(m.data[0]) for _, _, m in offloads],
         "slot0_sent_s": offloads[0][1] - t_start if offloads else math.nan,
         "slot0_received_s": offloads[0][0] - t_start if offloads else math.nan,
-        "slot0_logged_s": logged - t_start if logged is not None else math.nan,
+        "slot0_logged_s": logged("agent", r"slot 0 start"),
         "line_reached_s": reached[0, 0] - t_start if len(reached) else math.nan,
         "rates_bps": rates, "missed": [n for n, r in enumerate(rates) if r < rate_floor_bps],
         "missed_lines": [line for _, line in agent.lines if "missed R_min" in line],
@@ -279,7 +286,9 @@ def table(f: dict) -> str:
            + ", ".join(f"{k} {v:.1f} s" for k, v in f["times"].items()),
            f"pass start(s) from the planner: {', '.join(f'{t:.3f}' for t in f['starts'])}"]
     for k, u in f["uav"].items():
-        out.append(f"  {uav_name(k)}: slot 0 sent {u['slot0_sent_s']:+.2f} s, received "
+        out.append(f"  {uav_name(k)}: start heard by the agent {u['start_heard_s']:+.2f} s, "
+                   f"by the bridge {u['bridge_heard_s']:+.2f} s;"
+                   f" slot 0 sent {u['slot0_sent_s']:+.2f} s, received "
                    f"{u['slot0_received_s']:+.2f} s, logged {u['slot0_logged_s']:+.2f} s after "
                    f"the pass start (autopilot at the line {u['line_reached_s']:+.2f} s); "
                    f"{len(u['rates_bps'])} rates, missed R_min in slots {u['missed']}, "

@@ -9,7 +9,11 @@ Asserted, from what the ground recorded (the bag), the processes' output and the
 own physics state (SIMSTATE, recorded inside each UAV's namespace):
 - slot 0 starts at the pass start: each agent sent its slot 0 (uavK/offload, the bag's publish
   time: the agent's own clock) no more than EARLY_S before the planner's formation/start
-  instant and at most LATE_S after it; every UAV flies every slot, once and in order;
+  instant, and at most LATE_S after it or after the UAV's agent and bridge heard of it,
+  whichever is latest (formation/start crosses the radio: at 10 % loss a lost sample is resent
+  after Fast DDS's next heartbeat, 3 s, later than the planner's start_delay_s of 2 s; seen in
+  3 of 4 runs, an agent or a bridge hearing it 1.2 s after the instant); every UAV flies every
+  slot, once and in order;
 - the rate met (achieved_rate >= R_min - evaluate.rate_tolerance_bps) in at least
   MET_SHARE of the slots (the issue's target is 95 %), each miss explained in the agent's log
   (a line with "missed R_min" naming the slot);
@@ -36,8 +40,9 @@ from uav_insar_sim.netlab.lab import LabUnavailable, NetLab
 
 EARLY_S = 0.5
 # A copter is captured up to capture_radius_m (1 m) behind its start and accelerates from
-# rest behind the moving target; the agent hears its autopilot at ~10 Hz.
-LATE_S = 3.0
+# rest behind the moving target; the agent hears its autopilot at ~10 Hz. Measured: +0.31 to
+# +0.44 s from the pass start when the agent heard it in time.
+LATE_S = 2.0
 MET_SHARE = 0.90
 SIGMA_TOL = 0.03
 TRUE_MEAN_M = 1.0  # the capture radius: where the planner counts a UAV as on its start
@@ -71,7 +76,10 @@ def test_arducopters_on_their_own_hosts_fly_every_slot_from_the_pass_start(lab, 
         name = uav_name(k)
         assert u["slots"] == list(range(n)), (name, u["slots"])
         assert len(u["rates_bps"]) == n, (name, len(u["rates_bps"]))
-        assert -EARLY_S <= u["slot0_sent_s"] <= LATE_S, (name, u["slot0_sent_s"])
+        heard = (u["start_heard_s"], u["bridge_heard_s"])
+        assert all(map(math.isfinite, heard)), (name, "no word of the pass start", heard)
+        assert -EARLY_S <= u["slot0_sent_s"] <= max(*heard, 0.0) + LATE_S, (
+            name, u["slot0_sent_s"], heard)
     assert f["met_share"] >= MET_SHARE, f["met_share"]
     for k, u in f["uav"].items():
         for slot in u["missed"]:
