@@ -2,7 +2,7 @@
 MAVLink port of its own (not the bridge's), e.g. SERIAL1 `tcp:127.0.0.1:5762` inside the UAV's
 namespace.
 
-    python simstate_recorder.py HOST:PORT OUT.csv [--rate-hz 10]
+    python simstate_recorder.py HOST:PORT OUT.csv [--rate-hz 10] [--param NAME ...]
 
 It connects (retrying while SITL boots: SERIAL1 listens only once SERIAL0 has its client),
 asks for SIMSTATE (164) and SIM_STATE (108) with MAV_CMD_SET_MESSAGE_INTERVAL (again every
@@ -13,7 +13,9 @@ second until they come), and writes one row per SIMSTATE:
 t_wall_s is time.time() at arrival (the same clock as the ROS stamps on this machine),
 lat_e7/lng_e7 SIMSTATE's (1e-7 deg); SIMSTATE has no altitude, so alt_m is the AMSL altitude of
 the latest SIM_STATE (ArduPilot sends the two together, from the same physics state). Runs
-until killed; each row is flushed as it is written.
+until killed; each row is flushed as it is written. Each --param is read back once
+(PARAM_REQUEST_READ, again every second until answered) into OUT.csv.params as `NAME VALUE`
+lines: what the simulator actually runs with.
 """
 from __future__ import annotations
 
@@ -43,7 +45,7 @@ def request(mav: mavlink.MAVLink, sysid: int, interval_us: int) -> None:
                               0, 0, 0, 0, 0)
 
 
-def record(address: str, out_path: str, rate_hz: float) -> None:
+def record(address: str, out_path: str, rate_hz: float, params: list[str]) -> None:
     host, port = address.rsplit(":", 1)
     sock = connect(host, int(port))
     sock.settimeout(1.0)
@@ -51,11 +53,16 @@ def record(address: str, out_path: str, rate_hz: float) -> None:
     mav.robust_parsing = True
     interval_us = round(1e6 / rate_hz)
     sysid, alt_m, asked, rows = 0, None, 0.0, 0
-    with open(out_path, "w", buffering=1) as out:
+    unread = list(params)
+    with open(out_path, "w", buffering=1) as out, \
+            open(out_path + ".params", "w", buffering=1) as read_back:
         out.write(HEADER + "\n")
         while True:
-            if sysid and not rows and time.monotonic() - asked > 1.0:
-                request(mav, sysid, interval_us)
+            if sysid and (unread or not rows) and time.monotonic() - asked > 1.0:
+                if not rows:
+                    request(mav, sysid, interval_us)
+                for name in unread:
+                    mav.param_request_read_send(sysid, 1, name.encode(), -1)
                 asked = time.monotonic()
             try:
                 data = sock.recv(4096)
@@ -67,6 +74,9 @@ def record(address: str, out_path: str, rate_hz: float) -> None:
                 kind = msg.get_type()
                 if kind == "HEARTBEAT" and not sysid:
                     sysid = msg.get_srcSystem()
+                elif kind == "PARAM_VALUE" and msg.param_id in unread:
+                    unread.remove(msg.param_id)
+                    read_back.write(f"{msg.param_id} {msg.param_value:g}\n")
                 elif kind == "SIM_STATE":
                     alt_m = msg.alt
                 elif kind == "SIMSTATE" and alt_m is not None:
@@ -79,8 +89,9 @@ def main() -> None:
     parser.add_argument("address", help="HOST:PORT of a SITL MAVLink TCP port")
     parser.add_argument("out", help="CSV file to write")
     parser.add_argument("--rate-hz", type=float, default=10.0)
+    parser.add_argument("--param", action="append", default=[], help="read back NAME")
     args = parser.parse_args()
-    record(args.address, args.out, args.rate_hz)
+    record(args.address, args.out, args.rate_hz, args.param)
 
 
 if __name__ == "__main__":

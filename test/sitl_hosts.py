@@ -71,11 +71,16 @@ def home() -> tuple[float, float]:
     return lat, lon
 
 
+def field_parameters() -> dict[str, float]:
+    """The simulator's parameters of the field: wind across the track, GNSS noise."""
+    return {"SIM_WIND_SPD": WIND_MPS, "SIM_WIND_DIR": WIND_DIR_DEG,
+            "SIM_WIND_TURB": TURBULENCE, "SIM_GPS1_NOISE": GPS_NOISE_M}
+
+
 def write_inputs(workdir: Path) -> tuple[Path, Path]:
-    """The copters' parm file (wind, GNSS noise) and the nodes' ROS params file."""
+    """The copters' parm file (field_parameters) and the nodes' ROS params file."""
     parm = workdir / "field.parm"
-    parm.write_text(f"SIM_WIND_SPD {WIND_MPS}\nSIM_WIND_DIR {WIND_DIR_DEG}\n"
-                    f"SIM_WIND_TURB {TURBULENCE}\nSIM_GPS1_NOISE {GPS_NOISE_M}\n")
+    parm.write_text("".join(f"{name} {value:g}\n" for name, value in field_parameters().items()))
     params = workdir / "params.yaml"
     params.write_text(yaml.safe_dump({"/**": {"ros__parameters": {
         "num_slots": N_SLOTS, "slot_duration_s": 1.0, "velocity_feedforward": True,
@@ -117,7 +122,8 @@ def start_hosts(lab: NetLab, domain: int, workdir: Path) -> Flight:
         flight.truth[k] = copter / "simstate.csv"
         with open(copter / "simstate.log", "w") as log:
             lab.start(host, [sys.executable, str(HELPER), f"127.0.0.1:{TRUTH_PORT}",
-                             str(flight.truth[k]), "--rate-hz", str(TRUTH_RATE_HZ)],
+                             str(flight.truth[k]), "--rate-hz", str(TRUTH_RATE_HZ),
+                             *(f"--param={name}" for name in field_parameters())],
                       stdout=log, stderr=subprocess.STDOUT)
         start(host, f"bridge{k}", [
             *executable("mavlink_bridge"), *ros, "-r", f"__ns:=/{host}", "-p", f"uav_id:={k}",
@@ -239,7 +245,15 @@ def uav_figures(flight: Flight, timed: dict, k: int, t_start: float, target: np.
         "autopilot_xz": ap_pass[:, [1, 3]].mean(axis=0) if len(ap_pass) else np.full(2, np.nan),
         "truth_xz": true_pass[:, [1, 3]].mean(axis=0) if len(true_pass) else np.full(2, np.nan),
         "poses": (len(autopilot), len(ap_pass)), "truth_rows": (len(truth), len(true_pass)),
+        "sim_parameters": read_back(flight.truth[k]),
     }
+
+
+def read_back(truth: Path) -> dict[str, float]:
+    """The parameters simstate_recorder.py read back from the simulator beside `truth`."""
+    path = Path(f"{truth}.params")
+    lines = path.read_text().split("\n") if path.exists() else []
+    return {name: float(value) for name, value in (line.split() for line in lines if line)}
 
 
 def figures(flight: Flight) -> dict:

@@ -74,6 +74,8 @@ def test_arducopters_on_their_own_hosts_fly_every_slot_from_the_pass_start(lab, 
     n = hosts.N_SLOTS
     for k, u in f["uav"].items():
         name = uav_name(k)
+        # the field is what it says: every simulator runs with our wind and GNSS noise
+        assert u["sim_parameters"] == pytest.approx(hosts.field_parameters()), name
         assert u["slots"] == list(range(n)), (name, u["slots"])
         assert len(u["rates_bps"]) == n, (name, len(u["rates_bps"]))
         heard = (u["start_heard_s"], u["bridge_heard_s"])
