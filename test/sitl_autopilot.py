@@ -36,13 +36,19 @@ N_SLOTS = 12  # 12 slots of 1 s at Table I's 4.3 m/s: a 51.6 m pass
 WIND_DIR_DEG = 90.0  # from the east: across the track (y = north), pushing towards -x
 
 
+def sitl_command(instance: int, sysid: int, parm: Path) -> list[str]:
+    """arducopter instance `instance` (ports 5760 + 10 * instance) with ArduPilot's copter.parm
+    and then `parm` as defaults, at HOME."""
+    return [str(ARDUCOPTER), "--model", "+", "--speedup", str(SPEEDUP), f"-I{instance}",
+            "--sysid", str(sysid), "--defaults", f"{SITL_DIR / 'copter.parm'},{parm}",
+            "--home", HOME]
+
+
 def start_sitl(k: int, workdir: Path, parm: Path) -> subprocess.Popen:
     log = open(workdir / "sitl.log", "w")  # noqa: SIM115 - closed with the process
-    return subprocess.Popen(
-        [str(ARDUCOPTER), "--model", "+", "--speedup", str(SPEEDUP), f"-I{k}",
-         "--sysid", str(SYSIDS[k]), "--defaults", f"{SITL_DIR / 'copter.parm'},{parm}",
-         "--home", HOME], cwd=workdir, stdout=log, stderr=subprocess.STDOUT,
-        stdin=subprocess.DEVNULL, start_new_session=True)
+    return subprocess.Popen(sitl_command(k, SYSIDS[k], parm), cwd=workdir, stdout=log,
+                            stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                            start_new_session=True)
 
 
 kill_group = process_group.kill_group
