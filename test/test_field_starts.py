@@ -1,6 +1,8 @@
 """Per-UAV stacks whose vehicles take off where the field allows (issue 26, item 1): behind the
 track start, BESIDE it (holding their formation point at y = 0, their reported position
-jittering back and forth across the slot 0 line), or ahead of it (they fly back). Real
+jittering back and forth across the slot 0 line; or on the ground at y = 0, armed and taken
+off by their bridges, climbing and crossing to their formation points on that line), or
+ahead of it (they fly back). Real
 processes on localhost: the planner; per UAV a `uav-insar-vehicle` with GNSS-like position
 noise and a light wind, a `mavlink_bridge` with `uav_id` K in /uavK, and an agent with
 `position_source:=autopilot` in /uavK.
@@ -34,12 +36,17 @@ from uav_insar_planner.demo.processes import executable, start_node, start_proce
 from uav_insar_planner.param_specs import FIRST_SYSID
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.start_msgs import decode_start
+from uav_insar_sim.mission import home_position
 
 pytestmark = pytest.mark.timeout(120)
 N = 6
 SCENARIO = {"num_slots": N, "slot_duration_s": 1.0}
-#: along-track place of each vehicle at the start of the run, from the track start [m]
-STARTS = {"behind": -10.0, "beside": 0.0, "ahead": 10.0}
+#: where each vehicle is at the start of the run: along the track from its start [m], and
+#: in the air at its formation point's x and z (True), or on the ground at its home's x for
+#: the bridge to arm and take off (False), as the issue's copters did
+STARTS = {"behind": (-10.0, True), "beside": (0.0, True), "ahead": (10.0, True),
+          "takeoff beside": (0.0, False)}
+BESIDE = ("beside", "takeoff beside")
 NOISE_STD_M = 0.3  # the reported position's error per axis, as GNSS under an EKF
 NOISE_TAU_S = 1.0
 WIND_NED = (0.0, 0.5, 0.0)  # across the track: each holds 0.33 m off its point (E = x)
@@ -99,7 +106,7 @@ def flown(request, tmp_path_factory):
         "track_duration_s": float(N + 1)}}}))
     ros = ["--params-file", str(params_file)]
     uavs = range(plan.formation.shape[0])
-    ports = [BASE_PORT + 20 * list(STARTS).index(case) + k for k in uavs]
+    ports = [BASE_PORT + 20 * list(STARTS).index(case) + k for k in uavs]  # < 29680
     t_begin = time.monotonic()
     with private_graph() as (env, w):
         starts: list[Header] = []
@@ -112,19 +119,21 @@ def flown(request, tmp_path_factory):
                 lambda m, k=k: arrivals[k].append((time.time(), int(m.data[0]))),
                 topics.RATE_DEPTH)
         out: dict[str, Output] = {}
+        y, airborne = STARTS[case]  # (the plan's track start is y = 0)
         for k, port in zip(uavs, ports, strict=True):
-            x, z = plan.formation[k]
-            y = STARTS[case]  # the plan's track start is y = 0
+            x, z = plan.formation[k] if airborne else (home_position(k)[0], 0.0)
             out[f"vehicle{k}"] = Output(start_process([
                 *executable("uav-insar-vehicle"), "--sysid", str(FIRST_SYSID + k), "--listen",
-                f"udpin:127.0.0.1:{port}", "--airborne", "--start-ned", str(y), str(x),
-                str(-z), "--position-noise-std", str(NOISE_STD_M), "--position-noise-tau",
+                f"udpin:127.0.0.1:{port}", *(["--airborne"] if airborne else []),
+                "--start-ned", str(y), str(x), str(-z),
+                "--position-noise-std", str(NOISE_STD_M), "--position-noise-tau",
                 str(NOISE_TAU_S), "--noise-seed", "26", "--wind-mps", *map(str, WIND_NED)],
                 env))
             ns = ["-r", f"__ns:=/uav{k}", "-p", f"uav_id:={k}"]
             out[f"bridge{k}"] = Output(start_node("mavlink_bridge", [
                 *ros, *ns, "-p", f"connections:=['udpout:127.0.0.1:{port}']",
-                "-p", f"target_sysids:=[{FIRST_SYSID + k}]"], env))
+                "-p", f"target_sysids:=[{FIRST_SYSID + k}]",
+                "-p", f"arm_and_takeoff:={str(not airborne).lower()}"], env))
             out[f"agent{k}"] = Output(start_node("agent", [
                 *ros, *ns, "-p", "position_source:=autopilot"], env))
         procs = [o.proc for o in out.values()]
@@ -201,8 +210,8 @@ def test_no_slot_before_the_pass_start(flown):
 def test_beside_the_start_the_reported_position_crossed_the_line_before_it(flown):
     """What the old gate started slot 0 on: holding at y = 0, the reported position crossed
     the slot 0 line forward before the pass start (a crossing the field test must contain)."""
-    if flown["case"] != "beside":
-        pytest.skip("the vehicles hold beside the start only in the 'beside' run")
+    if flown["case"] not in BESIDE:
+        pytest.skip("the vehicles hold beside the start only in the 'beside' runs")
     t0 = pass_start(flown)
     crossings = {}
     for k in flown["uavs"]:
