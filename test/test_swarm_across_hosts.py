@@ -6,6 +6,9 @@ cuts frames as a bad radio does), DDS between them, MAVLink only inside each UAV
 - uavK: the vehicle simulator (`uav-insar-vehicle`, its autopilot on the UAV's own loopback),
   the bridge flying that one UAV and the agent reading its autopilot's position, both in the
   namespace /uavK (`-r __ns:=/uavK -p uav_id:=K`), as a stack on the UAV's computer runs.
+  Each vehicle takes off beside the track start (its home moved to y = 0), its reported
+  position jittering as under GNSS noise, so it climbs and crosses to its formation point on
+  the slot 0 line: no agent may start slot 0 before the planner's pass start.
 
 Everything observed crosses the lossy links: the bag is written on the ground, from what
 reached it. Skipped with the lab's reason where namespaces or TAP devices are not permitted.
@@ -45,7 +48,9 @@ RADIO = "loss=0.1 delay=0.05 jitter=0.02"  # 10 % loss, 50 ms +- 20 ms, each way
 VEHICLE_PORT = 14552  # on each UAV's own loopback: every UAV can use the same
 CUT = UAVS[-1]  # the UAV whose link is cut
 SCENARIO = {"num_slots": NUM_SLOTS, "slot_duration_s": 1.0}
-VEHICLE_HEIGHT_M = 10.0  # airborne above the agent's home, behind the track start
+VEHICLE_HEIGHT_M = 10.0  # airborne above the agent's home moved beside the track start
+POSITION_NOISE_STD_M = 0.3  # the reported position's error per axis, as GNSS under an EKF
+SLOT0 = re.compile(r"slot 0 started at y = (-?[\d.]+) m .*, ([+-][\d.]+) s from the pass start")
 LOG_TIME = re.compile(r"\[(\d+\.\d+)\]")
 
 
@@ -100,7 +105,8 @@ def start_swarm(lab: NetLab, domain: int, tmp_path: Path, discovery: str) -> dic
     """The ground station and the three UAV stacks; their Output readers by name."""
     params = tmp_path / "params.yaml"
     params.write_text(yaml.safe_dump({"/**": {"ros__parameters": {
-        **SCENARIO, "uav_timeout_s": UAV_TIMEOUT_S, "capture_radius_m": 0.5,
+        # the planner's default capture radius: a tighter one waits on the position noise
+        **SCENARIO, "uav_timeout_s": UAV_TIMEOUT_S, "capture_radius_m": 1.0,
         "gcs_timeout_s": GCS_TIMEOUT_S, "velocity_feedforward": True,
         # one slot more than the mission, so every UAV crosses the line after its last slot
         "track_duration_s": float(NUM_SLOTS + 1)}}}))
@@ -119,11 +125,13 @@ def start_swarm(lab: NetLab, domain: int, tmp_path: Path, discovery: str) -> dic
     ros = ["--ros-args", "--params-file", str(params)]
     for k in UAVS:
         host = uav_name(k)
-        x, y, _ = home_position(k)
+        x, _, _ = home_position(k)  # beside the track start (y = 0), not behind it
         start(host, f"vehicle{k}", [*executable("uav-insar-vehicle"), "--sysid",
                                     str(FIRST_SYSID + k), "--listen",
                                     f"udpin:127.0.0.1:{VEHICLE_PORT}", "--airborne",
-                                    "--start-ned", str(y), str(x), str(-VEHICLE_HEIGHT_M)])
+                                    "--start-ned", "0", str(x), str(-VEHICLE_HEIGHT_M),
+                                    "--position-noise-std", str(POSITION_NOISE_STD_M),
+                                    "--noise-seed", str(domain)])
         start(host, f"bridge{k}", [*executable("mavlink_bridge"), *ros, "-r",
                                    f"__ns:=/{host}", "-p", f"uav_id:={k}", "-p",
                                    f"connections:=['udpout:127.0.0.1:{VEHICLE_PORT}']",
@@ -186,14 +194,34 @@ def test_a_lossy_radio_loses_no_slot_and_no_plan(lab, ros_domain, tmp_path):
     ys = np.array([[m.pose.position.y for _, m in bag[f"/{uav_name(k)}/pose"]][-1]
                    for k in UAVS])
     assert np.all(ys > 0.0)
+    assert_slot0_on_the_pass_start(out)
+
+
+def assert_slot0_on_the_pass_start(out: dict) -> None:
+    """Each agent started slot 0 at or after the planner's pass start (the one it logged)."""
+    planned = re.findall(r"the pass starts in .* wall clock ([\d.]+)", out["planner"].text())
+    assert planned, out["planner"].text()[-2000:]
+    offsets = {}
+    for k in UAVS:
+        log = out[f"agent{k}"].text()
+        heard = re.findall(r"pass start (?:in|[\d.]+ s ago).*wall clock ([\d.]+)", log)
+        assert heard and heard[0] == planned[0], (heard, planned)
+        found = SLOT0.search(log)
+        assert found, log[-2000:]
+        offsets[uav_name(k)] = float(found[2])
+        # at or after it (the slot starts on the first position read at or after the instant)
+        assert float(found[2]) >= -0.05 and float(found[1]) >= 0.0, found[0]
+    print(f"slot 0 from the pass start: {offsets} s")
 
 
 def test_a_cut_link_loses_the_uav_on_the_ground_and_holds_it_in_the_air(lab, ros_domain,
                                                                           tmp_path):
     out = start_swarm(lab, ros_domain, tmp_path, "static")
     procs = [o.proc for o in out.values()]
-    assert wait_for(lambda: out[f"agent{CUT}"].first(r"slot 0 started"), 150.0, procs), \
+    assert wait_for(lambda: all(out[f"agent{k}"].first(r"slot 0 started") for k in UAVS),
+                    150.0, procs), \
         "\n".join(f"== {n}\n{o.text()[-1500:]}" for n, o in out.items())
+    assert_slot0_on_the_pass_start(out)
     time.sleep(2.0)
     cut_at = time.time()
     lab.switch(f"cut {uav_name(CUT)}")

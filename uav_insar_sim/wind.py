@@ -4,13 +4,8 @@ Wind velocity (track frame, m/s) at mission time t:
 
     w(t) = w_steady + u(t)
 
-with u a first-order Gauss-Markov process per axis (the Dryden turbulence spectrum to first
-order), stationary std sigma_g and time constant tau_g:
-
-    du = -u / tau_g dt + sigma_g sqrt(2 / tau_g) dW,
-
-sampled exactly over a step h: u(t + h) = a u(t) + sigma_g sqrt(1 - a^2) w, a = exp(-h /
-tau_g), w ~ N(0, I_3), u(0) drawn from the stationary N(0, sigma_g^2 I_3). Draws come from a
+with u a first-order Gauss-Markov process per axis (gauss_markov.py; the Dryden turbulence
+spectrum to first order), stationary std sigma_g and time constant tau_g. Draws come from a
 generator seeded by (seed, uav_id, 2), so a mission under wind is reproducible for a seed.
 
 How it acts (mission.Mission): the point-mass velocity is the UAV's air-relative velocity,
@@ -22,10 +17,11 @@ Off (w_steady = 0, sigma_g = 0) the mission is today's, exactly.
 """
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 
 import numpy as np
+
+from uav_insar_sim.gauss_markov import GaussMarkov
 
 
 class Wind:
@@ -38,9 +34,8 @@ class Wind:
         self.steady = np.asarray(steady_mps, dtype=float).reshape(3)
         self.gust_std = float(gust_std_mps)
         self.tau = float(gust_tau_s)
-        self._rng = np.random.default_rng([seed, uav_id, 2])
-        self.gust = (self._rng.normal(0.0, self.gust_std, 3) if self.gust_std > 0.0
-                     else np.zeros(3))
+        self._gusts = GaussMarkov(self.gust_std, self.tau,
+                                  np.random.default_rng([seed, uav_id, 2]))
 
     @property
     def off(self) -> bool:
@@ -49,14 +44,11 @@ class Wind:
     @property
     def velocity(self) -> np.ndarray:
         """The wind now [m/s]."""
-        return self.steady + self.gust
+        return self.steady + self._gusts.value
 
     def step(self, h: float) -> np.ndarray:
         """Advance the gusts by `h` seconds; return the wind over that step [m/s]."""
-        if self.gust_std > 0.0 and h > 0.0:
-            a = math.exp(-h / self.tau)
-            self.gust = a * self.gust + self.gust_std * math.sqrt(1.0 - a * a) * \
-                self._rng.standard_normal(3)
+        self._gusts.step(h)
         return self.velocity
 
     def settled_offset_m(self, max_accel: float) -> float:

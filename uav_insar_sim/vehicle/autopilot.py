@@ -20,6 +20,11 @@ in `statustexts` as (severity, text) for the vehicle to drain.
   only; offsets in the offset / body frames are from where the vehicle is (it never yaws).
 - Point-mass dynamics (`kinematics.step_toward` with a P gain), speed <= `max_speed`,
   acceleration <= `max_accel`; the ground is D = max(0, start D); landing at 1 m/s.
+- Wind (`wind_ned`, steady, m/s): off the ground it carries the vehicle, whose point-mass
+  velocity is then its air velocity (as wind.py's for the self-flown agent; `velocity` is
+  over the ground). The controller only sees the position error the wind causes, so a
+  vehicle holding a target sits downwind of it by max(|w| / KP, |w|^2 / max_accel), the
+  distance at which its approach speed matches the wind, as a real copter's does in a gust.
 """
 from __future__ import annotations
 
@@ -54,7 +59,8 @@ class Autopilot:
     def __init__(self, autopilot: str = "ardupilot",
                  start_ned: Sequence[float] = (0.0, 0.0, 0.0), max_speed: float = 10.0,
                  max_accel: float = 5.0, airborne: bool = False, offboard_timeout_s: float = 0.5,
-                 boot_s: float = 0.0, now: float | None = None):
+                 boot_s: float = 0.0, now: float | None = None,
+                 wind_ned: Sequence[float] = (0.0, 0.0, 0.0)):
         if autopilot not in AUTOPILOTS:
             raise ValueError(f"autopilot: {autopilot!r} is not allowed; expected ardupilot "
                              "or px4")
@@ -68,6 +74,11 @@ class Autopilot:
                                           for c in start_ned):
             raise ValueError(f"start_ned: value {tuple(start_ned)!r:.60} is not allowed; "
                              "expected 3 finite numbers N E D within +-1e6 m")
+        if len(wind_ned) != 3 or not all(math.isfinite(c) for c in wind_ned) or \
+                not math.hypot(*wind_ned) < max_speed:
+            raise ValueError(f"wind_mps: value {tuple(wind_ned)!r:.60} is not allowed; "
+                             f"expected 3 finite numbers N E D [m/s], slower than the "
+                             f"speed limit {max_speed:g} m/s")
         if not (0.0 <= boot_s < 3600.0):
             raise ValueError(f"boot_s: value {boot_s!r:.24} is not allowed; expected "
                              "0 <= s < 3600")
@@ -82,6 +93,7 @@ class Autopilot:
         self._booted = self.boot_s == 0.0
         self.statustexts: list[tuple[int, str]] = []
         self.state = PointMass(np.array(start_ned, dtype=float), np.zeros(3))
+        self.wind = np.array(wind_ned, dtype=float)
         self.ground_d = max(0.0, float(start_ned[2]))
         self.home = np.array([start_ned[0], start_ned[1], self.ground_d], dtype=float)
         self.armed = airborne
@@ -103,7 +115,12 @@ class Autopilot:
 
     @property
     def velocity(self) -> tuple[float, float, float]:
-        return tuple(float(c) for c in self.state.velocity)
+        """Over the ground: the wind's push added in the air."""
+        v = self.state.velocity + self.wind if self._in_the_wind() else self.state.velocity
+        return tuple(float(c) for c in v)
+
+    def _in_the_wind(self) -> bool:
+        return self.armed and not self.on_ground()
 
     def on_ground(self) -> bool:
         return (self.state.position[2] >= self.ground_d - 0.05
@@ -243,9 +260,12 @@ class Autopilot:
         """Advance the flight by `dt` seconds; the ground stops the vehicle."""
         self.booted(now)
         goal, feed_forward = self._goal(now)
+        in_the_wind = self._in_the_wind()
         self.state = step_toward(self.state, goal, dt, self.max_speed, self.max_accel,
                                  feed_forward, gain=KP)
         pos, vel = self.state.position, self.state.velocity
+        if in_the_wind:
+            pos += self.wind * dt
         if pos[2] > self.ground_d:
             pos[2] = self.ground_d
             vel[2] = min(vel[2], 0.0)

@@ -16,6 +16,7 @@ from uav_insar_planner.cli.parser import OneLineParser
 from uav_insar_planner.exit_codes import EXIT_BAD_INPUT, EXIT_CRASH, EXIT_OK
 from uav_insar_planner.mavlink.autopilots import AUTOPILOTS
 from uav_insar_planner.mavlink.signing import read_key_file
+from uav_insar_sim.vehicle import estimate_error
 from uav_insar_sim.vehicle.simulator import SimVehicle
 from uav_insar_sim.vehicle.telemetry import SITL_HOME, parse_home
 
@@ -52,6 +53,18 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--signing-key-file", default="",
                    help="MAVLink 2 signing key (32 raw bytes or 64 hex characters): sign "
                         "everything, accept only signed frames")
+    p.add_argument("--position-noise-std", type=float, default=0.0, metavar="M",
+                   help="std of the reported position's error per NED axis, a slowly "
+                        "wandering (Gauss-Markov) one as an EKF's under GNSS noise [m] "
+                        "(0: none)")
+    p.add_argument("--position-noise-tau", type=float, default=estimate_error.DEFAULT_TAU_S,
+                   metavar="S", help="correlation time of that error [s]")
+    p.add_argument("--noise-seed", type=int, default=0, metavar="N",
+                   help="seed of that error (with the sysid: each vehicle its own)")
+    p.add_argument("--wind-mps", type=float, nargs=3, metavar=("N", "E", "D"),
+                   default=(0.0, 0.0, 0.0),
+                   help="steady wind in local NED [m/s]: off the ground it pushes the "
+                        "vehicle, which then holds its position target downwind of it")
     return p
 
 
@@ -71,7 +84,10 @@ def main(argv: list[str] | None = None) -> int:
         vehicle = SimVehicle(args.sysid, args.listen, args.autopilot, tuple(args.start_ned),
                              args.speed, args.accel, args.airborne, args.offboard_timeout,
                              boot_s=args.boot_s, home=parse_home(args.home),
-                             gcs_sysid=args.gcs_sysid, signing_key=key, log=_stderr)
+                             gcs_sysid=args.gcs_sysid, signing_key=key, log=_stderr,
+                             position_noise_std_m=args.position_noise_std,
+                             position_noise_tau_s=args.position_noise_tau,
+                             noise_seed=args.noise_seed, wind_ned=tuple(args.wind_mps))
     except ValueError as exc:
         _stderr(f"error: {exc}")
         return EXIT_BAD_INPUT

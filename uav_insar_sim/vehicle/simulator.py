@@ -6,13 +6,15 @@ Command line (vehicle/cli.py: the `uav-insar-vehicle` console script, or
     uav-insar-vehicle --sysid 2 --listen udpin:127.0.0.1:14552 [--autopilot ardupilot|px4]
                       [--start-ned N E D] [--speed 10] [--accel 5] [--airborne]
                       [--boot-s 3] [--home LAT,LON,ALT] [--gcs-sysid 255]
-                      [--signing-key-file FILE]
+                      [--signing-key-file FILE] [--position-noise-std M]
+                      [--position-noise-tau S] [--noise-seed N] [--wind-mps N E D]
 
 In-process (a background thread; what tests and an agent node use):
 
     with SimVehicle(sysid=2, listen="udpin:127.0.0.1:0", autopilot="px4") as vehicle:
         port = vehicle.port              # the bound UDP port (0 picks a free one)
         vehicle.position_ned             # (N, E, D) in metres, thread-safe snapshot
+        vehicle.reported_position_ned    # what its telemetry says (estimate_error)
         vehicle.mode, vehicle.armed, vehicle.landed, vehicle.booted
         vehicle.set_radio(False)         # drop all traffic both ways (a link loss)
 
@@ -40,6 +42,9 @@ started `airborne` never boots. The MAVLink side, like the real autopilots (flig
   value that is not a number of its type) and, with `signing_key`, `bad_signature`.
 - With `signing_key` (CLI `--signing-key-file`) everything sent is signed and only correctly
   signed frames are read (`signing`), from anyone: the GCS sysid rule still applies.
+- Field conditions (off by default): `position_noise_std_m` / `position_noise_tau_s` /
+  `noise_seed`, the reported position's wandering error (`estimate_error`); `wind_ned`, a
+  steady wind its position controller fights (`autopilot`).
 - If the vehicle loop dies, `failure` says why and the loop ends; the command line then
   prints one line and exits with exit_codes.EXIT_CRASH.
 """
@@ -57,6 +62,7 @@ from uav_insar_planner.mavlink.link import MAV, Link, LinkStats
 from uav_insar_planner.mavlink.sequencer import command_name
 from uav_insar_planner.mavlink.setpoints import used_values
 from uav_insar_planner.mavlink.signing import signing_state
+from uav_insar_sim.vehicle import estimate_error
 from uav_insar_sim.vehicle.autopilot import Autopilot
 from uav_insar_sim.vehicle.commands import run_command
 from uav_insar_sim.vehicle.mission_upload import MissionStore
@@ -89,7 +95,10 @@ class SimVehicle:
                  offboard_timeout_s: float = 0.5, compid: int = MAV.MAV_COMP_ID_AUTOPILOT1,
                  *, boot_s: float = 0.0, home: tuple[float, float, float] = SITL_HOME,
                  gcs_sysid: int = 255, signing_key: bytes | None = None,
-                 log: Callable[[str], None] | None = None):
+                 log: Callable[[str], None] | None = None,
+                 position_noise_std_m: float = 0.0,
+                 position_noise_tau_s: float = estimate_error.DEFAULT_TAU_S,
+                 noise_seed: int = 0, wind_ned: tuple[float, float, float] = (0.0, 0.0, 0.0)):
         if not 1 <= sysid <= 255:
             raise ValueError(f"sysid: {sysid!r} is not allowed; expected 1..255")
         if not 0 <= gcs_sysid <= 255:
@@ -98,14 +107,17 @@ class SimVehicle:
         self.gcs_sysid = int(gcs_sysid)
         self._boot = time.monotonic()
         self._ap = Autopilot(autopilot, start_ned, max_speed, max_accel, airborne,
-                             offboard_timeout_s, boot_s, self._boot)
+                             offboard_timeout_s, boot_s, self._boot, wind_ned)
+        error = estimate_error.EstimateError(position_noise_std_m, position_noise_tau_s,
+                                             noise_seed, sysid)
         signing = None if signing_key is None else signing_state(signing_key, link_id=0)
         self._link = Link(listen, sysid, compid, signing)
         self._drops = DropLog()
         self._log = log
         #: why the vehicle loop died (None while it runs or never ran)
         self.failure: str | None = None
-        self.telemetry = Telemetry(self._link.mav, self._ap, tuple(home), self._boot, sysid)
+        self.telemetry = Telemetry(self._link.mav, self._ap, tuple(home), self._boot, sysid,
+                                   error)
         self.streams = Streams()
         self.params = ParamTable(vehicle_params(self), bytewise=self._ap.px4)
         self._lock = threading.Lock()
@@ -130,6 +142,12 @@ class SimVehicle:
     def position_ned(self) -> tuple[float, float, float]:
         with self._lock:
             return self._ap.position
+
+    @property
+    def reported_position_ned(self) -> tuple[float, float, float]:
+        """The position its telemetry reports: position_ned off by the estimate's error."""
+        with self._lock:
+            return self.telemetry.position()
 
     @property
     def velocity_ned(self) -> tuple[float, float, float]:

@@ -1,6 +1,7 @@
 """The telemetry of the simulated vehicle: what each message says and how often it is sent.
 
-Every message is built from the simulated state (`Autopilot`) and the geodetic position of
+Every message is built from the simulated state (`Autopilot`), its position as the estimate
+reports it (`EstimateError`: position messages only), and the geodetic position of
 the local NED origin (`origin` = (lat deg, lon deg, alt m AMSL); flat earth around it). The
 vehicle never yaws, so heading is 0 and roll / pitch follow the horizontal acceleration.
 
@@ -16,6 +17,7 @@ from collections.abc import Callable
 
 from uav_insar_planner.mavlink.autopilots import COPTER_MODES, px4_custom_mode
 from uav_insar_planner.mavlink.link import MAV
+from uav_insar_sim.vehicle.estimate_error import EstimateError
 
 EARTH_RADIUS_M = 6378137.0
 SITL_HOME = (-35.363261, 149.165230, 584.0)  # ArduPilot SITL's default (CMAC)
@@ -116,9 +118,10 @@ class Telemetry:
     """Builds the messages of one vehicle (see the module doc); `mav` encodes them."""
 
     def __init__(self, mav: MAV.MAVLink, ap, origin: tuple[float, float, float],
-                 boot_time: float, sysid: int):
+                 boot_time: float, sysid: int, error: EstimateError | None = None):
         check_home(origin)
         self.mav, self.ap, self.origin, self.boot_time = mav, ap, origin, boot_time
+        self.error = EstimateError() if error is None else error
         self.sysid = sysid
         self.battery = 100.0
         self._last_v, self._last_t = (0.0, 0.0, 0.0), boot_time
@@ -146,10 +149,12 @@ class Telemetry:
         return None if builder is None else builder(now)
 
     def update(self, now: float) -> None:
-        """Per physics tick: battery drain, tilt from the horizontal acceleration."""
+        """Per physics tick: battery drain, tilt from the horizontal acceleration, the
+        estimate's error."""
         dt = now - self._last_t
         if dt <= 0:
             return
+        self.error.step(dt)
         v = self.ap.velocity
         an, ae = (v[0] - self._last_v[0]) / dt, (v[1] - self._last_v[1]) / dt
         self._tilt = (math.atan2(ae, G), -math.atan2(an, G))
@@ -158,6 +163,10 @@ class Telemetry:
             self.battery = max(0.0, self.battery - BATTERY_DRAIN_PER_S * dt)
 
     # ------------------------------------------------------------------------ geometry
+    def position(self) -> tuple[float, float, float]:
+        """The position estimate (NED, m): where the vehicle is, off by the error."""
+        return self.error.reported(self.ap.position)
+
     def geodetic(self, n: float, e: float, d: float) -> tuple[int, int, int]:
         """NED [m] -> (lat degE7, lon degE7, alt mm AMSL)."""
         lat0, lon0, alt0 = self.origin
@@ -205,7 +214,7 @@ class Telemetry:
 
     def gps_raw_int(self, now: float) -> MAV.MAVLink_message:
         booted = self.ap.booted(now)
-        lat, lon, alt = self.geodetic(*self.ap.position) if booted else (0, 0, 0)
+        lat, lon, alt = self.geodetic(*self.position()) if booted else (0, 0, 0)
         vn, ve, _ = self.ap.velocity
         speed = math.hypot(vn, ve)
         cog = round(math.degrees(math.atan2(ve, vn)) % 360.0 * 100) % 36000 if speed > 0.2 \
@@ -221,11 +230,11 @@ class Telemetry:
         return self.mav.attitude_encode(self._ms(now), roll, pitch, 0.0, 0.0, 0.0, 0.0)
 
     def local_position_ned(self, now: float) -> MAV.MAVLink_message:
-        return self.mav.local_position_ned_encode(self._ms(now), *self.ap.position,
+        return self.mav.local_position_ned_encode(self._ms(now), *self.position(),
                                                   *self.ap.velocity)
 
     def global_position_int(self, now: float) -> MAV.MAVLink_message:
-        n, e, d = self.ap.position
+        n, e, d = self.position()
         lat, lon, alt = self.geodetic(n, e, d)
         vn, ve, vd = (round(v * 100) for v in self.ap.velocity)
         relative = round((float(self.ap.home[2]) - d) * 1000.0)
