@@ -24,7 +24,8 @@ CLI = [sys.executable, "-m", "uav_insar_planner.cli"]
 # 3 x 3 cells, two schemes; static-power is feasible at rate 17 Mbit/s and not at 18 with
 # P_com,max 9 dB (test_cli.py's sweep), so the map has both kinds of cell.
 SMALL_MAP = ("map", "h_amb_min_m", "0.9", "1.1", "3", "rate_min_mbps[1]", "17", "18", "3",
-             "--schemes", "proposed", "static-power", "--set", "p_com_max_db=9")
+             "--schemes", "proposed", "static-power", "--set", "p_com_max_db=9",
+             "--set", "rate_margin=0")  # Figure 4's map, on the paper's C10
 SMALL_SWEEP = ("sweep", "h_amb_min_m", "0.9", "1.2", "3", "--schemes", "proposed",
                "fixed-master", "--set", "master_fixed_xz_m=[-54,74]")
 

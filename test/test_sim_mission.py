@@ -4,6 +4,7 @@ import pytest
 
 from uav_insar_planner.evaluate import FEAS_TOL
 from uav_insar_planner.params_file import load_params
+from uav_insar_planner.schemes import planned_rate_bps
 from uav_insar_planner.solver.power import schedules
 from uav_insar_sim.mission import Mission
 
@@ -29,7 +30,7 @@ def fly(mission, until=300.0, step=0.37):
 
 
 @pytest.mark.parametrize("k", [0, 1, 2])
-def test_noise_free_mission_flies_every_slot_on_the_model_grid_at_rate_min(scenario, k):
+def test_noise_free_mission_flies_every_slot_on_the_model_grid_at_the_planned_rate(scenario, k):
     p, power = scenario
     m = Mission(k, p, max_speed=10.0, max_accel=3.0)
     assert m.advance(5.0) == [] and m.phase == "wait"
@@ -40,7 +41,10 @@ def test_noise_free_mission_flies_every_slot_on_the_model_grid_at_rate_min(scena
         assert s.position == pytest.approx((FORMATION[k, 0], p.y_track[n], FORMATION[k, 1]),
                                            abs=1e-9)
         assert s.power_w == power[k, n]
-        assert abs(s.margin_bps) <= FEAS_TOL * max(p.rate_min_bps)
+        # the plan's rate margin exactly: (1 + rate_margin) R_min,k, no more, no less
+        assert abs(s.rate_bps - planned_rate_bps(p, k, "proposed")) <= FEAS_TOL * max(
+            p.rate_min_bps)
+        assert s.margin_bps == pytest.approx(p.rate_margin * p.rate_min_bps[k], rel=1e-6)
     assert not m.state.velocity.any()
 
 

@@ -117,7 +117,7 @@ def test_three_arducopters_cold_start_fly_the_pass_and_one_is_lost(
         return all(uav_status(watcher, k)[1].get("armed") == "True" for k in range(3))
 
     def started() -> bool:
-        return any("formation established" in line for _, line in bridge_out)
+        return any("pass start from the planner" in line for _, line in bridge_out)
 
     assert watcher.spin_until(lambda: watcher.formations, 60.0, nodes), "no /formation"
     assert watcher.spin_until(all_armed, 150.0, nodes), log()

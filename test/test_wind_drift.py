@@ -13,7 +13,9 @@ from uav_insar_planner.ros.planner import PlannerNode
 from uav_insar_sim.agent_node import AgentNode
 
 N = 8
-SCENARIO = {"num_slots": N}
+# No rate margin (the paper's C10), so the open loop's drift shows in the verdict: the default
+# 5 % margin carries uav1 through this drift (17.3 of 16.95 Mbit/s, measured)
+SCENARIO = {"num_slots": N, "rate_margin": 0.0}
 WIND = [-5.0, 0.0, 0.0]  # pushes uav1 away from the ground station (Table I)
 
 

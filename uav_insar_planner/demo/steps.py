@@ -124,12 +124,11 @@ def set_by_the_demo(args: argparse.Namespace) -> dict[str, tuple[tuple[str, ...]
         radius = f"nothing: its pass uses {CAPTURE_RADIUS_M:g}"
         own.update({"connections": (bridge, wired), "target_sysids": (bridge, wired),
                     "velocity_feedforward": (bridge, "nothing: its pass uses true"),
-                    "capture_radius_m": (bridge, radius),
+                    "capture_radius_m": (("planner",) + bridge, radius),
                     "track_duration_s": (bridge, "--num-slots (the pass is one slot longer "
                                          "than the slots)")})
         if args.per_uav_stacks:
             own["uav_id"] = (agent + bridge, "nothing: /uavK's stack flies UAV K")
-            own["capture_radius_m"] = (("planner",) + bridge, radius)
     return own
 
 
@@ -224,7 +223,7 @@ class Mission:
         """Start the planner and, unless --no-mavlink, one vehicle per UAV and the bridge."""
         args = self.args
         own = [] if args.uav_timeout is None else ["-p", f"uav_timeout_s:={args.uav_timeout}"]
-        if args.per_uav_stacks:  # the planner starts the pass once every UAV is this close
+        if not args.no_mavlink:  # the planner starts the pass once every UAV is this close
             own += ["-p", f"capture_radius_m:={CAPTURE_RADIUS_M}"]
         self.procs.append(start_node("planner", [*self.common, *own], self.env, "[planner]"))
         if args.no_mavlink:

@@ -132,11 +132,13 @@ INTERFACE: tuple[TopicSpec, ...] = (
     TopicSpec(POWER, "std_msgs/msg/Float64MultiArray", "LATCHED", _PLANNER, _AGENT + _BRIDGE,
               "P_com[k][n] [W], row-major; layout [uav, slot, plan id]: the third dimension's "
               "label is the plan's identity, `plan /planner <sec>.<nanosec>`"),
-    TopicSpec(FORMATION_START, "std_msgs/msg/Header", "LATCHED", _PLANNER, _BRIDGE,
+    TopicSpec(FORMATION_START, "std_msgs/msg/Header", "LATCHED", _PLANNER, _AGENT + _BRIDGE,
               "the pass start, once every flown UAV's uav{k}/mavlink/pose is within "
               "capture_radius_m of its start point: stamp = the wall-clock start (time.time(), "
               "not ROS time), frame_id = the identity label of the plan it starts "
-              "(ros/start_msgs.py); a bridge follows it with pass_start planner"),
+              "(ros/start_msgs.py); the one mission clock: a bridge flies its pass from it "
+              "(pass_start planner, the default), an agent on a bridge-flown vehicle starts "
+              "its slots by it (a self-flown agent keeps its own clock and does not subscribe)"),
     TopicSpec(MARKERS, "visualization_msgs/msg/MarkerArray", "LATCHED", _PLANNER, (),
               "the plan for RViz / Foxglove in frame insar_track (ros/markers.py)"),
     TopicSpec(FLOWN_MARKERS, "visualization_msgs/msg/MarkerArray", "DEPTH", _PLANNER, (),
