@@ -194,3 +194,23 @@ def test_an_agent_whose_embedded_vehicle_dies_exits_1(ros_domain):
     assert out.returncode == 1, out
     errors = [line for line in (out.stdout + out.stderr).splitlines() if "ERROR" in line]
     assert len(errors) == 1 and "embedded MAVLink vehicle died" in errors[0], out
+
+
+def test_a_pass_start_heard_late_starts_each_slot_where_its_line_was_crossed():
+    """A lossy radio delivers formation/start 1.2 s after its instant: the UAV is already
+    2.5 lines down the track. Its slots still start where it crossed each line, from the
+    positions read meanwhile, not all at the one position it has when the start arrives."""
+    mission = _mission(pass_start_s=None)
+    step = mission.params.speed * mission.params.slot_duration_s
+    v = mission.params.speed
+    t, y = 9.0, -0.2
+    while t < 11.25:  # holding until 10 s, then flying the pass at v_y
+        y = -0.2 if t < 10.0 else -0.2 + v * (t - 10.0)
+        assert mission.observe((-30.0, y, 50.0), t) == []
+        t = round(t + 0.1, 6)
+    started = mission.set_pass_start(10.0)
+    assert [s.slot for s in started] == [0, 1, 2] and y > 2 * step
+    for n, s in enumerate(started):
+        assert s.position[1] == pytest.approx(n * step, abs=1e-9)
+    assert mission.slot_times_s == pytest.approx([10.1, 10.6, 11.1])
+    assert [s.slot for s in mission.observe((-30.0, 3 * step + 0.1, 50.0), 11.3)] == [3]

@@ -98,7 +98,9 @@ def test_three_stacks_fly_the_formation_and_start_the_pass_together(watcher):
         tracked()
         # a re-plan during the pass (same y_start): the same instant under the new identity
         assert watcher.call(Trigger, "/planner/replan", Trigger.Request()).success
-        replanned = watcher.spin_until(lambda: len(starts) >= 2, 20.0, everyone)
+        # (the planner sends each start again every half second: look for another label)
+        replanned = watcher.spin_until(
+            lambda: any(m.frame_id != starts[0].frame_id for m in starts), 20.0, everyone)
         watcher.spin_until(lambda: time.time() > t0 + 6.0, 10.0, everyone)
         replanned_y = [watcher.mavlink_poses[k][-1].pose.position.y for k in UAVS]
         names = set(watcher.node.get_node_names_and_namespaces())
@@ -115,7 +117,8 @@ def test_three_stacks_fly_the_formation_and_start_the_pass_together(watcher):
     assert formations and watcher.poses[1], "no /formation or no /uav1/pose"
     assert {s.name for s in diagnostics if s.name.startswith("mavlink_bridge")} == {
         f"mavlink_bridge: uav{k}" for k in UAVS}
-    again, t_again = decode_start(starts[1], time.time())
+    again, t_again = decode_start(next(m for m in starts if m.frame_id != starts[0].frame_id),
+                                  time.time())
     assert t_again == t0 and again != plan_id and again.planner == plan_id.planner
     assert flown[-2:] == [plan_id.label, again.label], flown  # the agent flies /formation
     for k, out in enumerate(bridge_outs):

@@ -142,6 +142,7 @@ class AgentNode(Node):
         self._starts = (StartFollower(self, ns, lambda: self.gate.current, self._on_pass_start,
                                       f"{self.uav_name}: ") if self.flight.observed else None)
         self._told_no_start = False
+        self._late: list = []  # slots a late pass start found already flown, to report
         self._rate_tol = rate_tolerance_bps(params.rate_min_bps)
         self._lag_logged_at = -LAG_LOG_PERIOD_S
         self.create_timer(TICK_PERIOD_S, self._tick)
@@ -191,11 +192,14 @@ class AgentNode(Node):
     def _on_pass_start(self, wall_time_s: float, label: str) -> None:
         if self.mission.pass_start_s == wall_time_s:
             return
-        self.mission.set_pass_start(wall_time_s)
+        late = self.mission.set_pass_start(wall_time_s)
+        self._late += late
         ahead = wall_time_s - time.time()
         when = f"in {ahead:.2f} s" if ahead >= 0 else f"{-ahead:.2f} s ago"
         self.get_logger().info(f"{self.uav_name}: pass start {when}, wall clock "
-                               f"{wall_time_s:.3f} ({label}): slots from then on")
+                               f"{wall_time_s:.3f} ({label}): slots from then on" + (
+                                   f"; {len(late)} slot(s) flown since, from the positions "
+                                   "read meanwhile" if late else ""))
 
     # --- flight --------------------------------------------------------------------------
     def _tick(self) -> None:
@@ -203,7 +207,8 @@ class AgentNode(Node):
             self.get_logger().error(f"{self.uav_name}: embedded MAVLink vehicle died: "
                                     f"{self.vehicle.failure}; exiting")
             raise SystemExit(EXIT_CRASH)  # never a zombie agent that flies nothing
-        for sample in self.flight.tick():
+        late, self._late = self._late, []
+        for sample in late + self.flight.tick():
             if self.flight.own_poses:
                 self._publish_pose(sample.position)
             self._rate_pub.publish(Float64(data=sample.rate_bps))

@@ -12,12 +12,17 @@ it, else where the UAV is (it held just ahead of the line). So the slots follow 
 real progress whatever its clock or speed, and wherever it took off. The mission is `done`
 once the line after the last slot is reached.
 
+A pass start that arrives late (a lossy radio repairs a lost sample only seconds later) finds
+the UAV already on its way: the positions read since the start (kept for HISTORY_S) are
+replayed, so each slot still starts where the UAV crossed its line, only reported late.
+
 `lag` tells how far the UAV is behind the mission clock: the pass start passed, its next line
 not reached while the clock says it should have been, for the agent to say so.
 """
 from __future__ import annotations
 
 import math
+from collections import deque
 from collections.abc import Sequence
 
 from uav_insar_planner.mavlink.frames import Vec3
@@ -29,6 +34,8 @@ from uav_insar_sim.slots import SlotSample, SlotSchedule
 # A new plan whose y_start differs by more than this is another pass (as the bridge's
 # trajectory.PassTrajectory): the pass start of the old one no longer applies.
 SAME_Y_START_M = 1e-3
+# Positions kept for a pass start that arrives late: longer than any repair of a lost sample.
+HISTORY_S = 30.0
 
 
 class ObservedMission(SlotSchedule):
@@ -42,6 +49,7 @@ class ObservedMission(SlotSchedule):
         self._last_t: float | None = None
         self.pass_start_s: float | None = None  # wall clock; None: not (yet) known
         self.slot_times_s: list[float] = []  # wall clock of the observation that started each
+        self._history: deque[tuple[float, Vec3]] = deque()  # (read at, position), oldest first
 
     def actual_position(self) -> Vec3 | None:
         """The last observed position (None before the first)."""
@@ -53,16 +61,30 @@ class ObservedMission(SlotSchedule):
             self.pass_start_s = None
         super().set_plan(target_xz, powers, y_start)
 
-    def set_pass_start(self, wall_time_s: float) -> None:
-        """The pass of the flown plan starts (started) at `wall_time_s` (time.time())."""
+    def set_pass_start(self, wall_time_s: float) -> list[SlotSample]:
+        """The pass of the flown plan starts (started) at `wall_time_s` (time.time()); the slots
+        that the positions read since then start, when it comes late (module doc)."""
         self.pass_start_s = float(wall_time_s)
+        since = [(t, q) for t, q in self._history if t >= wall_time_s]
+        if not since:
+            return []
+        earlier = [(t, q) for t, q in self._history if t < wall_time_s]
+        self._last, self._last_t = (earlier[-1][1], earlier[-1][0]) if earlier else (None, None)
+        return [sample for t, q in since for sample in self._advance(q, t)]
 
     def observe(self, position: Sequence[float], wall_time_s: float) -> list[SlotSample]:
         """Record the UAV at `position` (x, y, z), read at `wall_time_s`; return the slots that
         started with it, in order."""
         here = (float(position[0]), float(position[1]), float(position[2]))
+        t = float(wall_time_s)
+        self._history.append((t, here))
+        while self._history and self._history[0][0] < t - HISTORY_S:
+            self._history.popleft()
+        return self._advance(here, t)
+
+    def _advance(self, here: Vec3, wall_time_s: float) -> list[SlotSample]:
         before, self._last = self._last, here
-        self._last_t = float(wall_time_s)
+        self._last_t = wall_time_s
         started: list[SlotSample] = []
         if (self.phase not in ("transit", "track") or self.pass_start_s is None
                 or wall_time_s < self.pass_start_s):

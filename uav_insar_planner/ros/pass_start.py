@@ -12,6 +12,12 @@ offset dt puts a UAV v_y dt along track.
 A plan with the same y_start as the started one (a re-plan during the pass) gets the same
 instant again under its own identity, so the pass continues; one with another y_start (or the
 hold plan, nothing flown) waits for a new capture. Radius 0 starts at the first check.
+
+Each start is sent again every REPEAT_PERIOD_S until REPEAT_AFTER_S past its instant (and for
+at least REPEAT_MIN_S): on a lossy radio a reliable sample that is lost is repaired only at
+the writer's next heartbeat (3 s in Fast DDS), after the 2 s start_delay_s, so a bridge or
+agent that lost it would join the pass late; a newer copy, sent half a second later, is there
+in time. Receivers take the same instant again as no change.
 """
 from __future__ import annotations
 
@@ -33,6 +39,9 @@ CHECK_PERIOD_S = 0.1
 # Bridges publish a pose per LOCAL_POSITION_NED, ~10 Hz: older than this is a silent UAV.
 POSE_FRESH_S = 1.0
 SAME_Y_START_M = 1e-3  # as trajectory.PassTrajectory: the same track start
+REPEAT_PERIOD_S = 0.5
+REPEAT_AFTER_S = 1.0
+REPEAT_MIN_S = 2.0
 
 
 Point = tuple[float, float, float]
@@ -65,6 +74,7 @@ class PassStart:
         self._starts: dict[int, Point] = {}  # flown UAV -> its start point
         self._y_start: float | None = None
         self._start_ns: int | None = None  # the published instant, while this pass lasts
+        self._repeat: tuple[Header, float, float] | None = None  # message, next, until (wall)
         self._pub = node.create_publisher(Header, topics.FORMATION_START, topics.LATCHED)
         node.create_timer(CHECK_PERIOD_S, self._check)
 
@@ -82,11 +92,28 @@ class PassStart:
                     and abs(y_start - self._y_start) < SAME_Y_START_M)
             self._plan, self._starts, self._y_start = plan_id, starts, y_start
             if not same:
-                self._start_ns = None
+                self._start_ns, self._repeat = None, None  # the old pass's start is void
                 return
             start_ns = self._start_ns
-        self._pub.publish(encode_start(start_ns, plan_id))
+        self._publish(encode_start(start_ns, plan_id), start_ns)
         self._node.get_logger().info(f"pass continues: the same start again for {plan_id}")
+
+    def _publish(self, msg: Header, start_ns: int) -> None:
+        """Send a start now, and again every REPEAT_PERIOD_S (module doc)."""
+        self._pub.publish(msg)
+        now = time.time()
+        until = max(start_ns * 1e-9 + REPEAT_AFTER_S, now + REPEAT_MIN_S)
+        with self._lock:
+            self._repeat = (msg, now + REPEAT_PERIOD_S, until)
+
+    def _send_again(self) -> None:
+        now = time.time()
+        with self._lock:
+            if self._repeat is None or now < self._repeat[1]:
+                return
+            msg, _, until = self._repeat
+            self._repeat = (msg, now + REPEAT_PERIOD_S, until) if now < until else None
+        self._pub.publish(msg)
 
     def _on_pose(self, k: int, msg: PoseStamped) -> None:
         p = msg.pose.position
@@ -94,6 +121,7 @@ class PassStart:
             self._poses[k] = (time.monotonic(), (p.x, p.y, p.z))
 
     def _check(self) -> None:
+        self._send_again()
         radius = float(self._node.get_parameter("capture_radius_m").value)
         delay = float(self._node.get_parameter("start_delay_s").value)
         lost = self._lost()
@@ -105,7 +133,7 @@ class PassStart:
                 return
             self._start_ns = time.time_ns() + round(delay * 1e9)
             start_ns, plan_id = self._start_ns, self._plan
-        self._pub.publish(encode_start(start_ns, plan_id))
+        self._publish(encode_start(start_ns, plan_id), start_ns)
         self._node.get_logger().info(
             f"every flown UAV ({', '.join(uav_name(k) for k in sorted(starts))}) within "
             f"{radius:g} m of its start: the pass starts in {delay:g} s, wall clock "
