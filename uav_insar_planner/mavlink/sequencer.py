@@ -19,7 +19,9 @@ Contract:
   (the confirmation field counts them). IN_PROGRESS waits for the final ACK.
 - Every outcome is reported through `emit(level, text)`. A vehicle already armed under our
   control (and, for ArduPilot, airborne) skips the sequence; one already airborne skips the
-  takeoff.
+  takeoff, unless it was seen disarmed during the sequence: a disarmed multicopter stands on
+  the ground, whatever its position estimate says (an EKF's height on the ground wanders by
+  tenths of a metre with the barometer and the GNSS, past `WatchedVehicle.airborne`'s 0.5 m).
 """
 from __future__ import annotations
 
@@ -104,6 +106,7 @@ class ArmingSequence:
         self.climb_height = 0.0
         self.climb_deadline: float | None = None
         self.failed = ""
+        self.seen_disarmed = False  # then it is on the ground: its takeoff is never skipped
 
     @property
     def active(self) -> bool:
@@ -158,6 +161,7 @@ class ArmingSequence:
                                    "sequence skipped")
                 return
         step = self.steps[self.index]
+        self.seen_disarmed = self.seen_disarmed or not v.armed
         if step.name != "climb" and now > self.deadline:
             why = self.waiting_for or v.prearm or step.name
             self._fail(f"not ready after {self.readiness_timeout_s:g} s ({step.name}: {why})")
@@ -176,7 +180,8 @@ class ArmingSequence:
         if step.name == "climb":
             self._step_climb(now)
             return
-        if step.command == MAV.MAV_CMD_NAV_TAKEOFF and self.sent_at is None and v.airborne:
+        if (step.command == MAV.MAV_CMD_NAV_TAKEOFF and self.sent_at is None and v.airborne
+                and not self.seen_disarmed):
             self._emit("info", f"sysid {v.sysid} already airborne; no takeoff")
             self._advance(now)
             self._advance(now)  # and no climb to wait for
