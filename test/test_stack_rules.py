@@ -14,7 +14,7 @@ from uav_insar_planner.mavlink.pass_start import planner_start
 from uav_insar_planner.mavlink.trajectory import PassTrajectory
 from uav_insar_planner.param_specs import BRIDGE_SPECS
 from uav_insar_planner.ros.claims import Claim, refusal
-from uav_insar_planner.ros.pass_start import POSE_FRESH_S, all_captured
+from uav_insar_planner.ros.pass_start import POSE_FRESH_S, all_captured, not_captured
 from uav_insar_planner.ros.plan_msgs import PlanId, PlanMessageError
 from uav_insar_planner.ros.start_msgs import PLAUSIBLE_S, decode_start, encode_start
 
@@ -86,6 +86,12 @@ def test_the_planner_starts_only_with_every_flown_uav_fresh_and_inside_the_radiu
     nan = {**near, 1: (now, (math.nan, 0.0, 48.0))}
     assert not all_captured(starts, nan, now, 1.0)
     assert not all_captured({}, near, now, 1.0)  # nothing flown: no start
+    # what the planner says while it waits: who, and why
+    assert not_captured(starts, near, now, 1.0) == {}
+    assert not_captured(starts, near, now, 0.5) == {1: "0.62 m from its start point"}
+    assert not_captured(starts, {0: near[0]}, now, 1.0) == {1: "no uav1/mavlink/pose yet"}
+    assert not_captured(starts, stale, now, 1.0) == {1: "no uav1/mavlink/pose for 1.1 s"}
+    assert not_captured(starts, nan, now, 1.0) == {1: "nan m from its start point"}
 
 
 def test_the_start_message_round_trips_and_bad_ones_name_their_field():

@@ -42,24 +42,36 @@ SAME_Y_START_M = 1e-3  # as trajectory.PassTrajectory: the same track start
 REPEAT_PERIOD_S = 0.5
 REPEAT_AFTER_S = 1.0
 REPEAT_MIN_S = 2.0
+# A capture that takes longer than this is said, with who is missing and why, this often: a
+# copter's boot and climb take a minute, a vehicle that never arrives must not be silent.
+WAIT_LOG_PERIOD_S = 15.0
 
 
 Point = tuple[float, float, float]
+
+
+def not_captured(starts: dict[int, Point], poses: dict[int, tuple[float, Point]],
+                 now: float, radius_m: float) -> dict[int, str]:
+    """Why each UAV of `starts` is not captured (no pose fresher than POSE_FRESH_S at `now`,
+    monotonic, or farther than `radius_m` from its start), by UAV; empty when all are."""
+    why: dict[int, str] = {}
+    for k, start in starts.items():
+        seen = poses.get(k)
+        if seen is None:
+            why[k] = f"no {topics.mavlink_pose(k)} yet"
+        elif now - seen[0] > POSE_FRESH_S:
+            why[k] = f"no {topics.mavlink_pose(k)} for {now - seen[0]:.1f} s"
+        elif not (radius_m <= 0.0 or math.dist(seen[1], start) <= radius_m):
+            # (written so that a NaN distance never counts as inside)
+            why[k] = f"{math.dist(seen[1], start):.2f} m from its start point"
+    return why
 
 
 def all_captured(starts: dict[int, Point], poses: dict[int, tuple[float, Point]],
                  now: float, radius_m: float) -> bool:
     """Whether every UAV of `starts` has a pose (monotonic time, position) fresher than
     POSE_FRESH_S at `now` within `radius_m` of its start; False with nothing to start."""
-    if not starts:
-        return False
-    for k, start in starts.items():
-        seen = poses.get(k)
-        if seen is None or now - seen[0] > POSE_FRESH_S:
-            return False
-        if not (radius_m <= 0.0 or math.dist(seen[1], start) <= radius_m):
-            return False  # (written so that a NaN distance never counts as inside)
-    return True
+    return bool(starts) and not not_captured(starts, poses, now, radius_m)
 
 
 class PassStart:
@@ -75,6 +87,7 @@ class PassStart:
         self._y_start: float | None = None
         self._start_ns: int | None = None  # the published instant, while this pass lasts
         self._repeat: tuple[Header, float, float] | None = None  # message, next, until (wall)
+        self._wait_told = time.monotonic()  # the last time the wait for a capture was said
         self._pub = node.create_publisher(Header, topics.FORMATION_START, topics.LATCHED)
         node.create_timer(CHECK_PERIOD_S, self._check)
 
@@ -91,6 +104,7 @@ class PassStart:
             same = (self._start_ns is not None and y_start is not None
                     and abs(y_start - self._y_start) < SAME_Y_START_M)
             self._plan, self._starts, self._y_start = plan_id, starts, y_start
+            self._wait_told = time.monotonic()
             if not same:
                 self._start_ns, self._repeat = None, None  # the old pass's start is void
                 return
@@ -115,6 +129,11 @@ class PassStart:
             self._repeat = (msg, now + REPEAT_PERIOD_S, until) if now < until else None
         self._pub.publish(msg)
 
+    def _bridged(self, starts: dict[int, Point]) -> bool:
+        """Whether a bridge flies any of `starts` (publishes its uavK/mavlink/pose): without
+        one (self-flown agents) no pass start is awaited, and nothing is said."""
+        return any(self._node.count_publishers(topics.mavlink_pose(k)) for k in starts)
+
     def _on_pose(self, k: int, msg: PoseStamped) -> None:
         p = msg.pose.position
         with self._lock:
@@ -129,7 +148,16 @@ class PassStart:
             if self._plan is None or self._start_ns is not None:
                 return
             starts = {k: p for k, p in self._starts.items() if k not in lost}
-            if not all_captured(starts, self._poses, time.monotonic(), radius):
+            now = time.monotonic()
+            if not all_captured(starts, self._poses, now, radius):
+                why = (not_captured(starts, self._poses, now, radius)
+                       if now - self._wait_told >= WAIT_LOG_PERIOD_S and self._bridged(starts)
+                       else {})
+                if why:
+                    self._wait_told = now
+                    waiting = ", ".join(f"{uav_name(k)} ({w})" for k, w in sorted(why.items()))
+                    self._node.get_logger().info(f"the pass start waits for {waiting}: "
+                                                 f"capture_radius_m {radius:g} ({self._plan})")
                 return
             self._start_ns = time.time_ns() + round(delay * 1e9)
             start_ns, plan_id = self._start_ns, self._plan
