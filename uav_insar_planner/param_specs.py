@@ -249,9 +249,10 @@ AGENT_SCENARIO_SPECS = tuple(SPEC_BY_NAME[n] for n in (
 
 #: The planner's gcs/heartbeat period [s] (ros/gcs_link.py): 2 Hz is ~100 bytes/s on the
 #: radio, and a timeout of a few seconds then spans several heartbeats.
-GCS_HEARTBEAT_PERIOD_S = 0.5
-#: The smallest non-zero gcs_timeout_s: two heartbeat periods (one lost never holds).
-GCS_TIMEOUT_MIN_S = 2 * GCS_HEARTBEAT_PERIOD_S
+GCS_HEARTBEAT_PERIOD_S = 0.1
+#: The smallest non-zero gcs_timeout_s: ten heartbeat periods (at 30 % loss all ten are lost
+#: with probability 6e-6: a hold means the ground is gone, not a lost heartbeat).
+GCS_TIMEOUT_MIN_S = 10 * GCS_HEARTBEAT_PERIOD_S
 #: gcs_timeout_s's default, "auto": GCS_TIMEOUT_DEFAULT_S on a per-UAV bridge (ArduPilot's
 #: FS_GCS_TIMEOUT default), off on the all-in-one bridge, which sits with the ground station.
 GCS_TIMEOUT_AUTO = -1.0

@@ -108,8 +108,8 @@ class BridgeConfig:
                              "expected the bridge's own id (e.g. 255, the SYSID_MYGCS default)")
         if 0.0 < self.gcs_timeout_s < GCS_TIMEOUT_MIN_S or self.gcs_timeout_s < 0.0:
             raise ValueError(f"gcs_timeout_s: value {self.gcs_timeout_s:g} is not allowed; "
-                             f"expected 0 (off) or at least {GCS_TIMEOUT_MIN_S:g} s (two "
-                             "gcs/heartbeat periods, so one lost heartbeat never holds)")
+                             f"expected 0 (off) or at least {GCS_TIMEOUT_MIN_S:g} s (ten "
+                             "gcs/heartbeat periods, so lost heartbeats never hold)")
         length = self.speed_mps * self.track_duration_s
         if length > ORIGIN_LIMIT_M:
             raise ValueError(f"track_duration_s: {self.track_duration_s:g} s at speed_mps "
