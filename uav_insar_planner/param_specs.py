@@ -50,7 +50,8 @@ class ParamSpec:
         if self.kind is bool:
             return "true or false"
         if self.kind is list:
-            return "a list of " + ("strings" if isinstance(self.default[0], str) else "integers")
+            return "a non-empty list of " + ("strings" if isinstance(self.default[0], str)
+                                             else "integers")
         what = {int: "an integer", float: "a finite number", str: "a string"}[self.kind]
         if self.length:
             what = f"a list of {self.length} finite numbers"
