@@ -336,3 +336,14 @@ def nodes_taking(name: str) -> tuple[str, ...]:
         return tuple(NODE_SPECS)
     return tuple(node for node, specs in NODE_SPECS.items()
                  if any(s.name == name for s in specs))
+
+
+def spec_named(name: str, node: str | None = None) -> ParamSpec | None:
+    """The spec of parameter `name`: node `node`'s when it takes it (nodes differ in a few
+    ranges), else that of the first node in NODE_SPECS that does; None for rclpy's own names
+    and names no node takes."""
+    for owner in ([node] if node in NODE_SPECS else []) + list(NODE_SPECS):
+        for spec in NODE_SPECS[owner]:
+            if spec.name == name:
+                return spec
+    return None
