@@ -31,7 +31,12 @@ from uav_insar_planner import load_params
 from uav_insar_planner.cli import main as cli
 from uav_insar_planner.exit_codes import EXIT_BAD_INPUT, EXIT_INFEASIBLE, EXIT_OK
 from uav_insar_planner.mission_file.geodesy import WGS84_A, WGS84_E2, latlon_to_ned, ned_to_latlon
-from uav_insar_planner.mission_file.qgc_plan import PREFLIGHT_S, PX4_PASS_SEQ, RUN_UP_S
+from uav_insar_planner.mission_file.qgc_plan import (
+    PREFLIGHT_S,
+    PX4_PASS_SEQ,
+    RUN_UP_S,
+    START_LEAD_MIN_S,
+)
 from uav_insar_planner.solver import solve
 from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, uav_name, uavs
 
@@ -571,7 +576,10 @@ def test_sitl_three_copters_fly_their_files(tmp_path):
                                   for c in copters), 120.0, BEARING, "GPS time, EKF on GPS")
         ready_s = time.monotonic() - t_boot
         clocks = [c.vehicle_now() for c in copters]
-        start = datetime.fromtimestamp(math.ceil(max(clocks) + LEAD_SIM_S), timezone.utc)
+        # LEAD_SIM_S on the vehicles' clocks, and at least START_LEAD_MIN_S on this host's,
+        # which export-mission checks: a SITL slowed below real time lags the host
+        start = datetime.fromtimestamp(math.ceil(max(max(clocks) + LEAD_SIM_S, time.time()
+                                                     + START_LEAD_MIN_S + 1.0)), timezone.utc)
         assert export(tmp_path / "plans", "--start-utc", start.isoformat()) == EXIT_OK
         rows = {c.k: mission_item_ints(json.loads(
             (tmp_path / "plans" / f"{uav_name(c.k)}.plan").read_text())) for c in copters}
