@@ -50,7 +50,8 @@ class ParamSpec:
         if self.kind is bool:
             return "true or false"
         if self.kind is list:
-            return "a list of " + ("strings" if isinstance(self.default[0], str) else "integers")
+            return "a non-empty list of " + ("strings" if isinstance(self.default[0], str)
+                                             else "integers")
         what = {int: "an integer", float: "a finite number", str: "a string"}[self.kind]
         if self.length:
             what = f"a list of {self.length} finite numbers"
@@ -336,3 +337,14 @@ def nodes_taking(name: str) -> tuple[str, ...]:
         return tuple(NODE_SPECS)
     return tuple(node for node, specs in NODE_SPECS.items()
                  if any(s.name == name for s in specs))
+
+
+def spec_named(name: str, node: str | None = None) -> ParamSpec | None:
+    """The spec of parameter `name`: node `node`'s when it takes it (nodes differ in a few
+    ranges), else that of the first node in NODE_SPECS that does; None for rclpy's own names
+    and names no node takes."""
+    for owner in ([node] if node in NODE_SPECS else []) + list(NODE_SPECS):
+        for spec in NODE_SPECS[owner]:
+            if spec.name == name:
+                return spec
+    return None

@@ -17,7 +17,7 @@ from uav_insar_planner.param_specs import (
     ORIGIN_LIMIT_M,
     vehicle_connection,
 )
-from uav_insar_planner.params import check_value
+from uav_insar_planner.params import check_value, shown
 from uav_insar_planner.plan import SAFE_SEPARATION_M as DEFAULT_MIN_SEPARATION_M
 from uav_insar_planner.swarm import MAX_UAVS
 
@@ -75,6 +75,10 @@ class BridgeConfig:
         n = len(self.target_sysids)
         if n == 0:
             raise ValueError("target_sysids: empty; expected one sysid (1..255) per UAV")
+        if n > MAX_UAVS:
+            raise ValueError(f"target_sysids: value {shown(list(self.target_sysids))} is not "
+                             f"allowed: {n} UAVs; expected one sysid per UAV, at most "
+                             f"{MAX_UAVS} (the largest swarm)")
         if self.pass_start == "auto":
             raise ValueError("pass_start: 'auto' is resolved by from_parameters; expected "
                              "capture or planner")
