@@ -131,3 +131,14 @@ def test_slots_flown_off_the_planned_speed_are_found():
     assert off[2] == pytest.approx(4.0, abs=0.15) and off[4] == pytest.approx(0.5, abs=0.1)
     assert all(abs(d - 1.0) <= SPEED_TOLERANCE for n, d in enumerate(durations) if n not in off)
     assert math.isfinite(mission.end_time_s)
+
+
+def test_a_start_heard_too_late_holds_the_uav_rather_than_sprint():
+    events: list[str] = []
+    holding = Holding("ardupilot", 0.0, [0, 1], lambda k, level, text: events.append(text))
+    on_time, late = _vehicle(0, 19.0), _vehicle(1, 0.0)
+    holding.fall_back([on_time, late], {0: 1.0, 1: 9.0}, 2.0, "a new pass start")
+    assert not holding.stopped(on_time) and holding.stopped(late)
+    assert holding.hold.engaged(1) and "cannot keep the pass" in holding.phase(late)
+    assert events == ["a new pass start: 9.00 m behind its target, more than the 2.00 m it may "
+                      "catch up: cannot keep the pass, keeps holding (LOITER, no sprint)"]
