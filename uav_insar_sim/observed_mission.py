@@ -20,8 +20,9 @@ replayed, so each slot still starts where the UAV crossed its line, only reporte
 not reached while the clock says it should have been, for the agent to say so.
 
 A slot is flown at the planned speed when the time from its line to the next (`durations`)
-is within SPEED_TOLERANCE of delta_t; one flown slower (a hold in it) or faster (a catch-up)
-is `off_speed`, and the agent says so and does not count it as flown at the planned speed.
+is within SPEED_TOLERANCE of delta_t (or OFF_SPEED_MIN_S, for the position noise); one
+flown slower (a hold in it) or faster (a catch-up) is `off_speed`, and the agent says so
+and does not count it as flown at the planned speed.
 """
 from __future__ import annotations
 
@@ -43,6 +44,9 @@ HISTORY_S = 30.0
 # A slot whose line-to-line time is off delta_t by more than this fraction was not flown at
 # v_y: its samples are not where the plan put them (the done-when of issue 27: 0.9).
 SPEED_TOLERANCE = 0.1
+# ... and by at least this much: GNSS noise of 0.3 m moves a crossing by 0.07 s at 4.3 m/s, a
+# slot's duration by 0.1 s (two crossings); a hold or a catch-up sprint is far more.
+OFF_SPEED_MIN_S = 0.25
 
 
 class ObservedMission(SlotSchedule):
@@ -127,8 +131,8 @@ class ObservedMission(SlotSchedule):
     def off_speed(self) -> list[tuple[int, float]]:
         """(slot, duration) of every slot flown off the planned speed (module doc)."""
         dt = self.params.slot_duration_s
-        return [(n, d) for n, d in enumerate(self.durations())
-                if abs(d - dt) > SPEED_TOLERANCE * dt]
+        tolerance = max(SPEED_TOLERANCE * dt, OFF_SPEED_MIN_S)
+        return [(n, d) for n, d in enumerate(self.durations()) if abs(d - dt) > tolerance]
 
     def lag(self, wall_now_s: float) -> tuple[int, float, float] | None:
         """(next slot n, seconds since the clock put the UAV on its line, metres still to go
