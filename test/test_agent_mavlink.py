@@ -11,6 +11,7 @@ import pytest
 from rclpy.parameter import Parameter
 
 from uav_insar_planner import load_params, model, solve
+from uav_insar_planner.mavlink.trajectory import RAMP_MPS2
 from uav_insar_planner.ros.mavlink_bridge import MavlinkBridgeNode
 from uav_insar_planner.ros.planner import PlannerNode
 from uav_insar_sim.agent_node import AgentNode
@@ -99,10 +100,12 @@ def test_no_pass_start_no_slot_and_the_lag_is_told():
     assert (n, late, to_go) == (0, pytest.approx(3.0), pytest.approx(4.0))
     assert mission.observe((-30.0, 0.0, 50.0), 13.1)[0].slot == 0
     step = mission.params.speed * mission.params.slot_duration_s
-    # slot 1 was due at 10 s + 0.5 s: 2.7 s late, a whole slot still to go
-    assert mission.lag(13.2) == (1, pytest.approx(2.7), pytest.approx(step))
+    # slot 1 was due when the target, ramping up from the hover at 10 s, crossed its line
+    due = 10.0 + math.sqrt(2.0 * step / RAMP_MPS2)
+    assert mission.line_time(1) == pytest.approx(due)
+    assert mission.lag(13.2) == (1, pytest.approx(13.2 - due), pytest.approx(step))
     mission.observe((-30.0, step - 1.0, 50.0), 14.0)
-    assert mission.lag(14.0) == (1, pytest.approx(3.5), pytest.approx(1.0))
+    assert mission.lag(14.0) == (1, pytest.approx(14.0 - due), pytest.approx(1.0))
     mission.observe((-30.0, 4 * step, 50.0), 14.1)
     assert mission.phase == "done" and mission.lag(20.0) is None
 

@@ -13,7 +13,7 @@ from uav_insar_planner.mavlink.frames import TrackFrame
 from uav_insar_planner.mavlink.holding import Holding
 from uav_insar_planner.mavlink.pass_start import lags, planner_start, resume_where_held
 from uav_insar_planner.mavlink.supervision import WatchedVehicle
-from uav_insar_planner.mavlink.trajectory import PassTrajectory
+from uav_insar_planner.mavlink.trajectory import RAMP_MPS2, PassTrajectory
 from uav_insar_planner.ros.pass_start import ON_TRACK_M, POSE_FRESH_S, on_track
 from uav_insar_planner.ros.plan_msgs import PlanId, PlanMessageError
 from uav_insar_planner.ros.start_msgs import decode_start, encode_start
@@ -67,12 +67,19 @@ def test_a_resumed_pass_holds_at_its_offset_until_the_instant_then_flies_at_v():
     assert "resuming 20.00 m past the start line" in text and "in 2.00 s" in text
     (position, velocity) = pass_.target(0, 51.0)
     assert position[1] == pytest.approx(30.0) and velocity == (0.0, 0.0, 0.0)  # holds there
+    # from the hover it ramps up at RAMP_MPS2 (no vehicle left to catch up), then cruises
     position, velocity = pass_.target(0, 53.0)
-    assert position[1] == pytest.approx(34.0) and velocity[1] == 4.0
+    assert position[1] == pytest.approx(30.0 + 0.5 * RAMP_MPS2) and velocity[1] == RAMP_MPS2
+    position, velocity = pass_.target(0, 62.0)
+    assert position[1] == pytest.approx(30.0 + 4.0 * (10.0 - 0.5 * 4.0 / RAMP_MPS2))
+    assert velocity[1] == 4.0
     # the same start again (a re-plan) changes nothing; another offset does
     assert planner_start(pass_, 1002.0, 50.0, 1000.0, PLAN.label, 20.0) == ""
     assert planner_start(pass_, 1002.0, 50.0, 1000.0, PLAN.label, 0.0) != ""
-    assert pass_.target(0, 53.0)[0][1] == pytest.approx(14.0)
+    assert pass_.target(0, 53.0)[0][1] == pytest.approx(10.0 + 0.5 * RAMP_MPS2)
+    # one heard well after its instant joins a running pass: no ramp
+    assert "joining the pass" in planner_start(pass_, 990.0, 50.0, 1000.0, PLAN.label, 0.0)
+    assert pass_.target(0, 50.0)[0][1] == pytest.approx(10.0 + 40.0)
 
 
 def _vehicle(uav: int, north: float) -> WatchedVehicle:
@@ -86,7 +93,7 @@ def test_a_held_uav_rejoins_when_near_its_target_and_says_so_when_too_far_behind
     frame = TrackFrame.from_degrees(0.0, (0.0, 0.0, 0.0))  # along track = north
     pass_ = PassTrajectory(2.0, 0.0)
     pass_.set_formation([(0.0, 0.0, 50.0), (-20.0, 0.0, 50.0)])
-    pass_.t_start = 0.0
+    pass_.t_start, pass_.ramp = 0.0, False  # a pass running for 10 s
     near, far = _vehicle(0, 19.0), _vehicle(1, 15.0)  # target at y = 20 at t = 10
     events: list[str] = []
     holding = Holding("ardupilot", 1.0, [0, 1], lambda k, level, text: events.append(text))
@@ -114,7 +121,7 @@ def test_slots_flown_off_the_planned_speed_are_found():
     params = load_params(overrides={"num_slots": 6, "slot_duration_s": 1.0})
     mission = ObservedMission(0, params)
     mission.set_plan((0.0, 50.0), [1.0] * 6, y_start=0.0)
-    mission.set_pass_start(0.0)
+    mission.set_pass_start(0.0, None)  # a pass joined at speed: no ramp planned
     v, t, y, held = params.speed, 0.0, -0.1, 0
     mission.observe((0.0, y, 50.0), t)
     while mission.phase != "done":  # slot 2 held for 3 s, slot 4 flown at twice the speed
@@ -131,6 +138,12 @@ def test_slots_flown_off_the_planned_speed_are_found():
     assert off[2] == pytest.approx(4.0, abs=0.15) and off[4] == pytest.approx(0.5, abs=0.1)
     assert all(abs(d - 1.0) <= SPEED_TOLERANCE for n, d in enumerate(durations) if n not in off)
     assert math.isfinite(mission.end_time_s)
+    # from the hover, the plan's target ramps up: slot 0 takes longer by plan, not off speed
+    mission.set_pass_start(0.0, 0.0)
+    v = params.speed
+    assert mission.line_time(1) == pytest.approx(math.sqrt(2.0 * v / RAMP_MPS2))
+    assert mission.line_time(5) == pytest.approx(5.0 + v / (2.0 * RAMP_MPS2))
+    assert mission.line_time(5) - mission.line_time(4) == pytest.approx(1.0)
 
 
 def test_a_start_heard_too_late_holds_the_uav_rather_than_sprint():

@@ -11,7 +11,7 @@ from std_msgs.msg import Header
 
 from uav_insar_planner.mavlink.config import from_parameters
 from uav_insar_planner.mavlink.pass_start import planner_start
-from uav_insar_planner.mavlink.trajectory import PassTrajectory
+from uav_insar_planner.mavlink.trajectory import RAMP_MPS2, PassTrajectory, ramp_up
 from uav_insar_planner.param_specs import BRIDGE_SPECS
 from uav_insar_planner.ros.claims import Claim, refusal
 from uav_insar_planner.ros.pass_start import POSE_FRESH_S, all_captured, not_captured
@@ -120,7 +120,10 @@ def test_a_planner_start_holds_until_its_instant_then_flies_and_a_repeat_keeps_t
     text = planner_start(track, 1000.0, 10.0, 998.0, "plan /planner 1.000000000")
     assert "in 2.00 s" in text and track.t_start == pytest.approx(12.0)
     assert track.target(0, 11.9)[0] == (1.0, 0.0, 40.0)  # held at the start point
-    assert track.target(0, 13.0)[0] == pytest.approx((1.0, 4.0, 40.0))
+    # from the hover: the target ramps up (RAMP_MPS2), then cruises
+    assert track.target(0, 13.0)[0] == pytest.approx((1.0, ramp_up(1.0, 4.0)[0], 40.0))
+    assert track.target(0, 20.0)[0] == pytest.approx((1.0, ramp_up(8.0, 4.0)[0], 40.0))
+    assert ramp_up(8.0, 4.0)[:2] == pytest.approx((4.0 * (8.0 - 2.0 / RAMP_MPS2), 4.0))
     # the same instant under a re-plan's identity, read a moment later: the clock stays
     assert planner_start(track, 1000.0, 11.0, 999.0 + 2e-6, "plan /planner 2.0") == ""
     assert track.t_start == pytest.approx(12.0)

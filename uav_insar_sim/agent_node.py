@@ -65,6 +65,7 @@ from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension
 from uav_insar_planner.evaluate import rate_tolerance_bps
 from uav_insar_planner.exit_codes import EXIT_CRASH
 from uav_insar_planner.mavlink.guard import DropLog, finite
+from uav_insar_planner.mavlink.trajectory import JOIN_GRACE_S
 from uav_insar_planner.param_specs import AGENT_SCENARIO_SPECS as SCENARIO_SPECS
 from uav_insar_planner.param_specs import AGENT_SPECS, MAVLINK_SPECS
 from uav_insar_planner.params import ParamError, params_from_mapping
@@ -196,7 +197,9 @@ class AgentNode(Node):
             wall_time_s
         if self.mission.pass_start_s == clock:
             return
-        late = self.mission.set_pass_start(clock)
+        # heard before its instant: the bridge ramps its target up from the hover there
+        ramp = offset_m if wall_time_s >= time.time() - JOIN_GRACE_S else None
+        late = self.mission.set_pass_start(clock, ramp)
         self._late += late
         ahead = wall_time_s - time.time()
         when = f"in {ahead:.2f} s" if ahead >= 0 else f"{-ahead:.2f} s ago"
@@ -235,12 +238,12 @@ class AgentNode(Node):
         if not self.flight.observed or n < 0:
             return
         durations = self.mission.durations()
-        dt = self.mission.params.slot_duration_s
         if n < len(durations) and (n, durations[n]) in self.mission.off_speed():
+            planned = self.mission.line_time(n + 1) - self.mission.line_time(n)
             self.get_logger().warning(
                 f"{self.uav_name}: slot {n} took {durations[n]:.2f} s from its line to the "
-                f"next, planned {dt:g} s: not flown at the planned speed (held, or catching "
-                "up); its data is not where the plan put it")
+                f"next, planned {planned:.2f} s: not flown at the planned speed (held, or "
+                "catching up); its data is not where the plan put it")
 
     def _say_lag(self) -> None:
         """A pass start whose line the UAV does not reach is never silent."""

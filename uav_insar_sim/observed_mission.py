@@ -20,7 +20,9 @@ replayed, so each slot still starts where the UAV crossed its line, only reporte
 not reached while the clock says it should have been, for the agent to say so.
 
 A slot is flown at the planned speed when the time from its line to the next (`durations`)
-is within SPEED_TOLERANCE of delta_t (or OFF_SPEED_MIN_S, for the position noise); one
+is within SPEED_TOLERANCE of the plan's (or OFF_SPEED_MIN_S, for the position noise): delta_t
+at v_y, longer where the bridge's target ramps up from the hover (`line_time`,
+mavlink.trajectory.ramp_up); one
 flown slower (a hold in it) or faster (a catch-up) is `off_speed`, and the agent says so
 and does not count it as flown at the planned speed.
 """
@@ -31,6 +33,7 @@ from collections import deque
 from collections.abc import Sequence
 
 from uav_insar_planner.mavlink.frames import Vec3
+from uav_insar_planner.mavlink.trajectory import RAMP_MPS2, ramp_up
 from uav_insar_planner.params import Params
 from uav_insar_sim.fading import LinkFading
 from uav_insar_sim.offload import ClosedLoopOffload
@@ -59,6 +62,7 @@ class ObservedMission(SlotSchedule):
         self._last: Vec3 | None = None
         self._last_t: float | None = None
         self.pass_start_s: float | None = None  # wall clock; None: not (yet) known
+        self.ramp_from_m: float | None = 0.0  # where the target ramps up (None: no ramp)
         self.slot_times_s: list[float] = []  # wall clock of the observation that started each
         self.end_time_s: float | None = None  # when the line after the last slot was reached
         self._history: deque[tuple[float, Vec3]] = deque()  # (read at, position), oldest first
@@ -73,10 +77,13 @@ class ObservedMission(SlotSchedule):
             self.pass_start_s = None
         super().set_plan(target_xz, powers, y_start)
 
-    def set_pass_start(self, wall_time_s: float) -> list[SlotSample]:
-        """The pass of the flown plan starts (started) at `wall_time_s` (time.time()); the slots
-        that the positions read since then start, when it comes late (module doc)."""
-        self.pass_start_s = float(wall_time_s)
+    def set_pass_start(self, wall_time_s: float, ramp_from_m: float | None = 0.0
+                       ) -> list[SlotSample]:
+        """The pass of the flown plan starts (started) at `wall_time_s` (time.time()), its
+        target ramping up from the hover `ramp_from_m` past the start line (None: a running
+        pass joined, no ramp); the slots that the positions read since then start, when it
+        comes late (module doc)."""
+        self.pass_start_s, self.ramp_from_m = float(wall_time_s), ramp_from_m
         since = [(t, q) for t, q in self._history if t >= wall_time_s]
         if not since:
             return []
@@ -121,6 +128,20 @@ class ObservedMission(SlotSchedule):
                                * (wall_time_s - before_t) if crossed else wall_time_s)
         return started
 
+    def line_time(self, n: int) -> float:
+        """When the plan's target crosses slot n's line (wall clock; the pass started)."""
+        v = self.params.speed
+        s = n * v * self.params.slot_duration_s
+        r = self.ramp_from_m
+        if r is None or s < r or v <= 0.0:
+            return self.pass_start_s + s / v
+        t_ramp_start = self.pass_start_s + r / v
+        u = s - r  # metres into the ramp
+        d_ramp = v * v / (2.0 * RAMP_MPS2)
+        if u <= d_ramp:
+            return t_ramp_start + math.sqrt(2.0 * u / RAMP_MPS2)
+        return t_ramp_start + u / v + ramp_up(v / RAMP_MPS2, v)[2]
+
     def durations(self) -> list[float]:
         """Each slot's time from its line to the next (the last one's to the line after
         it), for the slots whose end was seen."""
@@ -130,9 +151,12 @@ class ObservedMission(SlotSchedule):
 
     def off_speed(self) -> list[tuple[int, float]]:
         """(slot, duration) of every slot flown off the planned speed (module doc)."""
-        dt = self.params.slot_duration_s
-        tolerance = max(SPEED_TOLERANCE * dt, OFF_SPEED_MIN_S)
-        return [(n, d) for n, d in enumerate(self.durations()) if abs(d - dt) > tolerance]
+        out = []
+        for n, d in enumerate(self.durations()):
+            planned = self.line_time(n + 1) - self.line_time(n)
+            if abs(d - planned) > max(SPEED_TOLERANCE * planned, OFF_SPEED_MIN_S):
+                out.append((n, d))
+        return out
 
     def lag(self, wall_now_s: float) -> tuple[int, float, float] | None:
         """(next slot n, seconds since the clock put the UAV on its line, metres still to go
@@ -142,7 +166,7 @@ class ObservedMission(SlotSchedule):
                 or self.all_flown):
             return None
         n = len(self.samples)
-        late = wall_now_s - (self.pass_start_s + n * self.params.slot_duration_s)
+        late = wall_now_s - self.line_time(n)
         if late <= 0.0:
             return None
         to_go = self.slot_line(n) - self._last[1] if self._last is not None else math.nan

@@ -3,9 +3,12 @@
 UAV k's target is (x_k, y_start, z_k) until the track starts, then
 (x_k, y_start + s(t - t_start + t_offset), z_k) with s from `braked_pass`; a pass that resumes
 mid-track (the planner's resume start) has t_offset = its along-track offset / speed, and
-holds the targets there until t_start. The track starts once every
-gating UAV is within `capture_radius_m` of its start point (0: at once), so the formation is
-established before the pass.
+holds the targets there until t_start. A pass that starts from a hover (a start the bridge
+heard before its instant, or its own capture) ramps up: the target accelerates at RAMP_MPS2
+from the start (`ramp_up`), so no vehicle falls behind and catches up faster than v_y; it
+then runs v_y / (2 RAMP_MPS2) behind the unramped clock (1.4 s at Table I's 4.3 m/s). The
+track starts once every gating UAV is within `capture_radius_m` of its start point (0: at
+once), so the formation is established before the pass.
 """
 from __future__ import annotations
 
@@ -17,6 +20,23 @@ from uav_insar_planner.swarm import uav_name
 
 # Braking at the end of a finite pass, gentle for a multicopter's position controller.
 BRAKE_MPS2 = 1.5
+# ... and its mirror at the start: a target that jumped to v_y would leave a hovering copter
+# behind, to catch up at v_y + 1-2 m/s (measured in the network lab: 5.5-6 m/s at 4.3).
+RAMP_MPS2 = BRAKE_MPS2
+# A start heard this long after its instant is still a start from the hover (radio latency);
+# later, the vehicle joins a running pass: no ramp.
+JOIN_GRACE_S = 0.5
+
+
+def ramp_up(elapsed: float, speed: float) -> tuple[float, float, float]:
+    """(offset, velocity, shift) `elapsed` seconds after a start from rest: RAMP_MPS2 up to
+    `speed`, then cruising; shift = how far behind an unramped clock it runs then (seconds)."""
+    if speed <= 0.0:
+        return 0.0, 0.0, 0.0
+    t_ramp = speed / RAMP_MPS2
+    if elapsed < t_ramp:
+        return 0.5 * RAMP_MPS2 * elapsed * elapsed, RAMP_MPS2 * elapsed, 0.0
+    return speed * (elapsed - 0.5 * t_ramp), speed, 0.5 * t_ramp
 
 
 def braked_pass(elapsed: float, speed: float, duration: float) -> tuple[float, float]:
@@ -58,6 +78,7 @@ class PassTrajectory:
         self.formation: list[Vec3 | None] | None = None
         self.t_start: float | None = None
         self.t_offset = 0.0  # s: how far into the pass t_start is (a resumed pass)
+        self.ramp = True  # the pass starts from a hover at t_start (`ramp_up`)
 
     def set_formation(self, clean: list[Vec3 | None]) -> bool:
         """Adopt a cleaned formation; True when it restarts a running track (new y_start).
@@ -88,7 +109,14 @@ class PassTrajectory:
         if now < self.t_start:  # (a planner's start may lie ahead; a resumed one holds)
             offset, _ = braked_pass(self.t_offset, self.speed_mps, self.track_duration_s)
             return (x, y + offset, z), (0.0, 0.0, 0.0)
-        offset, speed = braked_pass(now - self.t_start + self.t_offset, self.speed_mps,
+        elapsed = now - self.t_start
+        if self.ramp:
+            ramped, speed, shift = ramp_up(elapsed, self.speed_mps)
+            if not shift:  # still accelerating
+                base, _ = braked_pass(self.t_offset, self.speed_mps, self.track_duration_s)
+                return (x, y + base + ramped, z), (0.0, speed, 0.0)
+            elapsed -= shift
+        offset, speed = braked_pass(elapsed + self.t_offset, self.speed_mps,
                                     self.track_duration_s)
         return (x, y + offset, z), (0.0, speed, 0.0)
 

@@ -63,6 +63,9 @@ SPEED_WINDOW_S = 1.0  # along-track speed from the poses of the last second
 # within a few seconds of each other, DDS repairs included. Longer alone: it is left behind.
 BEHIND_GRACE_S = 4.0
 BEHIND_FRESH_S = 3.0
+# A swarm still flying is resumed on an instant this far in the past (more than the bridges'
+# trajectory.JOIN_GRACE_S): they take it as a running pass and do not ramp up from a hover.
+MOVING_BACKDATE_S = 1.0
 # A capture that takes longer than this is said, with who is missing and why, this often: a
 # copter's boot and climb take a minute, a vehicle that never arrives must not be silent.
 WAIT_LOG_PERIOD_S = 15.0
@@ -300,7 +303,11 @@ class PassStart:
         with self._lock:
             plan_id, v = self._plan, self._speed_mps
             moving = v > 0.0 and speed > 0.5 * v
-            start_ns = time.time_ns() + (0 if moving else round(delay * 1e9))
+            if moving:  # an instant clearly past: the bridges join it at speed, no ramp
+                start_ns = time.time_ns() - round(MOVING_BACKDATE_S * 1e9)
+                past = max(0.0, past - v * MOVING_BACKDATE_S)
+            else:  # from the hover: the bridges ramp their targets up from there
+                start_ns = time.time_ns() + round(delay * 1e9)
             self._start_ns, self._offset_m = start_ns, past
             self._started.add(plan_id.label)
         self._publish(encode_start(start_ns, plan_id, past), start_ns)
