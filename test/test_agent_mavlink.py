@@ -72,7 +72,8 @@ def test_no_slot_before_the_pass_start_wherever_the_uav_took_off(take_off_y):
     first = mission.observe((-30.0, 0.31, 50.0), 10.1)
     assert [s.slot for s in first] == [0]
     assert first[0].position == pytest.approx(interpolate(held, (-30.0, 0.31, 50.0), 0.0))
-    assert mission.slot_times_s == [10.1]
+    # when it crossed the line, interpolated between the two readings
+    assert mission.slot_times_s == pytest.approx([10.0 + 0.1 * 0.12 / 0.43])
 
 
 def test_a_uav_holding_just_ahead_of_the_line_starts_slot_0_at_the_start_where_it_is():
@@ -212,5 +213,7 @@ def test_a_pass_start_heard_late_starts_each_slot_where_its_line_was_crossed():
     assert [s.slot for s in started] == [0, 1, 2] and y > 2 * step
     for n, s in enumerate(started):
         assert s.position[1] == pytest.approx(n * step, abs=1e-9)
-    assert mission.slot_times_s == pytest.approx([10.1, 10.6, 11.1])
+    # when it crossed each line (between two readings): 0.2 m behind at 10 s, then v_y
+    dt = mission.params.slot_duration_s
+    assert mission.slot_times_s == pytest.approx([10.0 + 0.2 / v + n * dt for n in range(3)])
     assert [s.slot for s in mission.observe((-30.0, 3 * step + 0.1, 50.0), 11.3)] == [3]

@@ -142,3 +142,29 @@ def test_a_uav_id_in_a_params_file_is_refused_for_the_stacks_bridges(repo, tmp_p
     assert proc.returncode == 2, proc.stdout + proc.stderr
     assert "uav_id: value 2 is not allowed in the demo" in proc.stderr, proc.stderr
     assert "/uavK's stack flies UAV K" in proc.stderr
+
+
+@pytest.mark.parametrize("bad,field", [
+    (["-p", "gcs_timeout_s:=0.5"], "gcs_timeout_s"),  # in the bridge's range, not its rule
+    (["-p", "max_accel_mps2:=0.0"], "max_accel_mps2"),  # the agents'
+    (["-p", "uav_timeout_s:=0.01"], "uav_timeout_s"),  # the planner's
+    (["-p", "arm_and_takeoff:=3"], "arm_and_takeoff"),
+    (["--num-slots", "0"], "num_slots"),  # was: 20 slots flown
+    (["PARAMS_FILE"], "gcs_timeout_s"),  # a stack's own section
+])
+def test_a_bad_node_parameter_is_refused_before_anything_starts(repo, tmp_path, bad, field):
+    """Every node's values (params file sections for its name, -p, the demo's own) are judged
+    by the nodes' specs and the bridge's rules up front: one line, exit 2, no process started
+    (nothing on stdout, where the demo says what it starts), in well under the seconds a
+    started swarm would take to fail."""
+    if bad == ["PARAMS_FILE"]:
+        params = tmp_path / "params.yaml"
+        params.write_text("/uav2/mavlink_bridge:\n  ros__parameters:\n    gcs_timeout_s: 0.5\n")
+        bad = ["--params-file", str(params)]
+    proc = process_group.run([sys.executable, "-m", "uav_insar_planner.demo", "--per-uav-stacks",
+                              "--no-bag", *bad], cwd=repo, capture_output=True, text=True,
+                             timeout=30)
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    (line,) = proc.stderr.strip().splitlines()
+    assert line.startswith(f"{field}: value ") and "expected" in line, line
+    assert proc.stdout == "", proc.stdout

@@ -17,6 +17,8 @@ import asyncio
 import gc
 import json
 import math
+import os
+import subprocess
 import warnings
 from datetime import datetime, timedelta, timezone
 from pathlib import Path
@@ -29,7 +31,12 @@ from uav_insar_planner import load_params
 from uav_insar_planner.cli import main as cli
 from uav_insar_planner.exit_codes import EXIT_BAD_INPUT, EXIT_INFEASIBLE, EXIT_OK
 from uav_insar_planner.mission_file.geodesy import WGS84_A, WGS84_E2, latlon_to_ned, ned_to_latlon
-from uav_insar_planner.mission_file.qgc_plan import PREFLIGHT_S, PX4_PASS_SEQ, RUN_UP_S
+from uav_insar_planner.mission_file.qgc_plan import (
+    PREFLIGHT_S,
+    PX4_PASS_SEQ,
+    RUN_UP_S,
+    START_LEAD_MIN_S,
+)
 from uav_insar_planner.solver import solve
 from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, uav_name, uavs
 
@@ -205,13 +212,17 @@ BAD = [
     (["--formation", "-30,40,-36,45", "--scheme", "fixed-master"], "--scheme"),
     (["--set", "speed_mps=0"], "speed_mps"), (["--run-up-m", "-1"], "--run-up-m"),
     (["--autopilot", "px4", "--start-utc", "SOON"], "--start-utc"),
+    # less than START_LEAD_MIN_S ahead: ArduPilot would wait a day
+    (["--start-utc", "IN20S"], "--start-utc"), (["--out", ""], "--out"),
+    # C4: three UAVs at one point; C1: 490 m above z_max_m
+    (["--formation", "-30,50,-30,50,-30,50"], "C4"), (["--formation", "-30,40,-36,590"], "C1"),
 ]
 
 
 @pytest.mark.parametrize(("extra", "named"), BAD, ids=[f"{b[1]}{i}" for i, b in enumerate(BAD)])
 def test_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path, capsys, extra, named):
     table = {"PAST": (utc_in(-3600)).isoformat(), "FAR": utc_in(25 * 3600).isoformat(),
-             "SOON": utc_in(600).isoformat()}
+             "SOON": utc_in(600).isoformat(), "IN20S": utc_in(20).isoformat()}
     extra = [table.get(a, a) for a in extra]
     args = {"--home": HOME_ARG, "--bearing": str(BEARING), "--out": str(tmp_path / "out")}
     for i in range(0, len(extra), 2):
@@ -242,6 +253,80 @@ def test_an_out_that_is_not_a_writable_folder_is_refused(tmp_path, capsys, where
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "--out" in err
     assert (tmp_path / "f").read_text() == "keep" and not (ro / "new").exists()
+
+
+def snapshot(folder: Path) -> dict[str, bytes | None]:
+    """Every entry of `folder` (hidden ones too): a file's bytes, None for a folder."""
+    return {p.name: None if p.is_dir() else p.read_bytes() for p in folder.iterdir()}
+
+
+@pytest.mark.parametrize("in_the_way", ["folder", "immutable", "stale_not_a_plan"])
+def test_a_file_or_folder_in_the_way_leaves_the_folder_as_it_was(tmp_path, capsys, in_the_way):
+    """Every target is checked before anything is written: one line naming it, exit 2, and
+    the earlier export untouched (not a partial, mixed set)."""
+    assert export(tmp_path, "--formation", "-30,40,-36,45,-40,50") == EXIT_OK
+    capsys.readouterr()
+    named = {"folder": "uav1.plan", "immutable": "uav2.plan", "stale_not_a_plan": "uav4.plan"}
+    target = tmp_path / named[in_the_way]
+    if in_the_way == "folder":
+        target.unlink()
+        target.mkdir()
+    elif in_the_way == "stale_not_a_plan":
+        target.write_text("not a mission of ours")
+    elif subprocess.run(["chattr", "+i", str(target)], capture_output=True).returncode:
+        pytest.skip("chattr +i not available here")
+    before = snapshot(tmp_path)
+    try:
+        code = export(tmp_path, "--formation", "-31,40,-37,45")
+    finally:
+        if in_the_way == "immutable":
+            subprocess.run(["chattr", "-i", str(target)], check=True)
+    assert code == EXIT_BAD_INPUT
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "--out" in err and named[in_the_way] in err, err
+    assert snapshot(tmp_path) == before
+
+
+def test_a_failed_write_is_undone(tmp_path, capsys, monkeypatch):
+    """Fault injected (a fake): the rename that puts the second new file in place fails, as a
+    full disk or a vanished folder would make it. The first new file, the temporaries and the
+    moved-aside old files are undone: the folder is as it was, one line, exit 2."""
+    from uav_insar_planner.mission_file import folder
+
+    assert export(tmp_path, "--formation", "-30,40,-36,45,-40,50") == EXIT_OK
+    before = snapshot(tmp_path)
+    real, placed = os.rename, []
+
+    def failing_rename(src, dst):
+        if str(src).endswith(".new"):
+            placed.append(dst)
+            if len(placed) == 2:
+                raise OSError(28, "No space left on device", str(dst))
+        return real(src, dst)
+
+    monkeypatch.setattr(folder.os, "rename", failing_rename)
+    capsys.readouterr()
+    assert export(tmp_path, "--formation", "-31,40,-37,45") == EXIT_BAD_INPUT
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "No space left" in err and "nothing was changed" in err
+    assert "uav1.plan" in err, err
+    assert len(placed) == 2
+    assert snapshot(tmp_path) == before
+    monkeypatch.undo()
+    assert export(tmp_path / "new" / "sub", "--formation", "-31,40,-37,45") == EXIT_OK
+
+
+def test_a_smaller_export_removes_the_stale_plans_and_says_so(tmp_path, capsys):
+    assert export(tmp_path, "--formation", "-30,40,-36,45,-40,50") == EXIT_OK
+    (tmp_path / "notes.txt").write_text("kept")
+    capsys.readouterr()
+    assert export(tmp_path, "--formation", "-31,40,-37,45") == EXIT_OK
+    out = capsys.readouterr().out
+    assert "removed uav2.plan" in out, out
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["notes.txt", "uav0.plan", "uav1.plan"]
+    starts = {json.loads((tmp_path / n).read_text())["mission"]["items"][1]["params"][4]
+              for n in ("uav0.plan", "uav1.plan")}
+    assert len(starts) == 2  # both rewritten by the second export
 
 
 def test_an_infeasible_plan_exits_3_naming_the_blocking_constraints(tmp_path, capsys):
@@ -491,7 +576,10 @@ def test_sitl_three_copters_fly_their_files(tmp_path):
                                   for c in copters), 120.0, BEARING, "GPS time, EKF on GPS")
         ready_s = time.monotonic() - t_boot
         clocks = [c.vehicle_now() for c in copters]
-        start = datetime.fromtimestamp(math.ceil(max(clocks) + LEAD_SIM_S), timezone.utc)
+        # LEAD_SIM_S on the vehicles' clocks, and at least START_LEAD_MIN_S on this host's,
+        # which export-mission checks: a SITL slowed below real time lags the host
+        start = datetime.fromtimestamp(math.ceil(max(max(clocks) + LEAD_SIM_S, time.time()
+                                                     + START_LEAD_MIN_S + 1.0)), timezone.utc)
         assert export(tmp_path / "plans", "--start-utc", start.isoformat()) == EXIT_OK
         rows = {c.k: mission_item_ints(json.loads(
             (tmp_path / "plans" / f"{uav_name(c.k)}.plan").read_text())) for c in copters}

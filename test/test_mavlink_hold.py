@@ -67,11 +67,17 @@ def test_hold_order_is_resent_a_few_times_then_given_up():
             order.sent(v, t * 0.5)
             sent += 1
     assert sent == ATTEMPTS
-    v.custom_mode = 5
+    v.custom_mode, v.last_heartbeat = 5, 99.0
     order.engage([v.uav])
-    assert not order.due(v, 100.0)  # already in LOITER
+    # in LOITER as last heard, but heard before the order: a hold order still on its way
+    # may be what put it there, or not; sent once more
+    assert order.due(v, 100.0)
+    order.sent(v, 100.0)
+    v.last_heartbeat = 100.5  # a heartbeat after the order shows LOITER: done
+    assert not order.due(v, 101.5)
+    order.engage([v.uav])
     v.custom_mode, v.linked = 4, False
-    assert not order.due(v, 100.0)  # not linked: when it comes back
+    assert not order.due(v, 102.0)  # not linked: when it comes back
     order.release()
     v.linked = True
     assert not order.due(v, 100.0)

@@ -57,7 +57,15 @@ CASES = {
     "slash inside a namespace": ("ns:\n  /planner:\n    ros__parameters:\n      looks: 3\n", "",
                                  "section 'ns//planner' is not a node name"),
     "misspelt name": (BASE + "    num_slot: 3\n", "", unknown_parameter("num_slot")),
-    "misspelt nested name": (BASE + "    looks:\n      n: 3\n", "", unknown_parameter("looks.n")),
+    "misspelt nested name": (BASE + "    lookz:\n      n: 3\n", "", unknown_parameter("lookz.n")),
+    # a mapping where a node's parameter is: one line saying what is expected, not one
+    # "unknown parameter 'ground_station_m.x'" per key (issue 27)
+    "mapping for a list": (BASE + "    ground_station_m: {x: 1, y: 2, z: 3}\n", "",
+                           "section '/**': ground_station_m: value {'x': 1, 'y': 2, 'z': 3} "
+                           "is not allowed (a mapping); expected a list of 3 finite numbers"),
+    "mapping for a number": (BASE + "    looks:\n      n: 3\n", "",
+                             "looks: value {'n': 3} is not allowed (a mapping); expected an "
+                             "integer"),
     "list of mixed types": (BASE + "planner:\n  ros__parameters:\n"
                             "    ground_station_m: [70, 150.5, 25]\n", "",
                             "ground_station_m: value [70, 150.5, 25] mixes floats and "

@@ -7,6 +7,7 @@ in every slot.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -73,6 +74,26 @@ def pair_metrics(p: Params, q0: np.ndarray, qk: np.ndarray) -> dict[str, float]:
     }
 
 
+def _status(slacks: dict[str, float], scale: float, absolute: float | None = None
+            ) -> ConstraintStatus:
+    name, worst = min(slacks.items(), key=lambda kv: kv[1])
+    tol = FEAS_TOL * scale if absolute is None else absolute
+    return ConstraintStatus(bool(worst >= -tol), float(worst), name)
+
+
+def position_constraints(p: Params, formation: np.ndarray, uavs: Sequence[int]
+                         ) -> dict[str, ConstraintStatus]:
+    """C1 (every altitude in [z_min, z_max]) and C4 (every two UAVs at least d_min apart) of
+    the rows `uavs` of `formation`: what any formation must meet to be flown at all, planned
+    or given (`uav-insar export-mission --formation`). The detail names the worst: `zK`, `dIJ`."""
+    q = np.asarray(formation, dtype=float)
+    c = {"C1": _status({f"z{k}": min(q[k, 1] - p.z_min, p.z_max - q[k, 1]) for k in uavs},
+                       1.0, POSITION_TOL_M)}
+    c["C4"] = _status({f"d{i}{j}": float(np.hypot(*(q[i] - q[j]))) - p.d_min
+                        for i in uavs for j in uavs if i < j}, 1.0, POSITION_TOL_M)
+    return c
+
+
 def evaluate(p: Params, formation: np.ndarray, p_com: np.ndarray, scheme: str) -> Evaluation:
     """Metrics and C1..C11 for `formation` ((num_uavs, 2) rows (x_k, z_k), NaN rows for UAVs the
     scheme does not fly) and `p_com` ((num_uavs, N) watts)."""
@@ -98,38 +119,30 @@ def evaluate(p: Params, formation: np.ndarray, p_com: np.ndarray, scheme: str) -
                                                                     p.ground_station),
                                 p.comm_bandwidth_hz, p.beta_c) for k in uavs}
 
-    def status(slacks: dict[str, float], scale: float, absolute: float | None = None
-               ) -> ConstraintStatus:
-        name, worst = min(slacks.items(), key=lambda kv: kv[1])
-        tol = FEAS_TOL * scale if absolute is None else absolute
-        return ConstraintStatus(bool(worst >= -tol), float(worst), name)
-
-    c: dict[str, ConstraintStatus] = {}
-    c["C1"] = status({f"z{k}": min(q[k, 1] - p.z_min, p.z_max - q[k, 1]) for k in uavs}, 1.0,
-                     POSITION_TOL_M)
-    c["C2"] = status({"x0": -abs(q[0, 0] - float(model.master_x(q[0, 1], p.x_t, p.theta0)))},
-                     1.0)
-    c["C3"] = status({f"theta{k}": min(looks[k] - p.theta_min, p.theta_max - looks[k])
-                      for k in slaves}, 1.0)
-    c["C4"] = status({f"d{i}{j}": float(np.hypot(*(q[i] - q[j]))) - p.d_min
-                      for i in uavs for j in uavs if i < j}, 1.0, POSITION_TOL_M)
-    c["C5"] = status({f"S{k}": swaths[k] - p.swath_min for k in uavs}, max(p.swath_min, 1.0))
-    c["C6"] = status({f"gamma_snr{k}": pairs[k]["coherence_snr"] - p.coherence_snr_min
-                      for k in slaves}, 1.0)
-    c["C7"] = status({f"gamma_rg{k}": pairs[k]["coherence_baseline"] - p.coherence_rg_min
-                      for k in slaves}, 1.0)
+    position = position_constraints(p, q, uavs)
+    c: dict[str, ConstraintStatus] = {"C1": position["C1"]}
+    c["C2"] = _status({"x0": -abs(q[0, 0] - float(model.master_x(q[0, 1], p.x_t, p.theta0)))},
+                      1.0)
+    c["C3"] = _status({f"theta{k}": min(looks[k] - p.theta_min, p.theta_max - looks[k])
+                       for k in slaves}, 1.0)
+    c["C4"] = position["C4"]
+    c["C5"] = _status({f"S{k}": swaths[k] - p.swath_min for k in uavs}, max(p.swath_min, 1.0))
+    c["C6"] = _status({f"gamma_snr{k}": pairs[k]["coherence_snr"] - p.coherence_snr_min
+                       for k in slaves}, 1.0)
+    c["C7"] = _status({f"gamma_rg{k}": pairs[k]["coherence_baseline"] - p.coherence_rg_min
+                       for k in slaves}, 1.0)
     # C8 per slave against its own rung (h_amb_ratio's ladder; all equal at ratio 1)
     # (tolerance scaled by the lowest rung, h_amb^min: the strictest for every slave)
-    c["C8"] = status({f"h_amb{k}": pairs[k]["h_amb_m"] - model.h_amb_min_of(p, k)
-                      for k in slaves}, p.h_amb_min)
-    c["C9"] = status({f"P{k}": float(min(power[k].min(), p.p_max_w - power[k].max()))
-                      for k in uavs}, max(p.p_max_w, 1e-9))
+    c["C8"] = _status({f"h_amb{k}": pairs[k]["h_amb_m"] - model.h_amb_min_of(p, k)
+                       for k in slaves}, p.h_amb_min)
+    c["C9"] = _status({f"P{k}": float(min(power[k].min(), p.p_max_w - power[k].max()))
+                       for k in uavs}, max(p.p_max_w, 1e-9))
     # C10 as planned: the rate margin on top of R_min,k (schemes.planned_rate_bps)
     planned = {k: planned_rate_bps(p, k, scheme) for k in uavs}
-    c["C10"] = status({f"R{k}": float((rates[k] - planned[k]).min()) for k in uavs},
-                      max(max(planned.values()), 1.0))
-    c["C11"] = status({f"E{k}": p.energy_budget_j(k) - float(power[k].sum()
-                                                             * p.slot_duration_s)
+    c["C10"] = _status({f"R{k}": float((rates[k] - planned[k]).min()) for k in uavs},
+                       max(max(planned.values()), 1.0))
+    c["C11"] = _status({f"E{k}": p.energy_budget_j(k) - float(power[k].sum()
+                                                              * p.slot_duration_s)
                        for k in uavs}, p.e_max_j)
     if scheme == "static-power":
         dev = max(float(np.abs(power[k] - static_power_w(p)).max()) for k in uavs)

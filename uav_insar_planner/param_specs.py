@@ -50,7 +50,8 @@ class ParamSpec:
         if self.kind is bool:
             return "true or false"
         if self.kind is list:
-            return "a list of " + ("strings" if isinstance(self.default[0], str) else "integers")
+            return "a non-empty list of " + ("strings" if isinstance(self.default[0], str)
+                                             else "integers")
         what = {int: "an integer", float: "a finite number", str: "a string"}[self.kind]
         if self.length:
             what = f"a list of {self.length} finite numbers"
@@ -249,9 +250,10 @@ AGENT_SCENARIO_SPECS = tuple(SPEC_BY_NAME[n] for n in (
 
 #: The planner's gcs/heartbeat period [s] (ros/gcs_link.py): 2 Hz is ~100 bytes/s on the
 #: radio, and a timeout of a few seconds then spans several heartbeats.
-GCS_HEARTBEAT_PERIOD_S = 0.5
-#: The smallest non-zero gcs_timeout_s: two heartbeat periods (one lost never holds).
-GCS_TIMEOUT_MIN_S = 2 * GCS_HEARTBEAT_PERIOD_S
+GCS_HEARTBEAT_PERIOD_S = 0.1
+#: The smallest non-zero gcs_timeout_s: ten heartbeat periods (at 30 % loss all ten are lost
+#: with probability 6e-6: a hold means the ground is gone, not a lost heartbeat).
+GCS_TIMEOUT_MIN_S = 10 * GCS_HEARTBEAT_PERIOD_S
 #: gcs_timeout_s's default, "auto": GCS_TIMEOUT_DEFAULT_S on a per-UAV bridge (ArduPilot's
 #: FS_GCS_TIMEOUT default), off on the all-in-one bridge, which sits with the ground station.
 GCS_TIMEOUT_AUTO = -1.0
@@ -335,3 +337,14 @@ def nodes_taking(name: str) -> tuple[str, ...]:
         return tuple(NODE_SPECS)
     return tuple(node for node, specs in NODE_SPECS.items()
                  if any(s.name == name for s in specs))
+
+
+def spec_named(name: str, node: str | None = None) -> ParamSpec | None:
+    """The spec of parameter `name`: node `node`'s when it takes it (nodes differ in a few
+    ranges), else that of the first node in NODE_SPECS that does; None for rclpy's own names
+    and names no node takes."""
+    for owner in ([node] if node in NODE_SPECS else []) + list(NODE_SPECS):
+        for spec in NODE_SPECS[owner]:
+            if spec.name == name:
+                return spec
+    return None

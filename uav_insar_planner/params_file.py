@@ -20,7 +20,7 @@ from typing import Any
 
 import yaml
 
-from uav_insar_planner.param_specs import SPEC_BY_NAME, SUITE_PARAMETER_NAMES
+from uav_insar_planner.param_specs import SPEC_BY_NAME, SUITE_PARAMETER_NAMES, spec_named
 from uav_insar_planner.params import ParamError, Params, params_from_mapping, shown
 from uav_insar_planner.swarm import MASTER, MAX_UAVS, agent_name, uavs
 
@@ -179,8 +179,17 @@ def _section_problems(name: str, body: Any, own_name: str) -> list[str]:
         hint = f" (did you mean {near[0]}?)" if near else ""
         return [f"section {shown(name)} names no node of uav_insar_planner{hint}; expected "
                 f"/**, {', '.join(SUITE_NODE_KINDS)} or this node's name"]
-    problems = []
-    for param, value in _flat(body["ros__parameters"]).items():
+    problems, values = [], dict(body["ros__parameters"])
+    for param, value in body["ros__parameters"].items():
+        if isinstance(value, dict) and value and param in SUITE_PARAMETER_NAMES:
+            # rcl would read `ground_station_m: {x: 1}` as a parameter ground_station_m.x,
+            # which no node takes: the mapping is the mistake, said once
+            spec = spec_named(param, "agent" if node.startswith("agent") else node)
+            problems.append(f"section {shown(name)}: {param}: value {shown(value)} is not "
+                            "allowed (a mapping); expected "
+                            + (spec.allowed() if spec else "true or false"))
+            del values[param]
+    for param, value in _flat(values).items():
         kinds = {_kind(v) for v in value} if isinstance(value, list) else set()
         if len(kinds) > 1:
             problems.append(f"section {shown(name)}: {param}: value {shown(value)} mixes "

@@ -189,15 +189,20 @@ class AgentNode(Node):
                 self.get_logger().info(f"{self.uav_name}: no pass start yet: no slot starts "
                                        f"before the planner's {topics.FORMATION_START}")
 
-    def _on_pass_start(self, wall_time_s: float, label: str) -> None:
-        if self.mission.pass_start_s == wall_time_s:
+    def _on_pass_start(self, wall_time_s: float, label: str, offset_m: float = 0.0) -> None:
+        # A resumed pass (`offset_m` past the start line at the instant) runs on the clock of
+        # a pass that had started offset_m / v_y earlier: the slots' lines stay where they are.
+        clock = wall_time_s - offset_m / self.mission.params.speed if offset_m > 0.0 else \
+            wall_time_s
+        if self.mission.pass_start_s == clock:
             return
-        late = self.mission.set_pass_start(wall_time_s)
+        late = self.mission.set_pass_start(clock)
         self._late += late
         ahead = wall_time_s - time.time()
         when = f"in {ahead:.2f} s" if ahead >= 0 else f"{-ahead:.2f} s ago"
+        where = f", resuming {offset_m:.2f} m past the start line" if offset_m > 0.0 else ""
         self.get_logger().info(f"{self.uav_name}: pass start {when}, wall clock "
-                               f"{wall_time_s:.3f} ({label}): slots from then on" + (
+                               f"{wall_time_s:.3f}{where} ({label}): slots from then on" + (
                                    f"; {len(late)} slot(s) flown since, from the positions "
                                    "read meanwhile" if late else ""))
 
@@ -209,6 +214,7 @@ class AgentNode(Node):
             raise SystemExit(EXIT_CRASH)  # never a zombie agent that flies nothing
         late, self._late = self._late, []
         for sample in late + self.flight.tick():
+            self._say_off_speed(sample.slot - 1)
             if self.flight.own_poses:
                 self._publish_pose(sample.position)
             self._rate_pub.publish(Float64(data=sample.rate_bps))
@@ -223,6 +229,18 @@ class AgentNode(Node):
             self._log_phase()
         if self._starts is not None:
             self._say_lag()
+
+    def _say_off_speed(self, n: int) -> None:
+        """Slot n just ended (the next one started): one line if it was flown off v_y."""
+        if not self.flight.observed or n < 0:
+            return
+        durations = self.mission.durations()
+        dt = self.mission.params.slot_duration_s
+        if n < len(durations) and (n, durations[n]) in self.mission.off_speed():
+            self.get_logger().warning(
+                f"{self.uav_name}: slot {n} took {durations[n]:.2f} s from its line to the "
+                f"next, planned {dt:g} s: not flown at the planned speed (held, or catching "
+                "up); its data is not where the plan put it")
 
     def _say_lag(self) -> None:
         """A pass start whose line the UAV does not reach is never silent."""
@@ -294,8 +312,17 @@ class AgentNode(Node):
             samples = self.mission.samples
             met = sum(s.margin_bps >= -self._rate_tol for s in samples)
             worst = min(s.margin_bps for s in samples) / 1e6 if samples else float("nan")
-            log.info(f"{self.uav_name}: mission complete: {len(samples)} slots flown, rate met in "
-                     f"{met}, worst margin {worst:+.4g} Mbit/s")
+            speed = ""
+            if self.flight.observed and (durations := self.mission.durations()):
+                off = self.mission.off_speed()
+                speed = (f", {len(samples) - len(off)} at the planned speed"
+                         + (f" ({len(off)} off it: " + ", ".join(
+                             f"slot {n} {d:.2f} s" for n, d in off[:5])
+                            + (", ..." if len(off) > 5 else "") + ")" if off else "")
+                         + f", slot durations {min(durations):.2f}-{max(durations):.2f} s "
+                         f"of {self.mission.params.slot_duration_s:g} s")
+            log.info(f"{self.uav_name}: mission complete: {len(samples)} slots flown{speed}, "
+                     f"rate met in {met}, worst margin {worst:+.4g} Mbit/s")
 
 
 def main(args: list[str] | None = None) -> int:

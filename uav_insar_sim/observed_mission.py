@@ -18,6 +18,10 @@ replayed, so each slot still starts where the UAV crossed its line, only reporte
 
 `lag` tells how far the UAV is behind the mission clock: the pass start passed, its next line
 not reached while the clock says it should have been, for the agent to say so.
+
+A slot is flown at the planned speed when the time from its line to the next (`durations`)
+is within SPEED_TOLERANCE of delta_t; one flown slower (a hold in it) or faster (a catch-up)
+is `off_speed`, and the agent says so and does not count it as flown at the planned speed.
 """
 from __future__ import annotations
 
@@ -36,6 +40,9 @@ from uav_insar_sim.slots import SlotSample, SlotSchedule
 SAME_Y_START_M = 1e-3
 # Positions kept for a pass start that arrives late: longer than any repair of a lost sample.
 HISTORY_S = 30.0
+# A slot whose line-to-line time is off delta_t by more than this fraction was not flown at
+# v_y: its samples are not where the plan put them (the done-when of issue 27: 0.9).
+SPEED_TOLERANCE = 0.1
 
 
 class ObservedMission(SlotSchedule):
@@ -49,6 +56,7 @@ class ObservedMission(SlotSchedule):
         self._last_t: float | None = None
         self.pass_start_s: float | None = None  # wall clock; None: not (yet) known
         self.slot_times_s: list[float] = []  # wall clock of the observation that started each
+        self.end_time_s: float | None = None  # when the line after the last slot was reached
         self._history: deque[tuple[float, Vec3]] = deque()  # (read at, position), oldest first
 
     def actual_position(self) -> Vec3 | None:
@@ -84,7 +92,7 @@ class ObservedMission(SlotSchedule):
 
     def _advance(self, here: Vec3, wall_time_s: float) -> list[SlotSample]:
         before, self._last = self._last, here
-        self._last_t = wall_time_s
+        before_t, self._last_t = self._last_t, wall_time_s
         started: list[SlotSample] = []
         if (self.phase not in ("transit", "track") or self.pass_start_s is None
                 or wall_time_s < self.pass_start_s):
@@ -95,10 +103,32 @@ class ObservedMission(SlotSchedule):
                 break
             crossed = before is not None and before[1] < line
             started.append(self.start_slot(interpolate(before, here, line) if crossed else here))
-            self.slot_times_s.append(self._last_t)
+            # when it crossed the line, as far as two readings tell (10 Hz: a slot's duration
+            # from reading times alone would be off by up to a tenth of a 1 s slot)
+            s = (line - before[1]) / (here[1] - before[1]) if crossed else 1.0
+            self.slot_times_s.append(wall_time_s if before_t is None or not crossed else
+                                     max(before_t + s * (wall_time_s - before_t),
+                                         self.pass_start_s))
         if self.all_flown and here[1] >= self.slot_line(self.num_slots):
             self.phase = "done"
+            line = self.slot_line(self.num_slots)
+            crossed = before is not None and before_t is not None and before[1] < line
+            self.end_time_s = (before_t + (line - before[1]) / (here[1] - before[1])
+                               * (wall_time_s - before_t) if crossed else wall_time_s)
         return started
+
+    def durations(self) -> list[float]:
+        """Each slot's time from its line to the next (the last one's to the line after
+        it), for the slots whose end was seen."""
+        ends = self.slot_times_s[1:] + ([self.end_time_s] if self.end_time_s is not None
+                                        and self.all_flown else [])
+        return [b - a for a, b in zip(self.slot_times_s, ends, strict=False)]
+
+    def off_speed(self) -> list[tuple[int, float]]:
+        """(slot, duration) of every slot flown off the planned speed (module doc)."""
+        dt = self.params.slot_duration_s
+        return [(n, d) for n, d in enumerate(self.durations())
+                if abs(d - dt) > SPEED_TOLERANCE * dt]
 
     def lag(self, wall_now_s: float) -> tuple[int, float, float] | None:
         """(next slot n, seconds since the clock put the UAV on its line, metres still to go

@@ -31,6 +31,7 @@ hold when K is the master) and adds to the summary when it came and what the pla
 Exit code 0 when every flown UAV reported every slot and every flown vehicle flew its pass
 (with --kill-uav: the planner answered, and every surviving UAV finished); 1 when something
 did not happen in time (no plan, a process died, slots missing, no pass); 2 for bad options
+or a node parameter a node would refuse (`node_checks`), before any process starts
 (`exit_codes`).
 
 The options are `options`; the steps, in the order `run` calls them, `steps.Mission`.
@@ -41,6 +42,7 @@ import argparse
 import os
 import sys
 
+from uav_insar_planner.demo.node_checks import node_problems
 from uav_insar_planner.demo.options import fit_swarm, parse_options
 from uav_insar_planner.demo.processes import random_domain_id, ros_env
 from uav_insar_planner.demo.steps import Mission, overridden_problems
@@ -53,12 +55,14 @@ def run(args: argparse.Namespace) -> int:
 
     try:
         overrides = dict(parse_override(text) for text in args.param)
-        if args.num_slots:
+        if args.num_slots is not None:
             overrides["num_slots"] = args.num_slots
         if problems := fit_swarm(args, overrides):
             raise ParamError(problems)
         params = load_params(args.params_file, overrides)
         if problems := overridden_problems(args, overrides):
+            raise ParamError(problems)
+        if problems := node_problems(args, overrides, params):
             raise ParamError(problems)
     except ParamError as exc:
         print("\n".join(exc.problems), file=sys.stderr)

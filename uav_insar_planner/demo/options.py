@@ -35,9 +35,9 @@ def build_parser() -> OneLineParser:
         help=f"fly a swarm of N UAVs, {MIN_UAVS}..{MAX_UAVS} (num_uavs; default: the params "
              f"file's, Table I's {DEFAULT_NUM_UAVS}); R_min,k not given for N UAVs: the params "
              "file's first N, its last repeated")
-    add("--num-slots", type=int, default=0,
-        help=f"override num_slots (default: {MAVLINK_NUM_SLOTS}; with --no-mavlink the "
-             "params file's)")
+    add("--num-slots", type=int, default=None, metavar="N",
+        help=f"override num_slots, 1..100000 (default: {MAVLINK_NUM_SLOTS}; with --no-mavlink "
+             "the params file's)")
     add("--time-scale", type=float, default=None,
         help="self-flown agents' mission seconds per wall second (default 20, 4 with "
              "--kill-uav); --no-mavlink only: the vehicles fly in wall-clock time")
@@ -98,7 +98,7 @@ def parse_options(argv: list[str] | None = None) -> argparse.Namespace:
                 parser.error(f"{option}: applies to self-flown agents only; the MAVLink path "
                              "flies the vehicles in wall-clock time; expected --no-mavlink "
                              "with it")
-        args.num_slots = args.num_slots or MAVLINK_NUM_SLOTS
+        args.num_slots = MAVLINK_NUM_SLOTS if args.num_slots is None else args.num_slots
     if args.time_scale is None:
         args.time_scale = DEFAULT_TIME_SCALE if args.kill_uav is None else KILL_TIME_SCALE
     if args.at < 0:

@@ -91,6 +91,12 @@ def start_mavlink(ports: Sequence[int], pass_s: float, common: Sequence[str],
     return procs
 
 
+def pass_duration_s(params: Params) -> float:
+    """The bridge's pass: the slots and one more, so every UAV crosses the line after its
+    last slot (ObservedMission's end)."""
+    return (params.num_slots + 1) * params.slot_duration_s
+
+
 def node_names(node: str, args: argparse.Namespace) -> list[str]:
     """The full names the demo gives `node`'s processes (params-file sections match these),
     for the --uavs flown (without it, every UAV a swarm may have: its num_uavs is not known
@@ -180,9 +186,7 @@ class Mission:
         self.mavlink_pass: MavlinkPass | None = None
         self.targets: dict[int, tuple[float, float, float]] = {}
         self.n_slots, self.plan_time, self.wall_timeout_s = 0, 0.0, 0.0
-        # the bridge's pass: the slots and one more, so every UAV crosses the line after its
-        # last slot (ObservedMission's end)
-        self.pass_s = (params.num_slots + 1) * params.slot_duration_s
+        self.pass_s = pass_duration_s(params)
         self.watcher = TopicWatcher(None, "demo_watcher", on_mavlink_pose=self._on_vehicle,
                                     num_uavs=params.num_uavs)
 

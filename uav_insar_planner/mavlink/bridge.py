@@ -1,46 +1,29 @@
 """The swarm bridge: formation in the track frame -> SET_POSITION_TARGET_LOCAL_NED per UAV.
 
-Contract:
+Contract (each point's detail is in the module named):
 - One MAVLink link per distinct connection string; several UAVs may share one (a router),
-  each addressed by its own sysid and the component its heartbeat came from (default 1).
-- Setpoints in MAV_FRAME_LOCAL_NED at `setpoint_rate_hz` (`setpoints`), following the pass
-  (`trajectory`). pass_start "capture": the track starts once every linked UAV with a target
-  is within `capture_radius_m` of its start point; UAVs that are lost or whose arming failed
-  do not hold the others back. "planner": at the wall-clock instant given to `set_start`.
-- `uav_id` >= 0: one vehicle, UAV `uav_id`, flying formation.points[uav_id] (a stack per UAV).
-- Our HEARTBEAT at 1 Hz as (source_sysid, 191), MAV_TYPE_ONBOARD_CONTROLLER. Lost and found
-  vehicles are reported (`supervision`); setpoints to the others never stop, nor to the lost
-  one (PX4 needs the stream on return).
-- LOCAL_POSITION_NED is read back (and requested at 10 Hz with SET_MESSAGE_INTERVAL).
-- Optional arm_and_takeoff (`sequencer`): readiness (position, mode confirmed from the
-  heartbeat, arming checks retried until `readiness_timeout_s`), arm, take off; each
-  COMMAND_ACK and each new PreArm / Arm STATUSTEXT reason is reported as an event.
-- ArduPilot: no setpoints to a vehicle that is not in GUIDED (nor during its takeoff
-  sequence); PX4: the stream never stops (OFFBOARD needs it before and on return).
-- Each UAV has a `phase` (supervision.phase): waiting for heartbeat / waiting for position /
-  prearm: <reason> / armed / airborne / in formation / lost ...
-- A formation with every pose NaN after one with targets (the planner's hold: the mission
-  cannot continue) stops the setpoints and commands every vehicle into LOITER / PX4
-  AUTO.LOITER (`hold.HoldOrder`).
-- Ground station silent for `gcs_timeout_s` (> 0; the clock starts when it is first heard,
-  `gcs_heard`): the setpoints stop and every vehicle is commanded into its hold mode; only a
-  new plan (`set_formation`) or start (`resume`) ends it, and a vehicle still in the hold
-  mode the bridge commanded is switched back to GUIDED / OFFBOARD (`holding`).
-- Two planned UAVs closer than `min_separation_m` are warned about (an event per new
-  formation, and `separation` in their status).
-- TCP links connect and reconnect without blocking (`tcp.TcpClient`), so a dead vehicle is
-  reported lost after `heartbeat_timeout_s` while the others go on.
-- Bad values are dropped where they cross, counted in the link's counters and logged once per
-  kind every DROP_LOG_PERIOD_S (`guard`): a setpoint or command whose values do not fit
-  MAVLink's float32 (`unsendable`), a non-finite LOCAL_POSITION_NED (`bad_value`: no
-  telemetry, so it can never pass the capture gate), a message for a known sysid from an
-  unexpected address or component (`spoofed`, supervision.unexpected_source).
-- Optional MAVLink 2 signing (`signing_key_file`, see `signing`): everything sent is signed,
-  unsigned or wrongly signed frames are dropped (`bad_signature`).
+  each addressed by its sysid and the component its heartbeat came from (`link`).
+- Setpoints in MAV_FRAME_LOCAL_NED at `setpoint_rate_hz` (`setpoints`) along the pass
+  (`trajectory`), started by the capture gate or the planner's instant (`pass_start`).
+  ArduPilot: none to a vehicle not in GUIDED (nor during its takeoff); PX4: the stream never
+  stops (OFFBOARD needs it before and on return). `uav_id` >= 0: one vehicle, UAV `uav_id`.
+- Our HEARTBEAT at 1 Hz as (source_sysid, 191); vehicles found, lost and their `phase`
+  (`supervision`); LOCAL_POSITION_NED requested at 10 Hz and read back.
+- Optional arm_and_takeoff (`sequencer`), each COMMAND_ACK and PreArm reason an event.
+- Holds (`holding`): the planner's mission stop (every pose NaN) and the ground station's
+  silence for `gcs_timeout_s`; a held vehicle at most `holding.REJOIN_S` of the pass behind
+  its target rejoins when the ground is heard again or a new start or plan comes, one
+  farther behind keeps holding and is reported `behind` (the planner resumes the swarm from
+  where it holds or replans without it; under pass_start "capture" a new plan resumes the
+  pass where the swarm holds).
+- Two planned UAVs closer than `min_separation_m` are warned about (`separation`).
+- Bad values are dropped where they cross, counted and logged rate-limited (`guard`):
+  `unsendable`, `bad_value`, `spoofed` (supervision.unexpected_source); optional MAVLink 2
+  signing (`signing`, `bad_signature`).
 
-All I/O runs in one background thread (`start()` / `stop()`); `set_formation`, `status`,
-`link_stats`, `drain_events`, `track_started` and `target` are thread-safe and are what the
-ROS node calls, with `gcs_heard`, `gcs_state` and `resume`.
+All I/O runs in one background thread (`start()` / `stop()`); `set_formation`, `set_start`,
+`gcs_heard`, `gcs_state`, `status`, `link_stats`, `drain_events`, `track_started` and `target`
+are thread-safe and are what the ROS node calls.
 """
 from __future__ import annotations
 
@@ -53,10 +36,15 @@ from dataclasses import replace
 
 from uav_insar_planner.mavlink.config import BridgeConfig
 from uav_insar_planner.mavlink.frames import TrackFrame, Vec3
-from uav_insar_planner.mavlink.guard import DropLog, fits_float32
-from uav_insar_planner.mavlink.holding import Holding
+from uav_insar_planner.mavlink.guard import DropLog
+from uav_insar_planner.mavlink.holding import REJOIN_S, Holding
 from uav_insar_planner.mavlink.link import MAV, Link, LinkStats, Source
-from uav_insar_planner.mavlink.pass_start import capture_start, planner_start
+from uav_insar_planner.mavlink.pass_start import (
+    capture_start,
+    lags,
+    planner_start,
+    resume_where_held,
+)
 from uav_insar_planner.mavlink.report import BridgeEvent, VehicleStatus, vehicle_status
 from uav_insar_planner.mavlink.sequencer import (
     COPTER_MODE_GUIDED,
@@ -64,7 +52,12 @@ from uav_insar_planner.mavlink.sequencer import (
     command_name,
     result_name,
 )
-from uav_insar_planner.mavlink.setpoints import setpoint_message
+from uav_insar_planner.mavlink.setpoints import (
+    boot_ms,
+    command_message,
+    companion_heartbeat,
+    setpoint_message,
+)
 from uav_insar_planner.mavlink.signing import read_key_file, signing_state
 from uav_insar_planner.mavlink.supervision import WatchedVehicle, is_vehicle_heartbeat
 from uav_insar_planner.mavlink.trajectory import PassTrajectory, clean_formation, separation
@@ -98,6 +91,7 @@ class Bridge:
         self.failure: str | None = None
         self._events: deque[BridgeEvent] = deque(maxlen=1000)
         self._pass = PassTrajectory(config.speed_mps, config.track_duration_s)
+        self._start_label = ""  # the plan whose pass start the track clock is (planner)
         self._drops = DropLog(clock=clock)
         key = None
         if config.signing_key_file:
@@ -165,10 +159,12 @@ class Bridge:
         restarts the approach; one with the same y_start keeps the track clock running."""
         clean = clean_formation(poses, self._count)
         with self._lock:
+            now = self._clock()
             flown = self._pass.formation is not None and any(self._pass.formation)
-            self._holding.on_plan(clean, self._vehicles, flown)
+            self._holding.on_plan(clean, flown)
             if self._pass.set_formation(clean):
                 self._event(-1, "info", "new track start: approaching the formation again")
+            self._rejoin(now, "a new plan", here=self.config.pass_start != "planner")
             self._separation, warnings = separation(clean, self.config.min_separation_m)
             for text in warnings:
                 self._event(-1, "warn", text)
@@ -177,10 +173,13 @@ class Bridge:
                     if clean[v.uav] is not None and v.uav not in self._sequences:
                         self._sequences[v.uav] = self._new_sequence(v)
 
-    def gcs_heard(self, what: str) -> None:
-        """Something came from the ground station (`what`: a heartbeat, plan or start)."""
+    def gcs_heard(self, what: str, heartbeat: bool = False) -> None:
+        """Something came from the ground station (`what`: a heartbeat, plan or start;
+        `heartbeat`: a gcs/heartbeat, which starts the silence clock)."""
         with self._lock:
-            self._holding.gcs_heard(what, self._clock())
+            now = self._clock()
+            if self._holding.gcs_heard(what, now, heartbeat):
+                self._rejoin(now, "the ground station heard again")
 
     def gcs_state(self) -> str:
         """The ground station's link as the bridge sees it (holding.GcsWatch.state)."""
@@ -209,23 +208,35 @@ class Bridge:
         with self._lock:
             return self._pass.t_start is not None and self._clock() >= self._pass.t_start
 
-    def set_start(self, wall_time_s: float, label: str) -> None:
+    def set_start(self, wall_time_s: float, label: str, offset_m: float = 0.0) -> None:
         """pass_start "planner": the pass of plan `label` starts at `wall_time_s` (time.time()
-        seconds, see pass_start.planner_start); ignored under "capture". A start that changes
-        the track clock also ends a ground-silence hold."""
+        seconds, see pass_start.planner_start); ignored under "capture"."""
         if self.config.pass_start != "planner":
             return
         with self._lock:
-            text = planner_start(self._pass, wall_time_s, self._clock(), time.time(), label)
-            if text:  # a new start: it ends a ground-silence hold as a new plan does
+            now = self._clock()
+            text = planner_start(self._pass, wall_time_s, now, time.time(), label, offset_m)
+            self._start_label = label if self._pass.formation is not None else ""
+            if text:  # a new start: a held vehicle near its new target rejoins
                 self._event(-1, "info", text)
-                formation = list(self._pass.formation or [None] * len(self._vehicles))
-                self._holding.on_plan(formation, self._vehicles, any(formation))
+                self._rejoin(now, "a new pass start")
 
     def target(self, uav: int, now: float) -> tuple[Vec3, Vec3] | None:
         """(position, velocity) of UAV `uav` in the track frame at `now`, or None."""
         with self._lock:
             return self._pass.target(uav, now)
+
+    def _rejoin(self, now: float, why: str, here: bool = False) -> None:
+        """Held vehicles near their targets rejoin (`holding.rejoin`); `here`: the bridge's
+        own clock first moves to where the rearmost held vehicle stands."""
+        if not self._holding.held:
+            return
+        lag = lags(self._vehicles, self._pass, self.frame, now)
+        held = [lag[v.uav] for v in self._vehicles if self._holding.stopped(v)]
+        if here and (text := resume_where_held(self._pass, held)):
+            self._event(-1, "info", text)
+            lag = lags(self._vehicles, self._pass, self.frame, now)
+        self._holding.rejoin(self._vehicles, lag, self.config.speed_mps * REJOIN_S, why)
 
     # ------------------------------------------------------------------ the I/O thread
     def _run(self) -> None:
@@ -262,10 +273,14 @@ class Bridge:
                     if (seq := self._running(v)) and v.linked:
                         seq.step(now)
                 if now >= next_heartbeat:
-                    self._send_heartbeats()
+                    for link in self._links.values():
+                        link.send(companion_heartbeat(link.mav))
                     next_heartbeat = max(next_heartbeat + 1.0, now)
                 if now >= next_setpoint:
-                    self._maybe_start_track(now)
+                    if capture_start(self._vehicles, self._sequences, self._pass, self.frame,
+                                     now, self.config):
+                        self._event(-1, "info", f"formation established; flying the track "
+                                                f"at {self.config.speed_mps:g} m/s")
                     self._send_setpoints(now)
                     next_setpoint += period
                     if next_setpoint < now:  # we fell behind (suspended?): do not burst
@@ -348,29 +363,13 @@ class Bridge:
             if lost is not None:
                 self._event(v.uav, "warn", lost)
 
-    def _send_heartbeats(self) -> None:
-        for link in self._links.values():
-            link.send(link.mav.heartbeat_encode(MAV.MAV_TYPE_ONBOARD_CONTROLLER,
-                                                MAV.MAV_AUTOPILOT_INVALID, 0, 0,
-                                                MAV.MAV_STATE_ACTIVE))
-
     def _send_command(self, v: WatchedVehicle, command: int, params: Sequence[float],
                       confirmation: int = 0) -> None:
-        p = [float(x) for x in params] + [0.0] * (7 - len(params))
-        if not fits_float32(p):
-            self._drop(v, "unsendable", f"{command_name(command)} params {p}")
-            return
-        v.link.send(v.link.mav.command_long_encode(v.sysid, v.compid, command, confirmation,
-                                                   *p))
-
-    def _boot_ms(self, now: float) -> int:
-        return int((now - self._t0) * 1000.0) & 0xFFFFFFFF
-
-    def _maybe_start_track(self, now: float) -> None:
-        if capture_start(self._vehicles, self._sequences, self._pass, self.frame, now,
-                         self.config):
-            self._event(-1, "info", f"formation established; flying the track at "
-                                    f"{self.config.speed_mps:g} m/s")
+        msg = command_message(v.link.mav, v.sysid, v.compid, command, params, confirmation)
+        if msg is None:
+            self._drop(v, "unsendable", f"{command_name(command)} params {list(params)}")
+        else:
+            v.link.send(msg)
 
     def _send_setpoints(self, now: float) -> None:
         for v in self._vehicles:
@@ -380,10 +379,10 @@ class Bridge:
             target = self._pass.target(v.uav, now)
             ardupilot = self.config.autopilot == "ardupilot"
             holding = ardupilot and (self._running(v) or v.custom_mode != COPTER_MODE_GUIDED)
-            if target is None or holding or self._holding.stopped():
+            if target is None or holding or self._holding.stopped(v):
                 v.stream_since = None
                 continue
-            msg = setpoint_message(v.link.mav, self.frame, target, self._boot_ms(now),
+            msg = setpoint_message(v.link.mav, self.frame, target, boot_ms(now - self._t0),
                                    v.sysid, v.compid, self.config.velocity_feedforward)
             if msg is None:
                 self._drop(v, "unsendable", f"setpoint for target {target}: not float32")
@@ -397,4 +396,5 @@ class Bridge:
         status = vehicle_status(v, now, self._pass, self.frame, self.config.capture_radius_m,
                                 self._sequences.get(v.uav), self._separation[v.uav])
         held = self._holding.phase(v)
-        return replace(status, phase=held) if held else status
+        return replace(status, phase=held or status.phase, pass_plan=self._start_label,
+                       behind=self._holding.behind.get(v.uav, ""))

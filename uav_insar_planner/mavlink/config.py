@@ -17,7 +17,7 @@ from uav_insar_planner.param_specs import (
     ORIGIN_LIMIT_M,
     vehicle_connection,
 )
-from uav_insar_planner.params import check_value
+from uav_insar_planner.params import check_value, shown
 from uav_insar_planner.plan import SAFE_SEPARATION_M as DEFAULT_MIN_SEPARATION_M
 from uav_insar_planner.swarm import MAX_UAVS
 
@@ -75,6 +75,10 @@ class BridgeConfig:
         n = len(self.target_sysids)
         if n == 0:
             raise ValueError("target_sysids: empty; expected one sysid (1..255) per UAV")
+        if n > MAX_UAVS:
+            raise ValueError(f"target_sysids: value {shown(list(self.target_sysids))} is not "
+                             f"allowed: {n} UAVs; expected one sysid per UAV, at most "
+                             f"{MAX_UAVS} (the largest swarm)")
         if self.pass_start == "auto":
             raise ValueError("pass_start: 'auto' is resolved by from_parameters; expected "
                              "capture or planner")
@@ -108,8 +112,8 @@ class BridgeConfig:
                              "expected the bridge's own id (e.g. 255, the SYSID_MYGCS default)")
         if 0.0 < self.gcs_timeout_s < GCS_TIMEOUT_MIN_S or self.gcs_timeout_s < 0.0:
             raise ValueError(f"gcs_timeout_s: value {self.gcs_timeout_s:g} is not allowed; "
-                             f"expected 0 (off) or at least {GCS_TIMEOUT_MIN_S:g} s (two "
-                             "gcs/heartbeat periods, so one lost heartbeat never holds)")
+                             f"expected 0 (off) or at least {GCS_TIMEOUT_MIN_S:g} s (ten "
+                             "gcs/heartbeat periods, so lost heartbeats never hold)")
         length = self.speed_mps * self.track_duration_s
         if length > ORIGIN_LIMIT_M:
             raise ValueError(f"track_duration_s: {self.track_duration_s:g} s at speed_mps "

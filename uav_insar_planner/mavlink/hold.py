@@ -7,7 +7,8 @@ ground station falls silent for `gcs_timeout_s` (`holding`); it then sends no se
 `ResumeOrder` is the mode the bridge flies in, GUIDED / OFFBOARD: `holding` engages it for a
 vehicle the ground-silence hold put in LOITER once a new plan gives it a target again.
 
-An engaged order is sent again every RESEND_S until the vehicle's heartbeat shows the mode,
+An engaged order is sent again every RESEND_S until a vehicle heartbeat that came after the
+engagement shows the mode (an older one may predate a hold order still in flight),
 at most ATTEMPTS times per vehicle and engagement; a vehicle that is not linked gets it when
 it comes back. Once a vehicle showed the mode the order is done for it: a pilot who switches
 it to another mode afterwards is not fought. PX4 leaves OFFBOARD at once without a setpoint
@@ -42,7 +43,8 @@ class ModeOrder:
         self.mode_name, self.custom_mode, self.params = mode_name, custom_mode, params
         self.command = MAV.MAV_CMD_DO_SET_MODE
         self._mask, self._stream_first_s = mask, stream_first_s
-        self._sent: dict[int, tuple[int, float]] = {}  # engaged uav -> (attempts, last time)
+        # engaged uav -> (attempts, last time sent, engaged at: None until the first `due`)
+        self._sent: dict[int, tuple[int, float, float | None]] = {}
         self._done: set[int] = set()  # engaged uavs that showed the mode
 
     @property
@@ -55,7 +57,7 @@ class ModeOrder:
     def engage(self, uavs: Iterable[int]) -> None:
         """Order `uavs` into the mode (again: fresh attempts)."""
         for uav in uavs:
-            self._sent[uav] = (0, -RESEND_S)
+            self._sent[uav] = (0, -RESEND_S, None)
             self._done.discard(uav)
 
     def release(self, uavs: Iterable[int] | None = None) -> None:
@@ -72,18 +74,21 @@ class ModeOrder:
         """True when the command should go to `v` now (call `sent` after sending)."""
         if v.uav not in self._sent or v.uav in self._done or not v.linked:
             return False
-        if self.reached(v):
+        attempts, last, engaged = self._sent[v.uav]
+        if engaged is None:
+            engaged = now
+            self._sent[v.uav] = (attempts, last, engaged)
+        if self.reached(v) and v.last_heartbeat is not None and v.last_heartbeat > engaged:
             self._done.add(v.uav)
             return False
         if self._stream_first_s and (v.stream_since is None
                                      or now - v.stream_since <= self._stream_first_s):
             return False
-        attempts, last = self._sent[v.uav]
         return attempts < ATTEMPTS and now - last >= RESEND_S
 
     def sent(self, v: WatchedVehicle, now: float) -> None:
-        attempts, _ = self._sent.get(v.uav, (0, 0.0))
-        self._sent[v.uav] = (attempts + 1, now)
+        attempts, _, engaged = self._sent.get(v.uav, (0, 0.0, now))
+        self._sent[v.uav] = (attempts + 1, now, engaged)
 
 
 class HoldOrder(ModeOrder):

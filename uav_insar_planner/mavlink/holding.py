@@ -1,30 +1,34 @@
-"""Who holds, and why: the planner's mission stop and the ground station's silence.
+"""Who holds, and why: the planner's mission stop and the ground station's silence, and how a
+held UAV gets back into the pass.
 
 The bridge feeds it each new plan (`on_plan`, with the clean formation), everything heard
 from the ground station (`gcs_heard`) and its clock (`check`); it asks which mode order is due
-for a vehicle (`order_due`) and whether the setpoints are stopped (`stopped`). Not
+for a vehicle (`order_due`) and whether its setpoints are stopped (`stopped`). Not
 thread-safe: the bridge holds its lock.
 
 - Mission stop: a formation with every pose NaN after one with targets (`replan.hold_plan`)
   engages the hold order (`hold.HoldOrder`: LOITER / AUTO.LOITER) for every vehicle; a later
   plan releases it for the UAVs it gives a target, which stay in their hold mode until the
-  pilot or a GCS switches them back (as before the ground-silence hold existed).
-- Ground station silent (`gcs_timeout_s` > 0): the clock starts when the ground is first
-  heard (never heard: waiting, no hold, like the planner's lost rule). Anything counts: a
-  gcs/heartbeat, a plan message, a start message. Silent for longer than `gcs_timeout_s`: the
-  setpoints to every vehicle stop and the hold order is engaged for every vehicle, with one
-  event saying how long it was silent and what was last heard. Heard again: one event, and
-  the vehicles keep holding. The hold ends only with a NEW plan identity (or a new start):
-  the setpoints resume and a vehicle that gets a target and is still in the hold mode the
-  bridge commanded is switched back to GUIDED / OFFBOARD (`hold.ResumeOrder`): the bridge
-  put it there, so it may take it back. One in any other mode (a pilot switched it) is not
-  taken back. One without a target (a UAV the planner declared lost meanwhile: the
-  survivors' plan gives it NaN) keeps holding; a later plan that gives it a target takes it
-  back the same way.
+  pilot or a GCS switches them back.
+- Ground station silent (`gcs_timeout_s` > 0): the clock starts with the first gcs/heartbeat
+  (before one was matched, silence is not loss: a lossy radio may take seconds to match the
+  best-effort heartbeat, while the reliable plan is already there). From then on anything
+  counts: a heartbeat, a plan message, a start message. Silent for longer than
+  `gcs_timeout_s`: the setpoints to every vehicle stop and the hold order is engaged for
+  every vehicle, with one event saying how long it was silent and what was last heard.
+- Getting back (`rejoin`, called by the bridge when the ground is heard again and when a new
+  start or plan comes): a held vehicle whose target, on the pass clock it flies, is at most
+  `rejoin_m` ahead of where it stands rejoins the pass: its setpoints resume, and if it is
+  still in the hold mode the bridge commanded it is switched back to GUIDED / OFFBOARD
+  (`hold.ResumeOrder`: the bridge put it there, so it may take it back; one a pilot switched
+  to another mode is not taken back). One farther behind cannot keep the pass without a
+  sprint: it keeps holding and is reported `behind` (for the planner to resume the swarm from
+  where it stands, or replan without it). A vehicle without a target (the planner's
+  survivors' plan gives it NaN) keeps holding.
 """
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 from uav_insar_planner.mavlink.frames import Vec3
 from uav_insar_planner.mavlink.hold import HoldOrder, ModeOrder, ResumeOrder
@@ -32,6 +36,9 @@ from uav_insar_planner.mavlink.supervision import WatchedVehicle
 from uav_insar_planner.swarm import uav_name
 
 Emit = Callable[[int, str, str], None]  # (uav or -1 for the swarm, level, text)
+# A held UAV rejoins when its target is at most this much of the pass (speed_mps * REJOIN_S)
+# ahead of it: a short hold, caught up in a few seconds; farther behind it would sprint.
+REJOIN_S = 1.0
 
 
 class GcsWatch:
@@ -42,18 +49,21 @@ class GcsWatch:
         self.last: float | None = None  # when the ground was last heard (None: never)
         self.what = ""  # what was last heard
         self.silent = False  # timed out and not heard since
+        self.armed = False  # a heartbeat was heard: silence counts from now on
 
-    def heard(self, what: str, now: float) -> str | None:
-        """Record `what` from the ground; the event text when this ends a silence."""
+    def heard(self, what: str, now: float, heartbeat: bool = False) -> str | None:
+        """Record `what` from the ground (`heartbeat`: a gcs/heartbeat); the event text when
+        this ends a silence."""
         back = None
         if self.silent and self.last is not None:
             back = f"ground station heard again ({what}) after {now - self.last:.1f} s silent"
         self.silent, self.last, self.what = False, now, what
+        self.armed = self.armed or heartbeat
         return back
 
     def check(self, now: float) -> str | None:
         """Why the ground is now silent for too long, once per silence; else None."""
-        if self.timeout_s <= 0.0 or self.last is None or self.silent:
+        if self.timeout_s <= 0.0 or not self.armed or self.last is None or self.silent:
             return None
         if now - self.last <= self.timeout_s:
             return None
@@ -67,6 +77,9 @@ class GcsWatch:
             return "off"
         if self.last is None:
             return "waiting (never heard)"
+        if not self.armed:
+            return f"waiting (no gcs/heartbeat yet; heard {now - self.last:.1f} s ago: " \
+                   f"{self.what})"
         word = "silent" if self.silent else "heard"
         return f"{word} {now - self.last:.1f} s{' ago' * (not self.silent)} ({self.what})"
 
@@ -78,58 +91,96 @@ class Holding:
         self.hold, self.resume = HoldOrder(autopilot), ResumeOrder(autopilot)
         self.gcs = GcsWatch(gcs_timeout_s)
         self._uavs, self._emit = tuple(uavs), emit
-        self.gcs_hold = False  # setpoints stopped for the ground's silence
-        self._gcs_held: set[int] = set()  # put in the hold mode for it, not yet given back
+        self._stopped: set[int] = set()  # setpoints stopped for the ground's silence
+        self.behind: dict[int, str] = {}  # held, too far behind to rejoin: why
+        self._gcs_held: set[int] = set()  # held for a silence, no plan has given a target since
+        self._no_target: set[int] = set()  # of those, held again: a plan gave it no target
 
-    def gcs_heard(self, what: str, now: float) -> None:
-        back = self.gcs.heard(what, now)
+    @property
+    def held(self) -> bool:
+        """Whether any vehicle is held for the ground's silence."""
+        return bool(self._stopped)
+
+    def gcs_heard(self, what: str, now: float, heartbeat: bool = False) -> bool:
+        """True when this ends a silence while vehicles are held (the bridge then calls
+        `rejoin`)."""
+        back = self.gcs.heard(what, now, heartbeat)
         if back is not None:
-            self._emit(-1, "info", back + ("; holding until a new plan or start"
-                                           if self.gcs_hold else ""))
+            self._emit(-1, "info", back)
+        return back is not None and self.held
 
     def check(self, now: float) -> None:
         why = self.gcs.check(now)
         if why is None:
             return
-        self.gcs_hold, self._gcs_held = True, set(self._uavs)
+        self._stopped = set(self._uavs)
+        self._gcs_held, self._no_target = set(self._uavs), set()
+        self.behind = {}
         self.resume.release()
         self.hold.engage(self._uavs)
         self._emit(-1, "warn", f"{why}: stopping the setpoints and commanding "
                                f"{self.hold.mode_name} to every vehicle")
 
-    def on_plan(self, formation: Sequence[Vec3 | None], vehicles: Sequence[WatchedVehicle],
-                flown_before: bool) -> None:
-        """A new plan identity (or a new start for the plan flown) with this formation."""
+    def rejoin(self, vehicles: Sequence[WatchedVehicle], lags: Mapping[int, float | None],
+               rejoin_m: float, why: str) -> None:
+        """Give back every held vehicle whose target is at most `rejoin_m` ahead of it
+        (`lags`, metres along track; None: no target or no position), see the module doc;
+        `why` names the occasion for the log."""
+        if self.gcs.silent:
+            return  # still silent: nothing is given back
+        for v in vehicles:
+            if v.uav not in self._stopped:
+                continue
+            lag = lags.get(v.uav)
+            if lag is not None and lag <= rejoin_m:
+                self._give_back(v, f"{why}: rejoins the pass, {max(lag, 0.0):.2f} m behind its "
+                                   f"target (rejoin limit {rejoin_m:.2f} m)")
+                continue
+            text = ("no target in the plan flown: keeps holding" if lag is None else
+                    f"{lag:.2f} m behind its target, more than the {rejoin_m:.2f} m it may "
+                    "catch up: cannot keep the pass, keeps holding")
+            if self.behind.get(v.uav) != text:
+                self.behind[v.uav] = text
+                self._emit(v.uav, "warn", f"{why}: {text}")
+
+    def _give_back(self, v: WatchedVehicle, text: str) -> None:
+        self._stopped.discard(v.uav)
+        self.behind.pop(v.uav, None)
+        self.hold.release([v.uav])
+        if self.hold.reached(v) or self.resume.reached(v):
+            # (still in the flying mode as last heard: the hold order may be on its way)
+            self.resume.engage([v.uav])
+            text += f"; {self.hold.mode_name} -> {self.resume.mode_name}"
+        else:
+            text += (f"; in {v.mode}, not the {self.hold.mode_name} the bridge commanded (a "
+                     f"pilot switched it): not taken back to {self.resume.mode_name}")
+        self._emit(v.uav, "info", text)
+
+    def on_plan(self, formation: Sequence[Vec3 | None], flown_before: bool) -> None:
+        """A new plan identity with this formation: the mission stop (every pose NaN), or the
+        end of it for the UAVs given a target. A ground-silence hold is not ended here: the
+        bridge calls `rejoin` with the new plan's targets."""
         targets = {k for k, p in enumerate(formation) if p is not None}
         if not targets:
-            if flown_before and not self.gcs_hold:
+            if flown_before and not self.held:
                 self.hold.engage(self._uavs)
                 self._emit(-1, "warn", "every pose NaN: the mission stopped; commanding "
                                        f"{self.hold.mode_name} to every vehicle")
-            self.gcs_hold = False
             return
-        self.gcs_hold = False
-        self.hold.release(targets)
-        for v in vehicles:
-            if v.uav not in targets or v.uav not in self._gcs_held:
-                continue
-            self._gcs_held.discard(v.uav)
-            if self.hold.reached(v):
-                self.resume.engage([v.uav])
-                self._emit(v.uav, "info", f"new plan after the ground-station hold: "
-                                          f"{self.hold.mode_name} -> {self.resume.mode_name}")
-            elif v.mode != self.resume.mode_name:
-                self._emit(v.uav, "warn", f"in {v.mode}, not the {self.hold.mode_name} the "
-                                          "bridge commanded (a pilot switched it): not taken "
-                                          f"back to {self.resume.mode_name}")
-        kept = sorted(self._gcs_held - targets)
-        if kept:
+        self.hold.release(targets - self._stopped)
+        self._gcs_held -= targets
+        self._no_target -= targets
+        kept = sorted(self._gcs_held - self._no_target)
+        if kept:  # (lost meanwhile: the survivors' plan gives it NaN; never into their way)
+            self._no_target.update(kept)
+            self._stopped.update(kept)
+            self.hold.engage(kept)
             self._emit(-1, "info", "no target in the new plan for "
                                    f"{', '.join(uav_name(k) for k in kept)}: keeps holding")
 
-    def stopped(self) -> bool:
-        """No setpoints to any vehicle (the ground is or was silent, no new plan since)."""
-        return self.gcs_hold
+    def stopped(self, v: WatchedVehicle) -> bool:
+        """No setpoints to `v` (held for the ground's silence, not given back)."""
+        return v.uav in self._stopped
 
     def order_due(self, v: WatchedVehicle, now: float) -> ModeOrder | None:
         """The mode order to send `v` now (then call its `sent`), or None."""
@@ -140,11 +191,15 @@ class Holding:
 
     def phase(self, v: WatchedVehicle) -> str:
         """The UAV's phase while the ground-silence hold holds it ("" otherwise)."""
-        if self.gcs_hold:
-            return (f"holding ({self.hold.mode_name}): ground station "
-                    + ("heard again, waiting for a new plan or start" if not self.gcs.silent
-                       else "silent"))
-        if v.uav in self._gcs_held:
+        if v.uav not in self._stopped:
+            return ""
+        if v.uav in self._no_target:
             return (f"holding ({self.hold.mode_name}) since the ground station fell silent: no "
                     "target in the current plan")
-        return ""
+        if self.gcs.silent:
+            return f"holding ({self.hold.mode_name}): ground station silent"
+        if v.uav in self.behind:
+            return f"holding ({self.hold.mode_name}): {self.behind[v.uav]}"
+        return (f"holding ({self.hold.mode_name}): ground station heard again, waiting for "
+                "the pass to resume")
+

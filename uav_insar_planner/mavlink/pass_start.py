@@ -61,16 +61,52 @@ def capture_start(vehicles: Sequence[WatchedVehicle], sequences: Mapping[int, Ar
 
 
 def planner_start(pass_: PassTrajectory, wall_time_s: float, mono_now: float,
-                  wall_now: float, label: str) -> str:
+                  wall_now: float, label: str, offset_m: float = 0.0) -> str:
     """Set the track clock of `pass_` to the wall-clock instant `wall_time_s` (read against
-    `wall_now`, time.time(), at monotonic `mono_now`); the event text, "" when nothing
-    changed (no formation yet, or the same start again)."""
+    `wall_now`, time.time(), at monotonic `mono_now`), the pass `offset_m` past its start
+    line then (a resumed pass); the event text, "" when nothing changed (no formation yet,
+    or the same start again)."""
     if pass_.formation is None:
         return ""
     t_start = mono_now + (wall_time_s - wall_now)
-    if pass_.t_start is not None and abs(pass_.t_start - t_start) < SAME_START_S:
+    t_offset = offset_m / pass_.speed_mps if pass_.speed_mps > 0.0 else 0.0
+    if (pass_.t_start is not None and abs(pass_.t_start - t_start) < SAME_START_S
+            and abs(pass_.t_offset - t_offset) < SAME_START_S):
         return ""
-    pass_.t_start = t_start
+    pass_.t_start, pass_.t_offset = t_start, t_offset
     ahead = t_start - mono_now
     when = f"in {ahead:.2f} s" if ahead >= 0 else f"{-ahead:.2f} s ago (joining the pass)"
-    return f"pass start from the planner ({label}): {when}, wall clock {wall_time_s:.3f}"
+    where = f", resuming {offset_m:.2f} m past the start line" if offset_m > 0.0 else ""
+    return (f"pass start from the planner ({label}): {when}, wall clock "
+            f"{wall_time_s:.3f}{where}")
+
+
+def lags(vehicles: Sequence[WatchedVehicle], pass_: PassTrajectory, frame: TrackFrame,
+         now: float) -> dict[int, float | None]:
+    """How far each vehicle's target is ahead of it along track at `now` (metres; 0 before
+    the pass runs, when the target is its start point and no pass is yet to be kept; None
+    without a target or a position)."""
+    out: dict[int, float | None] = {}
+    for v in vehicles:
+        target = pass_.target(v.uav, now)
+        if target is None or v.position_ned is None:
+            out[v.uav] = None
+        elif pass_.t_start is None or now < pass_.t_start:
+            out[v.uav] = 0.0
+        else:
+            out[v.uav] = target[0][1] - frame.from_ned(*v.position_ned)[1]
+    return out
+
+
+def resume_where_held(pass_: PassTrajectory, held_lags: Sequence[float | None]) -> str:
+    """pass_start "capture" (the bridge's own clock, every vehicle its own): move the track
+    clock later so that the rearmost held vehicle's target is where it stands (`held_lags`:
+    the held vehicles' `lags`), and the swarm goes on from there at the planned speed; the
+    event text, "" when nothing moved."""
+    behind = [lag for lag in held_lags if lag is not None]
+    if pass_.t_start is None or not behind or max(behind) <= 0.0 or pass_.speed_mps <= 0.0:
+        return ""
+    shift = max(behind) / pass_.speed_mps
+    pass_.t_start += shift
+    return (f"the pass resumes where the swarm holds: its clock {shift:.2f} s later "
+            f"({max(behind):.2f} m)")

@@ -43,6 +43,8 @@ class VehicleStatus:
     prearm: str = ""  # the latest arming refusal reason the vehicle sent
     link_up: bool = True  # False while its TCP link is (re)connecting
     separation: str = ""  # "" or why this UAV is planned too close to another
+    pass_plan: str = ""  # the plan whose pass start the track clock is ("": none, capture)
+    behind: str = ""  # held and too far behind its target to rejoin: why ("" otherwise)
 
 
 def vehicle_status(v: WatchedVehicle, now: float, pass_: PassTrajectory, frame: TrackFrame,

@@ -1,10 +1,13 @@
-"""SET_POSITION_TARGET_LOCAL_NED as the bridge sends it and the simulated vehicle reads it.
+"""What the bridge sends: SET_POSITION_TARGET_LOCAL_NED (as the simulated vehicle reads it),
+COMMAND_LONG and its own HEARTBEAT.
 
 Type masks are built from the named MAV_POSITION_TARGET_TYPEMASK bits (a set bit means
 "ignore this field"). Both autopilots only honour whole groups, so position and velocity are
 ignored or used on all three axes together.
 """
 from __future__ import annotations
+
+from collections.abc import Sequence
 
 from pymavlink import mavutil
 
@@ -58,3 +61,24 @@ def used_values(type_mask: int, position: Vec3, velocity: Vec3) -> tuple[float, 
     clear). An ignored field may hold anything, NaN included, as PX4 and ArduPilot allow."""
     return tuple(v for bits, values in zip(_FIELD_BITS, (position, velocity), strict=True)
                  for bit, v in zip(bits, values, strict=True) if not type_mask & bit)
+
+
+def boot_ms(elapsed_s: float) -> int:
+    """time_boot_ms of a message `elapsed_s` after the bridge started (wraps as uint32)."""
+    return int(elapsed_s * 1000.0) & 0xFFFFFFFF
+
+
+def command_message(mav: MAV.MAVLink, sysid: int, compid: int, command: int,
+                    params: Sequence[float], confirmation: int = 0
+                    ) -> MAV.MAVLink_message | None:
+    """COMMAND_LONG with `params` padded to seven, or None when one does not fit float32."""
+    p = [float(x) for x in params] + [0.0] * (7 - len(params))
+    if not fits_float32(p):
+        return None
+    return mav.command_long_encode(sysid, compid, command, confirmation, *p)
+
+
+def companion_heartbeat(mav: MAV.MAVLink) -> MAV.MAVLink_message:
+    """The bridge's HEARTBEAT: an onboard controller, not an autopilot."""
+    return mav.heartbeat_encode(MAV.MAV_TYPE_ONBOARD_CONTROLLER, MAV.MAV_AUTOPILOT_INVALID,
+                                0, 0, MAV.MAV_STATE_ACTIVE)

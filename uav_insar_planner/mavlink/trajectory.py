@@ -1,7 +1,9 @@
 """The pass every UAV flies in the track frame, and when it starts.
 
 UAV k's target is (x_k, y_start, z_k) until the track starts, then
-(x_k, y_start + s(t - t_start), z_k) with s from `braked_pass`. The track starts once every
+(x_k, y_start + s(t - t_start + t_offset), z_k) with s from `braked_pass`; a pass that resumes
+mid-track (the planner's resume start) has t_offset = its along-track offset / speed, and
+holds the targets there until t_start. The track starts once every
 gating UAV is within `capture_radius_m` of its start point (0: at once), so the formation is
 established before the pass.
 """
@@ -55,6 +57,7 @@ class PassTrajectory:
         self.track_duration_s = track_duration_s
         self.formation: list[Vec3 | None] | None = None
         self.t_start: float | None = None
+        self.t_offset = 0.0  # s: how far into the pass t_start is (a resumed pass)
 
     def set_formation(self, clean: list[Vec3 | None]) -> bool:
         """Adopt a cleaned formation; True when it restarts a running track (new y_start).
@@ -66,7 +69,7 @@ class PassTrajectory:
             for a, b in zip(old, clean, strict=True))
         self.formation = clean
         if not same_start and self.t_start is not None:
-            self.t_start = None
+            self.t_start, self.t_offset = None, 0.0
             return True
         return False
 
@@ -80,9 +83,13 @@ class PassTrajectory:
         if start is None:
             return None
         x, y, z = start
-        if self.t_start is None or now < self.t_start:  # (a planner's start may lie ahead)
+        if self.t_start is None:
             return (x, y, z), (0.0, 0.0, 0.0)
-        offset, speed = braked_pass(now - self.t_start, self.speed_mps, self.track_duration_s)
+        if now < self.t_start:  # (a planner's start may lie ahead; a resumed one holds)
+            offset, _ = braked_pass(self.t_offset, self.speed_mps, self.track_duration_s)
+            return (x, y + offset, z), (0.0, 0.0, 0.0)
+        offset, speed = braked_pass(now - self.t_start + self.t_offset, self.speed_mps,
+                                    self.track_duration_s)
         return (x, y + offset, z), (0.0, speed, 0.0)
 
 

@@ -64,6 +64,10 @@ PREFLIGHT_S = 120.0
 CLIMB_MPS = 1.0
 TRANSIT_MPS = 2.0
 SETTLE_S = 20.0
+# The least lead of a given start time (`--start-utc`): a minute to upload, arm and fly to the
+# starts is already tight (default_start allows PREFLIGHT_S and the climb); an ArduPilot UAV
+# that reaches its start after the time waits for it on the next day.
+START_LEAD_MIN_S = 60.0
 
 
 @dataclass(frozen=True)

@@ -7,9 +7,14 @@ name. The stamp is for people and logs: the bridge times the silence on its own 
 clock from when it received something, so the two clocks need not agree.
 
 `GcsLink(node, on_heard, swarm_ns)` (the bridge): subscribes gcs/heartbeat and calls
-`on_heard(what)` for each one; `heard(what)` is the same door for the other messages from the
-ground (the plan, through PlanGate's `on_message`; a pass start), so that anything the ground
-sends counts as proof of a live radio link (mavlink/holding.py).
+`on_heard(what, True)` for each one; `heard(what)` is the same door for the other messages
+from the ground (the plan, through PlanGate's `on_message`; a pass start: `on_heard(what,
+False)`), so that anything the ground sends counts as proof of a live radio link, once a
+heartbeat has come (mavlink/holding.py).
+
+Sized for the documented loss: at GCS_HEARTBEAT_PERIOD_S the shortest gcs_timeout_s
+(GCS_TIMEOUT_MIN_S) spans ten heartbeats, all lost with probability 0.3^10 = 6e-6 at 30 %
+loss, so a hold means the ground is gone, not that a heartbeat was.
 """
 from __future__ import annotations
 
@@ -41,15 +46,16 @@ class GcsHeartbeat:
 class GcsLink:
     """See the module doc."""
 
-    def __init__(self, node: Node, on_heard: Callable[[str], None], swarm_ns: str) -> None:
+    def __init__(self, node: Node, on_heard: Callable[[str, bool], None], swarm_ns: str
+                 ) -> None:
         self._on_heard = on_heard
         node.create_subscription(Header, topics.resolve(swarm_ns, topics.GCS_HEARTBEAT),
                                  self._on_heartbeat, topics.GCS_HEARTBEAT_QOS)
 
     def heard(self, what: str) -> None:
         """Something came from the ground station (`what` names it for the log)."""
-        self._on_heard(what)
+        self._on_heard(what, False)
 
     def _on_heartbeat(self, msg: Header) -> None:
         name = msg.frame_id[:MAX_NAME] or "an unnamed sender"  # a name, not a payload
-        self.heard(f"gcs/heartbeat from {name}")
+        self._on_heard(f"gcs/heartbeat from {name}", True)

@@ -207,6 +207,8 @@ class MavlinkBridgeNode(Node):
         if s.separation:
             level = max(level, DiagnosticStatus.WARN)
             text += f"; planned too close: {s.separation}"
+        if s.behind:
+            text += f"; cannot keep the pass of {s.pass_plan or 'its plan'}"
         if s.phase.startswith("holding") and level == DiagnosticStatus.OK:
             level = DiagnosticStatus.WARN
         error = (math.dist(s.position_track, s.target_track)
@@ -233,7 +235,8 @@ class MavlinkBridgeNode(Node):
                   ("bad_start_messages", self._starts.dropped if self._starts else 0),
                   ("bad_claim_messages", self._claims.dropped),
                   ("bad_signature", link.bad_signature), ("spoofed", link.spoofed),
-                  ("bad_value", link.bad_value), ("unsendable", link.unsendable)]
+                  ("bad_value", link.bad_value), ("unsendable", link.unsendable),
+                  ("pass_plan", s.pass_plan), ("behind", s.behind)]
         return DiagnosticStatus(level=level, name=report.bridge_status_name(s.uav),
                                 message=text, hardware_id=f"mavlink sysid {s.sysid}",
                                 values=[KeyValue(key=k, value=fmt(v)) for k, v in values])

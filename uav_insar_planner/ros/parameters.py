@@ -72,12 +72,21 @@ def _override(node: Node, name: str) -> Any:
 def declare_specs(node: Node, specs: Iterable[ParamSpec], read_only: bool = False) -> list[str]:
     """Declare each spec on `node` (overrides apply); return one problem line per bad value.
 
-    A parameter whose override rclpy refuses is declared with its default instead, so every
-    problem is reported at once and the caller stops before publishing anything.
+    A parameter whose override rclpy refuses, or an empty list (which rcl gives no type), is
+    declared with its default instead, so every problem is reported at once and the caller
+    stops before publishing anything.
     """
     problems = []
     for spec in specs:
         desc = descriptor_for(spec, read_only)
+        given = node._parameter_overrides.get(spec.name)  # noqa: SLF001 - see _override
+        if given is not None and given.type_ == Parameter.Type.NOT_SET:
+            # rcl gives an empty list (`-p name:=[]`, `name: []`) no type: rclpy would
+            # declare the parameter uninitialised, and reading it would raise.
+            problems.append(f"{spec.name}: value [] is not allowed (an empty list); expected "
+                            f"{spec.allowed()}")
+            node.declare_parameter(spec.name, spec.default, desc, ignore_override=True)
+            continue
         try:
             node.declare_parameter(spec.name, spec.default, desc)
             continue

@@ -118,7 +118,7 @@ class PlannerNode(Node):
         self.create_timer(DIAGNOSTICS_PERIOD_S, self._on_diagnostics_timer)
         self._worker = SolveWorker(solve, self._on_solved)
         self._swarm = SwarmWatch(self, params)
-        self._pass_start = PassStart(self, self._swarm.lost_uavs)
+        self._pass_start = PassStart(self, self._swarm.lost_uavs, self._swarm.declare_lost)
         self._watch_uavs(params.num_uavs)
         self._worker.request(params, "start")
 
@@ -245,7 +245,8 @@ class PlannerNode(Node):
         self._formation_pub.publish(msg)
         self._power_pub.publish(power)
         self._markers.publish_plan(scenario, plan)
-        self._pass_start.on_plan(plan_id, report.formation_points(plan))
+        self._pass_start.on_plan(plan_id, report.formation_points(plan), scenario.speed,
+                                 scenario.speed * scenario.slot_duration_s * scenario.num_slots)
 
     def _on_diagnostics_timer(self) -> None:
         self._publish_diagnostics()

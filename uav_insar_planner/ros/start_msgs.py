@@ -4,7 +4,9 @@ side of it.
   header.stamp     the instant the pass starts, WALL clock (time.time(), seconds and
                    nanoseconds since the epoch; not ROS time, which may be simulated)
   header.frame_id  the identity label of the plan it starts ("plan /planner <sec>.<ns>",
-                   plan_msgs.PlanId)
+                   plan_msgs.PlanId), and for a pass that resumes mid-track the along-track
+                   distance from the start line it resumes at: "<label> at <metres> m"
+                   (the UAVs hold there until the instant, then fly on at v_y)
 
 The planner publishes it (ros/pass_start.py); a re-plan during the pass (same y_start)
 publishes the same instant again under the new plan's label. Validated where it enters
@@ -18,6 +20,8 @@ that plan is adopted (the latched start may overtake the formation, or follow it
 """
 from __future__ import annotations
 
+import math
+import re
 import time
 from collections.abc import Callable
 
@@ -31,21 +35,32 @@ from uav_insar_planner.ros.plan_msgs import DropLog, PlanId, PlanMessageError
 # whose clock was never set.
 PLAUSIBLE_S = 86400.0
 KEPT = 8
+MAX_OFFSET_M = 1e6  # far beyond any pass (the bridge's origin limit is 1e5 m)
+_RESUME = re.compile(r"^(.*) at (\d{1,7}\.\d{3}) m$")
 
 
-def encode_start(wall_time_ns: int, plan_id: PlanId) -> Header:
-    """The start message of `plan_id` at `wall_time_ns` (time.time_ns())."""
-    msg = Header(frame_id=plan_id.label)
+def encode_start(wall_time_ns: int, plan_id: PlanId, offset_m: float = 0.0) -> Header:
+    """The start message of `plan_id` at `wall_time_ns` (time.time_ns()), the pass then
+    `offset_m` past its start line (0: a pass from the start line)."""
+    label = plan_id.label if offset_m <= 0.0 else f"{plan_id.label} at {offset_m:.3f} m"
+    msg = Header(frame_id=label)
     msg.stamp.sec, msg.stamp.nanosec = divmod(int(wall_time_ns), 1_000_000_000)
     return msg
 
 
-def decode_start(msg: Header, wall_now: float) -> tuple[PlanId, float]:
-    """(plan identity, start in wall-clock seconds), or PlanMessageError (one line)."""
-    plan_id = PlanId.from_label(msg.frame_id)
+def decode_start(msg: Header, wall_now: float) -> tuple[PlanId, float, float]:
+    """(plan identity, start in wall-clock seconds, along-track offset at it in metres), or
+    PlanMessageError (one line)."""
+    resume = _RESUME.match(msg.frame_id)
+    label, offset = (resume[1], float(resume[2])) if resume else (msg.frame_id, 0.0)
+    plan_id = PlanId.from_label(label)
     if plan_id is None:
         raise PlanMessageError(topics.FORMATION_START, "frame_id", msg.frame_id,
-                               "a plan identity 'plan <planner> <sec>.<nanosec>'")
+                               "a plan identity 'plan <planner> <sec>.<nanosec>', optionally "
+                               "followed by ' at <metres> m'")
+    if not (math.isfinite(offset) and 0.0 <= offset <= MAX_OFFSET_M):
+        raise PlanMessageError(topics.FORMATION_START, "frame_id offset", offset,
+                               f"0..{MAX_OFFSET_M:g} m")
     sec, nanosec = int(msg.stamp.sec), int(msg.stamp.nanosec)
     if not 0 <= nanosec < 1_000_000_000:
         raise PlanMessageError(topics.FORMATION_START, "stamp.nanosec", nanosec,
@@ -55,21 +70,22 @@ def decode_start(msg: Header, wall_now: float) -> tuple[PlanId, float]:
         raise PlanMessageError(topics.FORMATION_START, "stamp", f"{sec}.{nanosec:09d}",
                                f"within {PLAUSIBLE_S:g} s of this host's clock "
                                f"({wall_now:.0f}); is it synchronised?")
-    return plan_id, start
+    return plan_id, start, offset
 
 
 class StartFollower:
-    """Subscribes `formation/start` of `swarm_ns` and calls `set_start(wall_time_s, label)`
+    """Subscribes `formation/start` of `swarm_ns` and calls `set_start(wall_time_s, label,
+    offset_m)`
     for the start of the plan flown (`flown()`, the PlanGate's current), on arrival and on
     `plan_adopted()`. `dropped` counts the messages refused by validation; `on_message(what)`
     hears every valid one (the ground station is there: ros/gcs_link.py)."""
 
     def __init__(self, node: Node, swarm_ns: str, flown: Callable[[], PlanId | None],
-                 set_start: Callable[[float, str], None], prefix: str = "",
+                 set_start: Callable[[float, str, float], None], prefix: str = "",
                  on_message: Callable[[str], None] | None = None) -> None:
         self._flown, self._set_start, self._prefix = flown, set_start, prefix
         self._on_message = on_message
-        self._starts: dict[PlanId, float] = {}
+        self._starts: dict[PlanId, tuple[float, float]] = {}
         self._drops = DropLog(node.get_logger().warning, time.monotonic)
         node.create_subscription(Header, topics.resolve(swarm_ns, topics.FORMATION_START),
                                  self._on_start, topics.LATCHED)
@@ -80,13 +96,14 @@ class StartFollower:
 
     def _on_start(self, msg: Header) -> None:
         try:
-            plan_id, start = decode_start(msg, time.time())
+            plan_id, start, offset = decode_start(msg, time.time())
         except PlanMessageError as exc:
             self._drops.drop(exc, self._prefix)
             return
         if self._on_message is not None:
             self._on_message(f"{topics.FORMATION_START} of {plan_id.label}")
-        self._starts[plan_id] = start
+        self._starts.pop(plan_id, None)  # (re-inserted: the newest arrival last)
+        self._starts[plan_id] = (start, offset)
         while len(self._starts) > KEPT:
             del self._starts[next(iter(self._starts))]  # the oldest arrival
         self.plan_adopted()
@@ -95,4 +112,5 @@ class StartFollower:
         """The flown plan may have changed: apply its start if one came."""
         plan_id = self._flown()
         if plan_id is not None and plan_id in self._starts:
-            self._set_start(self._starts[plan_id], plan_id.label)
+            start, offset = self._starts[plan_id]
+            self._set_start(start, plan_id.label, offset)

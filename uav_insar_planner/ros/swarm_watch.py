@@ -122,6 +122,13 @@ class SwarmWatch:
                 if lost is not None:
                     self._react(lost)
 
+    def declare_lost(self, k: int, why: str) -> None:
+        """UAV k cannot go on with the swarm (its bridge says why): lost, as by silence."""
+        with self._lock:
+            lost = self.monitor.bridge_lost(k, time.monotonic(), why)
+        if lost is not None:
+            self._react(lost)
+
     def has_lost(self) -> bool:
         """Whether a UAV of the swarm has been declared lost (final for the mission)."""
         with self._lock:
