@@ -9,7 +9,8 @@ durations an agent reports in its last line. Numbers only: no ROS here.
     times, spread = along_track_spread(tracks, t0, t1, smooth_s=1.0)
     along, ground = max_speed(tracks[0], window_s=1.0)
     durations = slot_durations(tracks[0], slot_lines(0.0, 4.3, 1.0, 40), pass_start)
-    figures = pass_figures(bag, UAVS, 40, 4.3, 1.0)   # all of the above for a whole pass
+    flown = Pass(bag, UAVS, 40, 4.3, 1.0)   # the above for the pass of the bag's start
+    flown.spread(since), flown.durations(since), flown.speeds(since)
 """
 from __future__ import annotations
 
@@ -146,24 +147,60 @@ def agent_durations(log: str) -> tuple[float, float, float] | None:
     return (float(found[1]), float(found[2]), float(found[3])) if found else None
 
 
-@dataclass(frozen=True)
-class PassFigures:
-    """How a swarm flew its pass (`pass_figures`)."""
+class Pass:
+    """The pass begun by a bag's first formation/start, of `num_slots` slots of `slot_s` at
+    `speed_mps` from the first plan's y_start, as the autopilots reported it (each track
+    smoothed over `smooth_s`); figures from an instant on (`since`, default its start) until
+    its end, when the first UAV crossed the line past the last slot."""
 
-    pass_start: float  # the first formation/start's instant [s, wall clock]
-    pass_end: float  # when the first UAV reached the line past the last slot (nan: none did)
-    spread_m: float  # the largest along-track spread from `since` to pass_end (nan: none)
-    since: float
-    durations: dict[int, np.ndarray]  # per UAV, each slot's duration [s]
-    speeds: dict[int, tuple[float, float]]  # per UAV, max_speed on its pass [m/s]
+    def __init__(self, bag: Mapping[str, list], uavs: Sequence[int], num_slots: int,
+                 speed_mps: float, slot_s: float, smooth_s: float = 0.0) -> None:
+        starts = start_instants(bag)
+        assert starts, f"no formation/start in the bag: {sorted(bag)}"
+        self.start, self.smooth_s = starts[0], smooth_s
+        lines = slot_lines(y_start(bag), speed_mps, slot_s, num_slots)
+        self.tracks = tracks_from_bag(bag, uavs)
+        #: per UAV, when it crossed each slot line and the one past the last (as far as it got)
+        self.crossed = {k: np.array(crossings(self.tracks[k].smoothed(smooth_s), lines,
+                                              self.start)) for k in uavs}
+        ends = [c[-1] for c in self.crossed.values() if len(c) == len(lines)]
+        self.end = min(ends) if ends else float("nan")
+        self._lines = len(lines)
 
-    def text(self) -> str:
+    def spread(self, since: float | None = None) -> float:
+        """The largest along-track spread [m] from `since` to the end (nan: no end)."""
+        if np.isnan(self.end):
+            return float("nan")
+        _, spread = along_track_spread(self.tracks, self.since(since), self.end,
+                                       self.smooth_s)
+        return float(max(spread, default=float("nan")))
+
+    def durations(self, since: float | None = None) -> dict[int, np.ndarray]:
+        """Per UAV, the duration [s] of each slot it flew that began at or after `since`."""
+        return {k: np.diff(c)[c[:-1] >= self.since(since)] for k, c in self.crossed.items()}
+
+    def speeds(self, since: float | None = None,
+               window_s: float = 1.0) -> dict[int, tuple[float, float]]:
+        """Per UAV, its fastest (along-track, ground) speed [m/s] over `window_s` from
+        `since` until it crossed the last line (on the pass only: before it each UAV
+        crosses from its home to its formation point)."""
+        return {k: max_speed(self.tracks[k], window_s, self.since(since),
+                             c[-1] if len(c) == self._lines else np.inf)
+                for k, c in self.crossed.items()}
+
+    def since(self, since: float | None) -> float:
+        return self.start if since is None else since
+
+    def text(self, since: float | None = None) -> str:
+        """The figures from `since` in one line."""
         durations = ", ".join(
             f"{uav_name(k)} {len(d)} slots {d.min():.2f}-{d.max():.2f} s" if len(d) else
-            f"{uav_name(k)} no slot" for k, d in self.durations.items())
-        speeds = ", ".join(f"{uav_name(k)} {a:.2f}/{g:.2f}" for k, (a, g) in self.speeds.items())
-        return (f"along-track spread up to {self.spread_m:.2f} m over "
-                f"{self.pass_end - self.since:.1f} s; slot durations {durations}; fastest "
+            f"{uav_name(k)} no slot" for k, d in self.durations(since).items())
+        speeds = ", ".join(f"{uav_name(k)} {a:.2f}/{g:.2f}"
+                           for k, (a, g) in self.speeds(since).items())
+        return (f"from {self.since(since) - self.start:+.1f} s after the pass start: "
+                f"along-track spread up to {self.spread(since):.2f} m until "
+                f"{self.end - self.start:+.1f} s; slot durations {durations}; fastest "
                 f"along-track/ground speed over 1 s [m/s] {speeds}")
 
 
@@ -181,27 +218,3 @@ def start_instants(bag: Mapping[str, list]) -> list[float]:
         if t not in seen:
             seen.append(t)
     return seen
-
-
-def pass_figures(bag: Mapping[str, list], uavs: Sequence[int], num_slots: int,
-                 speed_mps: float, slot_s: float, *, smooth_s: float = 0.0,
-                 since: float | None = None, window_s: float = 1.0) -> PassFigures:
-    """The figures of the pass begun by the bag's first formation/start, of `num_slots`
-    slots of `slot_s` at `speed_mps` from the first plan's y_start: the along-track spread
-    from `since` (default: that start) until the first UAV crossed the line past the last
-    slot, slot durations, fastest speeds from the start until the UAV crossed that line."""
-    starts = start_instants(bag)
-    assert starts, f"no formation/start in the bag: {sorted(bag)}"
-    lines = slot_lines(y_start(bag), speed_mps, slot_s, num_slots)
-    tracks = tracks_from_bag(bag, uavs)
-    passed = {k: crossings(tracks[k].smoothed(smooth_s), lines, starts[0]) for k in uavs}
-    ends = [c[-1] for c in passed.values() if len(c) == len(lines)]
-    end = min(ends) if ends else float("nan")
-    since = starts[0] if since is None else since
-    _, spread = along_track_spread(tracks, since, end, smooth_s) if ends else (None, [])
-    # on the pass only: before it each UAV crosses from its home to its formation point
-    speeds = {k: max_speed(tracks[k], window_s, starts[0],
-                           passed[k][-1] if len(passed[k]) == len(lines) else np.inf)
-              for k in uavs}
-    return PassFigures(starts[0], end, float(max(spread, default=float("nan"))), since,
-                       {k: np.diff(passed[k]) for k in uavs}, speeds)

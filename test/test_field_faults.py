@@ -23,6 +23,7 @@ from __future__ import annotations
 import re
 import time
 
+import numpy as np
 import process_group
 import pytest
 from netlab_swarm import (
@@ -37,7 +38,7 @@ from netlab_swarm import (
     timeline,
     wait_for,
 )
-from swarm_track import PassFigures, agent_durations, pass_figures
+from swarm_track import Pass, agent_durations
 
 from uav_insar_planner import load_params
 from uav_insar_planner.swarm import uav_name
@@ -85,28 +86,29 @@ def _story(swarm: Swarm) -> str:
     return f"{timeline(swarm.out, EVENTS, t0)}\n{swarm.logs(600)}"
 
 
-def _figures(swarm: Swarm, since: float | None = None) -> PassFigures:
-    """Closes the bag once the last positions crossed the radio; the pass's figures."""
+def _flown(swarm: Swarm) -> Pass:
+    """Closes the bag once the last positions crossed the radio; the pass flown."""
     # a lost reliable sample is repaired at the writer's next heartbeat (NACK lost too: two)
     time.sleep(2 * FAST_DDS_HEARTBEAT_S)
     swarm.stop_recorder()
-    figures = pass_figures(read_bag(swarm.tmp_path / "bag"), UAVS, NUM_SLOTS, V_Y, SLOT_S,
-                           since=since)
-    print(timeline(swarm.out, EVENTS, figures.pass_start))
-    print(figures.text())
-    return figures
+    flown = Pass(read_bag(swarm.tmp_path / "bag"), UAVS, NUM_SLOTS, V_Y, SLOT_S)
+    print(timeline(swarm.out, EVENTS, flown.start))
+    print(flown.text())
+    return flown
 
 
-def _assert_every_slot(swarm: Swarm, figures: PassFigures, shortest_s: float) -> None:
-    """Every agent flew every slot; none shorter than `shortest_s`, in the bag's track and
-    in the agent's own account where its last line gives one."""
-    for k in UAVS:
+def _assert_every_slot(swarm: Swarm, flown: Pass, shortest_s: float,
+                       since: float | None = None) -> None:
+    """Every agent flew every slot; none that began at or after `since` shorter than
+    `shortest_s` in the bag's track, nor in the agent's own account (its last line) when
+    `since` is None."""
+    for k, durations in flown.durations(since).items():
         log = swarm.out[f"agent{k}"].text()
         assert f"{uav_name(k)}: mission complete: {NUM_SLOTS} slots" in log, log[-2000:]
-        assert len(figures.durations[k]) == NUM_SLOTS, figures.text()
-        assert figures.durations[k].min() >= shortest_s, figures.text()
+        assert len(flown.crossed[k]) == NUM_SLOTS + 1, flown.text()
+        assert durations.min() >= shortest_s, (uav_name(k), np.round(durations, 2).tolist())
         said = agent_durations(log)
-        assert said is None or said[0] >= shortest_s, (uav_name(k), said)
+        assert since is not None or said is None or said[0] >= shortest_s, (uav_name(k), said)
 
 
 def test_a_planner_restarted_mid_pass_resumes_it_at_the_planned_speed(lab, ros_domain,
@@ -124,17 +126,17 @@ def test_a_planner_restarted_mid_pass_resumes_it_at_the_planned_speed(lab, ros_d
     alive = [o.proc for name, o in out.items() if name != "planner"]
     assert _complete(swarm, alive), _story(swarm)
     resumed = out["planner again"].first(r"(?i)resum")
-    figures = _figures(swarm, since=resumed or restarted_at)
+    flown = _flown(swarm)
     print(f"planner killed {killed_at - pass_start:.1f} s into the pass, started again after "
           f"{restarted_at - killed_at:.1f} s; "
           + (f"resumed {resumed - restarted_at:.1f} s later" if resumed else "no resume"))
-    for k in UAVS:
-        along, ground = figures.speeds[k]
-        assert ground <= SPEED_MAX_MPS, (uav_name(k), figures.text())
+    print(flown.text(killed_at))
+    for k, (_, ground) in flown.speeds(killed_at).items():
+        assert ground <= SPEED_MAX_MPS, (uav_name(k), flown.text(killed_at))
     assert resumed, out["planner again"].text()[-3000:]
-    assert figures.spread_m < SPREAD_MAX_M, figures.text()
+    assert flown.spread(resumed) < SPREAD_MAX_M, flown.text(resumed)
     # flown at most V_Y + 1 m/s, a slot lasts at least V_Y / (V_Y + 1) of its duration
-    _assert_every_slot(swarm, figures, SLOT_S * V_Y / SPEED_MAX_MPS)
+    _assert_every_slot(swarm, flown, SLOT_S * V_Y / SPEED_MAX_MPS, killed_at)
 
 
 def test_a_whole_mission_at_30_percent_loss_flies_in_formation(lossy_lab, ros_domain,
@@ -143,9 +145,9 @@ def test_a_whole_mission_at_30_percent_loss_flies_in_formation(lossy_lab, ros_do
                         noise_std_m=0.0)
     _started(swarm)
     assert _complete(swarm, swarm.procs()), _story(swarm)
-    figures = _figures(swarm)
+    flown = _flown(swarm)
     for k in UAVS:
         log = swarm.out[f"bridge{k}"].text()
         assert "ground station silent" not in log, log[-3000:]  # no hold for lost heartbeats
-    assert figures.spread_m < SPREAD_MAX_M, figures.text()
-    _assert_every_slot(swarm, figures, SLOT_MIN * SLOT_S)
+    assert flown.spread() < SPREAD_MAX_M, flown.text()
+    _assert_every_slot(swarm, flown, SLOT_MIN * SLOT_S)

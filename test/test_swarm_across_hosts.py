@@ -30,7 +30,7 @@ from netlab_swarm import (
     stop_recorder,
     wait_for,
 )
-from swarm_track import pass_figures
+from swarm_track import Pass
 
 from uav_insar_planner import load_params
 from uav_insar_planner.swarm import uav_name
@@ -85,12 +85,12 @@ def test_a_lossy_radio_loses_no_slot_and_no_plan(lab, ros_domain, tmp_path):
     assert np.all(ys > 0.0)
     assert_slot0_on_the_pass_start(out)
     assert_every_bridge_before_the_instant(out)
-    figures = pass_figures(bag, UAVS, NUM_SLOTS, V_Y, 1.0, smooth_s=SMOOTH_S)
-    print(figures.text())
-    assert figures.spread_m < SPREAD_MAX_M, figures.text()
-    for k in UAVS:
-        assert len(figures.durations[k]) == NUM_SLOTS, figures.text()
-        assert figures.durations[k].min() >= SLOT_MIN_S, figures.text()
+    flown = Pass(bag, UAVS, NUM_SLOTS, V_Y, 1.0, smooth_s=SMOOTH_S)
+    print(flown.text())
+    assert flown.spread() < SPREAD_MAX_M, flown.text()
+    for durations in flown.durations().values():
+        assert len(durations) == NUM_SLOTS, flown.text()
+        assert durations.min() >= SLOT_MIN_S, flown.text()
 
 
 def assert_every_bridge_before_the_instant(out: dict) -> None:
