@@ -10,6 +10,11 @@ cuts frames as a bad radio does), DDS between them, MAVLink only inside each UAV
   position jittering as under GNSS noise, so it climbs and crosses to its formation point on
   the slot 0 line: no agent may start slot 0 before the planner's pass start.
 
+The lossy-radio swarm is judged by how it flew too (issue 27's late pass start, which made a
+bridge join 1-4 s late and its UAV catch up): every bridge heard the planner's pass start
+before its instant, and from the bag (swarm_track.py) the swarm's along-track spread and
+each UAV's slot durations stay within what the position noise allows.
+
 Everything observed crosses the lossy links: the bag is written on the ground, from what
 reached it. Skipped with the lab's reason where namespaces or TAP devices are not permitted.
 """
@@ -42,13 +47,14 @@ UAV_TIMEOUT_S = 3.0
 GCS_TIMEOUT_S = 3.0
 CUT = UAVS[-1]  # the UAV whose link is cut
 V_Y = load_params().speed  # the scenario's speed along the track [m/s]
-# The reported positions wander by 0.3 m per axis (tau 2 s), the truth is not in the bag: a
-# 2 s moving average leaves ~0.1 m, so the formation's 1 m spread and 0.9-slot bounds (met by
-# the noise-free swarms of test_field_faults.py) widen here. A late pass start made 0.46 s
-# slots and 15 m of spread (issue 27): still far outside.
+# The reported positions wander by 0.3 m per axis (tau 2 s; a 2 s moving average hardly
+# narrows it) and the truth is not in the bag: measured, the noise-free swarm's 0.5 m spread
+# reads 1.1-1.2 m here, its 0.8-1.2 s slots 0.8-1.4 s. So the formation's 1 m and 0.9-slot
+# bounds (held by the noise-free swarms of test_field_faults.py) widen here; a late pass
+# start made 0.46 s slots and 15 m of spread (issue 27): still far outside.
 SMOOTH_S = 2.0
-SPREAD_MAX_M = 1.5
-SLOT_MIN_S = 0.7
+SPREAD_MAX_M = 2.0
+SLOT_MIN_S = 0.6
 SLOT0 = re.compile(r"slot 0 started at y = (-?[\d.]+) m .*, ([+-][\d.]+) s from the pass start")
 
 lab = lab_fixture(RADIO)
