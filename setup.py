@@ -22,6 +22,9 @@ PLANNER = [
     # uav-insar record writes the bag's MCAP file with it (bag/writer.py): rosbags' writer
     # cannot write what rosbag2 Jazzy writes (topic_type_hash, header, metadata records)
     "mcap>=1.1",
+    # `--jobs 1` of sweep / map pins this process's BLAS / OpenMP threads to one, as the
+    # workers' are, so that serial and parallel runs agree float for float (study/executors.py)
+    "threadpoolctl>=3.1",
 ]
 ROS_WHEELS = [
     "ros-jazzy-rclpy[fastrtps]>=7.1",

@@ -53,6 +53,19 @@ def test_metadata_is_rosbag2_v9_mcap_with_every_topic_and_latched_qos(mission):
         assert topics[f"/uav{k}/achieved_rate"]["message_count"] == SLOTS
 
 
+def test_every_topic_of_the_bag_is_on_the_generated_list_of_recording_md(mission):
+    """docs/recording.md's list (docs/_hooks/reference_topics.recorded_names) holds every
+    topic the recorder took; this mission has no bridge, whose topics the list has too."""
+    sys.path.insert(0, str(REPO / "docs" / "_hooks"))
+    import reference_topics
+
+    meta = yaml.safe_load((mission.bag / "metadata.yaml").read_text())
+    recorded = {t["topic_metadata"]["name"]
+                for t in meta["rosbag2_bagfile_information"]["topics_with_message_count"]}
+    listed = set(reference_topics.recorded_names())
+    assert EXPECTED <= recorded <= listed, sorted(recorded - listed)
+
+
 def test_mcap_and_its_ros2_decoder_read_every_message(mission):
     from mcap.reader import make_reader
     from mcap_ros2.decoder import DecoderFactory

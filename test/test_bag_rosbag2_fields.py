@@ -206,6 +206,32 @@ def test_the_mcap_header_schemas_and_channels_are_rosbag2_storage_mcaps(bags):
         assert channel.metadata["topic_type_hash"] == m["type_description_hash"]
 
 
+def test_chunk_crc_0_data_crc_0_and_a_summary_crc_as_rosbag2_writes_them(bags):
+    """mcap_storage.cpp:389-391 sets `noChunkCRC = true` and leaves libmcap's `noSummaryCRC`
+    and `enableDataCRC` false: every chunk's uncompressed_crc is 0, the data section's CRC is
+    0, and the footer holds the summary section's CRC (MCAP spec, Footer: the summary section
+    and the footer's fields before the CRC)."""
+    import zlib
+
+    from mcap.records import Chunk, DataEnd, Footer
+    from mcap.stream_reader import StreamReader
+
+    _, ours, _ = bags
+    path = ours / f"{ours.name}_0.mcap"
+    with path.open("rb") as f:
+        records = list(StreamReader(f, emit_chunks=True, validate_crcs=True).records)
+    chunks = [r for r in records if isinstance(r, Chunk)]
+    (data_end,) = [r for r in records if isinstance(r, DataEnd)]
+    (footer,) = [r for r in records if isinstance(r, Footer)]
+    assert chunks and {c.uncompressed_crc for c in chunks} == {0}
+    assert data_end.data_section_crc == 0
+    raw = path.read_bytes()
+    footer_at = len(raw) - 8 - 29  # the closing magic; opcode, length, 2 x u64 and the u32 CRC
+    assert raw[footer_at] == 0x02 and footer.summary_start > 0
+    expected = zlib.crc32(raw[footer.summary_start:footer_at + 25])
+    assert footer.summary_crc == expected != 0
+
+
 def test_messages_keep_receive_and_send_time_and_sequence_0(bags):
     _, ours, written = bags
     f, reader = _mcap(ours)

@@ -71,8 +71,8 @@ def test_the_reference_pages_hold_every_parameter_and_exit_code(site: Path):
     assert 'id="bridge-uav_id"' in html  # a name two nodes take: an anchor for each
     codes = (site / "reference" / "exit-codes" / "index.html").read_text()
     assert all(name in codes for name in ("EXIT_OK", "EXIT_CRASH", "EXIT_BAD_INPUT",
-                                          "EXIT_INFEASIBLE")), codes[:500]
-    assert len(EXIT_CODES) == 4
+                                          "EXIT_INFEASIBLE", "EXIT_INTERRUPTED")), codes[:500]
+    assert len(EXIT_CODES) == 5
 
 
 def test_the_readme_links_only_to_pages_that_exist():

@@ -127,3 +127,32 @@ def test_headings_get_the_ids_python_markdown_gives_them():
 def test_cells_escape_what_markdown_would_take_for_markup():
     assert reference_md.text("a | b <x> P_com[k] `c|<d>`") == r"a \| b &lt;x> P\_com\[k\] `c|<d>`"
     assert reference_md.text("odd ` tick") == r"odd \` tick"
+
+
+def test_recording_md_lists_every_topic_of_the_registry_as_a_demo_bag_names_it():
+    """The topic list of recording.md is generated (reference.INSERTS) from ros/topics.py:
+    the page holds only its marker, the built page every topic (25 for Table I's swarm: 7
+    of the swarm and 6 per UAV), services not."""
+    from types import SimpleNamespace
+
+    from uav_insar_planner.swarm import DEFAULT_NUM_UAVS
+
+    source = (REPO / "docs" / "recording.md").read_text()
+    ((marker, _),) = reference.INSERTS["recording.md"].items()
+    assert source.count(marker) == 1
+    assert "/uavK/mavlink/pose" not in source  # no hand-written list beside it
+    page = SimpleNamespace(file=SimpleNamespace(src_uri="recording.md"))
+    built = reference.on_page_markdown(source, page, None, None)
+    assert marker not in built
+    topics = [s for s in INTERFACE if not s.is_service]
+    names = reference_topics.recorded_names()
+    shared = sum(not s.per_uav for s in topics)
+    assert len(names) == len(set(names)) == shared + (len(topics) - shared) * DEFAULT_NUM_UAVS
+    assert len(names) == 25  # the demo bag of issue 27
+    for name in names:
+        assert f"[`{name}`](reference/topics.md#" in built, name
+    assert f"holds these {len(names)} topics" in built
+    assert not any(f"`{shown}`" in built for s in INTERFACE if s.is_service
+                   for shown in [reference_topics.shown_name(s)])
+    with pytest.raises(ValueError, match="recording.md: the line"):
+        reference.on_page_markdown(source.replace(marker, ""), page, None, None)

@@ -167,7 +167,7 @@ def flown(request, tmp_path_factory):
 
 def pass_start(flown) -> float:
     assert flown["starts"], "no formation/start seen"
-    _, t0 = decode_start(flown["starts"][0], time.time())
+    _, t0, _ = decode_start(flown["starts"][0], time.time())
     return t0
 
 

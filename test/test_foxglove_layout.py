@@ -16,7 +16,7 @@ import yaml
 from conftest import REPO
 
 from uav_insar_planner.report.foxglove_layout import SHIPPED, foxglove_layout, layout_json
-from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, uav_name, uavs
+from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, MAX_UAVS, MIN_UAVS, uav_name, uavs
 
 # Table I's swarm: this test is of three UAVs (test_num_uavs.py flies others)
 UAVS = uavs(DEFAULT_NUM_UAVS)
@@ -69,27 +69,44 @@ def test_every_panel_in_the_tree_has_a_config_and_every_config_a_panel():
     assert {pid.partition("!")[0] for pid in leaves} == PANEL_TYPES
 
 
-def test_each_plot_has_one_enabled_series_per_uav():
-    for pid, paths in _plot_paths(foxglove_layout()).items():
-        assert [p["label"] for p in paths] == [uav_name(k) for k in UAVS], pid
-        for p, k in zip(paths, UAVS, strict=True):
+# Table I's and swarm.py's smallest and largest swarms (test_num_uavs.py reports a 5-UAV bag)
+SWARMS = sorted({MIN_UAVS, DEFAULT_NUM_UAVS, MAX_UAVS})
+
+
+@pytest.mark.parametrize("num_uavs", SWARMS)
+def test_each_plot_has_one_enabled_series_per_uav(num_uavs):
+    swarm = uavs(num_uavs)
+    layout = foxglove_layout(num_uavs)
+    assert set(_leaves(layout["layout"])) == set(layout["configById"])
+    for pid, paths in _plot_paths(layout).items():
+        assert [p["label"] for p in paths] == [uav_name(k) for k in swarm], pid
+        for p, k in zip(paths, swarm, strict=True):
             assert p["enabled"] and p["timestampMethod"] == "receiveTime"
             assert p["value"].startswith(f"/{uav_name(k)}/") or f'"planner: {uav_name(k)}"' in \
                 p["value"], p
 
 
-def test_the_topics_are_the_suites():
+@pytest.mark.parametrize("num_uavs", SWARMS)
+def test_the_topics_are_the_suites(num_uavs):
     from uav_insar_planner.ros import topics
 
-    layout = foxglove_layout()
+    swarm = uavs(num_uavs)
+    layout = foxglove_layout(num_uavs)
     suite = {"/" + name for name in (topics.MARKERS, topics.FLOWN_MARKERS, topics.FORMATION)}
     suite |= {topics.DIAGNOSTICS}
-    suite |= {"/" + f(k) for k in UAVS for f in (topics.achieved_rate, topics.offload)}
+    suite |= {"/" + f(k) for k in swarm for f in (topics.achieved_rate, topics.offload)}
     assert _topics_named(layout) == suite
     assert layout["configById"]["3D!markers"]["followTf"] == topics.FRAME_ID
     power = [p["value"] for p in _plot_paths(layout)["Plot!power"]]
     index = topics.OFFLOAD_FIELDS.index("power_w")
-    assert power == [f"/{topics.offload(k)}.data[{index}]" for k in UAVS]
+    assert power == [f"/{topics.offload(k)}.data[{index}]" for k in swarm]
+
+
+@pytest.mark.parametrize("num_uavs", [0, MIN_UAVS - 1, MAX_UAVS + 1])
+def test_a_count_that_is_no_swarms_is_refused(num_uavs):
+    with pytest.raises(ValueError, match=f"num_uavs: value {num_uavs} UAVs is not allowed; "
+                       f"expected {MIN_UAVS} to {MAX_UAVS}"):
+        foxglove_layout(num_uavs)
 
 
 # --- Foxglove's message-path syntax, the part the layout uses --------------------------------

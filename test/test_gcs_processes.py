@@ -2,11 +2,15 @@
 with gcs_timeout_s on a private domain, MAVLink over loopback UDP to a simulated vehicle in
 this process. The fault: the planner's process group is frozen (SIGSTOP), so nothing comes
 from the ground, then thawed (SIGCONT): the vehicle, held too long to catch up with the pass
-clock, says it is behind, and the planner resumes the pass where it holds."""
+clock, says it is behind, and the planner resumes the pass where it holds. And the planner
+killed (SIGKILL) and started again mid-pass: the new one resumes the pass where the swarm
+holds, never on the dead planner's clock, and no vehicle flies faster than the pass."""
 from __future__ import annotations
 
+import math
 import os
 import signal
+import threading
 import time
 
 import pytest
@@ -93,3 +97,57 @@ def test_a_frozen_planner_holds_the_vehicle_then_resumes_the_pass_where_it_holds
     assert "resuming the pass where the swarm is" in planner.stdout.read()
     print(f"LOITER {latency:.2f} s after SIGSTOP (gcs_timeout_s {GCS_TIMEOUT_S:g}); GUIDED "
           f"{resumed:.2f} s after SIGCONT, from where it held")
+
+
+def test_a_planner_killed_and_started_again_resumes_where_the_swarm_holds(watcher, procs):
+    w = watcher
+    speed = 2.0
+    swarm = [SimVehicle(2 + k, "udpin:127.0.0.1:0", "ardupilot",
+                        start_ned=(0.0, 10.0 * k, -40.0), max_speed=20.0, max_accel=10.0,
+                        airborne=True) for k in range(3)]
+    for v in swarm:
+        v.start()
+    fastest = [0.0]
+    watching = threading.Event()
+
+    def watch_speed() -> None:  # the vehicles' true speed, from the kill to the end
+        while not watching.is_set():
+            fastest[0] = max([fastest[0]] + [math.hypot(*v.velocity_ned[:2]) for v in swarm])
+            time.sleep(0.02)
+
+    planner = procs("planner", "-p", "capture_radius_m:=0.0")
+    links = ", ".join(f"'udpout:127.0.0.1:{v.port}'" for v in swarm)
+    bridge = procs("mavlink_bridge", "-p", f"connections:=[{links}]",
+                   "-p", "target_sysids:=[2, 3, 4]", "-p", f"speed_mps:={speed}",
+                   "-p", f"gcs_timeout_s:={GCS_TIMEOUT_S}")
+    again = None
+    try:
+        def along() -> float:  # uav0's distance along the pass (bearing 0: north)
+            _, values = bridge_status(w)
+            return float(values["position_track_m"].split()[1]) if values.get(
+                "position_track_m") else -1e9
+
+        assert w.spin_until(lambda: along() > 6.0, 40.0, [planner, bridge]), bridge_status(w)
+        threading.Thread(target=watch_speed, daemon=True).start()
+        os.killpg(planner.pid, signal.SIGKILL)
+        assert w.spin_until(lambda: all(v.mode == "LOITER" for v in swarm),
+                            GCS_TIMEOUT_S + 2.0, [bridge]), [v.mode for v in swarm]
+        w.spin_until(lambda: False, 2.0)  # held: 4+ m of a 2 m/s pass behind its old clock
+        held = along()
+        again = procs("planner", "-p", "capture_radius_m:=0.0")
+        assert w.spin_until(lambda: all(v.mode == "GUIDED" for v in swarm), 30.0,
+                            [again, bridge]), [v.mode for v in swarm]
+        w.spin_until(lambda: False, 4.0)  # flying the pass again
+        flown = along() - held
+    finally:
+        watching.set()
+        codes = stop_nodes([p for p in (bridge, again) if p is not None])
+        for v in swarm:
+            v.stop()
+    assert codes == [0, 0]
+    log = again.stdout.read()
+    assert "resuming the pass where the swarm is" in log, log[-3000:]
+    assert 0.0 < flown < speed * 4.0 + 1.0, flown  # on from where it held, at the pass's speed
+    assert fastest[0] <= speed + 1.0, fastest[0]
+    print(f"planner started again: resumed from {held:.1f} m, fastest vehicle "
+          f"{fastest[0]:.2f} m/s (pass {speed:g} m/s)")

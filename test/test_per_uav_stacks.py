@@ -92,7 +92,7 @@ def test_three_stacks_fly_the_formation_and_start_the_pass_together(watcher):
     everyone = [*vehicles, *bridges, agent, planner]
     try:
         assert watcher.spin_until(lambda: starts, 40.0, everyone), "no formation/start"
-        plan_id, t0 = decode_start(starts[0], time.time())
+        plan_id, t0, _ = decode_start(starts[0], time.time())
         assert 0.5 < t0 - time.time() < 2.5  # a little in the future: start_delay_s 2
         assert watcher.spin_until(lambda: time.time() > t0 + 4.0, 10.0, everyone)
         tracked()
@@ -117,8 +117,8 @@ def test_three_stacks_fly_the_formation_and_start_the_pass_together(watcher):
     assert formations and watcher.poses[1], "no /formation or no /uav1/pose"
     assert {s.name for s in diagnostics if s.name.startswith("mavlink_bridge")} == {
         f"mavlink_bridge: uav{k}" for k in UAVS}
-    again, t_again = decode_start(next(m for m in starts if m.frame_id != starts[0].frame_id),
-                                  time.time())
+    again, t_again, _ = decode_start(
+        next(m for m in starts if m.frame_id != starts[0].frame_id), time.time())
     assert t_again == t0 and again != plan_id and again.planner == plan_id.planner
     assert flown[-2:] == [plan_id.label, again.label], flown  # the agent flies /formation
     for k, out in enumerate(bridge_outs):
@@ -167,7 +167,8 @@ def test_a_second_bridge_for_a_flown_uav_is_refused_within_discovery(ros_domain)
     """A bridge for a UAV another bridge flies is refused with one line naming it. It sends
     nothing when it hears the older claim within its 3 s discovery window. When discovery
     is slower, as seen under CI load, it is refused as soon as the claim arrives (claims.py).
-    By then it has sent one heartbeat per link."""
+    By then it has sent one heartbeat per link. The flying one killed (SIGKILL), a bridge
+    started in its place is granted: a dead writer sends no latched claim."""
     first_port, *others = [Counter(p) for p in (29101, 29102, 29103, 29104, 29105)]
     first = bridge(1, f"udpout:127.0.0.1:{first_port.port}", 3)
     try:
@@ -187,15 +188,27 @@ def test_a_second_bridge_for_a_flown_uav_is_refused_within_discovery(ros_domain)
         sent = first_port.poll()
         time.sleep(1.5)
         assert first_port.poll() > sent
+        process_group.kill_group(first)
+        killed_at = time.monotonic()
+        sent = others[0].poll()  # the twin's, refused
+        refused_bytes = [sent] + [c.poll() for c in others[1:]]
+        replacement = bridge(1, f"udpout:127.0.0.1:{others[0].port}", 3)
+        while others[0].poll() <= sent + 2 * HEARTBEAT_BYTES and time.monotonic() < end + 30:
+            time.sleep(0.1)
+        granted_after = time.monotonic() - killed_at
+        assert replacement.poll() is None and others[0].poll() > sent + 2 * HEARTBEAT_BYTES
+        replacement_out = stop(replacement)
     finally:
         first_out = stop(first)
+    assert "no other bridge claims it" in replacement_out, replacement_out
+    print(f"a bridge started in place of a SIGKILLed one flies {granted_after:.1f} s later")
     assert codes == [2, 2], outs
     for out in outs:
         lines = errors(out)
         assert len(lines) == 1, out
         assert "uav1: refused, already flown by /uav1/mavlink_bridge" in lines[0]
     # no MAVLink byte, or the heartbeats of the second before a late claim refused it
-    assert all(c.poll() <= 2 * HEARTBEAT_BYTES for c in others), [c.bytes for c in others]
+    assert all(b <= 2 * HEARTBEAT_BYTES for b in refused_bytes), refused_bytes
     assert not errors(first_out), first_out
 
 

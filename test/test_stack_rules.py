@@ -98,8 +98,9 @@ def test_the_start_message_round_trips_and_bad_ones_name_their_field():
     now = time.time()
     plan = PlanId(1_700_000_000, 5, "/planner")
     wall_ns = int(now * 1e9) + 2_000_000_000
-    got_plan, got_start = decode_start(encode_start(wall_ns, plan), now)
+    got_plan, got_start, offset = decode_start(encode_start(wall_ns, plan), now)
     assert got_plan == plan and got_start == pytest.approx(wall_ns * 1e-9, abs=1e-6)
+    assert offset == 0.0
     for frame_id, sec, nanosec, field in (
             ("plan planner 1.000000001", int(now), 0, "frame_id"),
             (plan.label, int(now), 1_000_000_000, "stamp.nanosec"),

@@ -6,6 +6,7 @@ EXIT_OK = 0
 EXIT_CRASH = 1
 EXIT_BAD_INPUT = 2
 EXIT_INFEASIBLE = 3
+EXIT_INTERRUPTED = 130  # the shell's 128 + SIGINT, what Ctrl-C leaves in $?
 
 #: (name, code, meaning) of every exit code.
 EXIT_CODE_TABLE: tuple[tuple[str, int, str], ...] = (
@@ -22,10 +23,17 @@ EXIT_CODE_TABLE: tuple[tuple[str, int, str], ...] = (
      "bad input: one line per problem, on stderr, before any work and with nothing written"),
     ("EXIT_INFEASIBLE", EXIT_INFEASIBLE,
      "infeasible: the scenario has no plan (the blocking constraints are named)"),
+    ("EXIT_INTERRUPTED", EXIT_INTERRUPTED,
+     "interrupted: a `uav-insar` command that computes (solve, sweep, map, montecarlo, "
+     "report, ...) was stopped by SIGINT (Ctrl-C) before it finished; one line, no traceback. "
+     "`sweep` and `map` write their files whole at the end or not at all. The nodes, the "
+     "demo, `record`, `echo` and `start-missions` take SIGINT as their way to stop (see "
+     "EXIT_OK)"),
 )
 #: A few words per code, for one-line summaries.
 EXIT_CODES = {EXIT_OK: "done", EXIT_CRASH: "failed (crash, dead worker, not finished)",
-              EXIT_BAD_INPUT: "bad input", EXIT_INFEASIBLE: "infeasible"}
+              EXIT_BAD_INPUT: "bad input", EXIT_INFEASIBLE: "infeasible",
+              EXIT_INTERRUPTED: "interrupted (Ctrl-C)"}
 
 
 class CommandFailed(Exception):

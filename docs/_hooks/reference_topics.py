@@ -7,7 +7,7 @@ import re
 import reference_md as md
 
 from uav_insar_planner.ros.topics import FRAME_ID, INTERFACE, TopicSpec
-from uav_insar_planner.swarm import MAX_UAVS, MIN_UAVS
+from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, MAX_UAVS, MIN_UAVS, uavs
 
 
 def topic_anchor(spec: TopicSpec) -> str:
@@ -34,6 +34,33 @@ def qos_text(spec: TopicSpec) -> str:
 
 def _nodes(names: tuple[str, ...]) -> str:
     return ", ".join(f"[`{n}`](commands.md#{md.heading_id(n)})" for n in names) or "-"
+
+
+def recorded_names(num_uavs: int = DEFAULT_NUM_UAVS) -> list[str]:
+    """Every topic of the registry as a bag of a swarm of `num_uavs` names it (a recorder
+    takes every topic that has a publisher), in the registry's order."""
+    return ["/" + name.lstrip("/") for spec in INTERFACE if not spec.is_service
+            for name in spec.names(uavs(num_uavs))]
+
+
+def recorded_topics() -> str:
+    """The list of a demo bag's topics on recording.md (its `<!-- generated: recorded topics
+    -->` line), from the registry."""
+    topics = [s for s in INTERFACE if not s.is_service]
+    shared = sum(not s.per_uav for s in topics)
+    per_uav = sum(s.per_uav for s in topics)
+    bridge_only = [s for s in topics if s.publishers == ("mavlink_bridge",)]
+    lines = [f"A `make demo` bag (Table I's {DEFAULT_NUM_UAVS} UAVs, flown by the MAVLink "
+             f"bridge) holds these {len(recorded_names())} topics, every topic of the "
+             "[topic reference](reference/topics.md) (generated, as this list, from "
+             f"`ros/topics.py`); a swarm of num_uavs UAVs has {shared} + {per_uav} x num_uavs. "
+             "Without the bridge (`--no-mavlink`) the topics only it publishes ("
+             + ", ".join(md.code(shown_name(s)) for s in bridge_only) + ") are missing.", ""]
+    lines += md.table(("Topic", "Type", "Publishers"), (
+        [", ".join(f"[`{name}`](reference/topics.md#{topic_anchor(s)})"
+                   for name in ("/" + n.lstrip("/") for n in s.names(uavs(DEFAULT_NUM_UAVS)))),
+         md.code(s.msg_type), ", ".join(md.code(n) for n in s.publishers)] for s in topics))
+    return "\n".join(lines) + "\n"
 
 
 def topics_page() -> str:

@@ -13,7 +13,9 @@ compressed (:391); per type a schema named `pkg/msg/Type`, encoding `ros2msg`, t
 definition (bag.definitions.full_definition) (:915-919); per topic a channel, encoding `cdr`
 (:933), whose metadata is `offered_qos_profiles` (the publishers' QoS as YAML text, so
 `ros2 bag play` offers them again: a transient-local topic is latched on playback) and
-`topic_type_hash` (the RIHS01 hash) (:935-938); each message at its receive time (log time),
+`topic_type_hash` (the RIHS01 hash) (:935-938); chunk CRC 0, the summary CRC written
+(rosbag2's `noChunkCRC = true` (:390), libmcap's noSummaryCRC and enableDataCRC left false, so
+the data section's CRC is 0 too); each message at its receive time (log time),
 its publisher's send time (publish time) and sequence 0 (:871-876); and a metadata record
 `rosbag2` whose `serialized_metadata` is the BagMetadata as YAML (:964-968), once when the bag
 opens and once more when it closes (rosbag2_cpp's sequential_writer.cpp:168 and :187).
@@ -21,19 +23,25 @@ opens and once more when it closes (rosbag2_cpp's sequential_writer.cpp:168 and 
 One deliberate difference: the header's `library` names this writer (MCAP_LIBRARY) where
 rosbag2 leaves the C++ library's own `libmcap 1.3.0`: the field says who wrote the file.
 
+The `mcap` package ties the chunk and summary CRCs to one switch (`enable_crcs`), where
+libmcap has one each: it runs with both off, and `close` writes the summary CRC into the
+footer afterwards (`_write_summary_crc`, as the MCAP spec defines it).
+
 A QoS dictionary has the keys of rosbag2's metadata (bag.metadata.qos_profile): history,
 depth, reliability, durability (names as in rclpy's policies, lower case), deadline, lifespan,
 liveliness_lease_duration as {sec, nsec}, liveliness and avoid_ros_namespace_conventions.
 """
 from __future__ import annotations
 
+import struct
+import zlib
 from collections.abc import Mapping, Sequence
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 import mcap
-from mcap.writer import CompressionType
+from mcap.writer import MCAP0_MAGIC, CompressionType
 from mcap.writer import Writer as _McapWriter
 
 from uav_insar_planner.bag import metadata as rosbag2
@@ -52,6 +60,10 @@ MCAP_LIBRARY = f"uav_insar_planner {_own_version()}, python mcap {mcap.__version
 SCHEMA_ENCODING = "ros2msg"
 CHUNK_SIZE = 768 * 1024  # libmcap's DefaultChunkSize, which rosbag2 keeps
 CUSTOM_DATA = {"recorded_by": "uav_insar_planner"}  # as `ros2 bag record --custom-data` adds
+# The MCAP footer record: opcode, record length, summary_start, summary_offset_start (all but
+# the opcode u64), summary_crc (u32); then the closing magic.
+_FOOTER_HEAD = struct.Struct("<BQQQ")
+_FOOTER_CRC = struct.Struct("<I")
 
 
 class McapBagWriter:
@@ -61,9 +73,9 @@ class McapBagWriter:
         self.path = Path(path)
         self.path.mkdir(parents=True, exist_ok=False)
         self.distro = rosbag2.ros_distro()
-        self._file = self.mcap_path.open("wb")
+        self._file = self.mcap_path.open("w+b")  # read back once: the summary CRC
         self._mcap = _McapWriter(self._file, chunk_size=CHUNK_SIZE,
-                                 compression=CompressionType.NONE)
+                                 compression=CompressionType.NONE, enable_crcs=False)
         self._mcap.start(profile=MCAP_PROFILE, library=MCAP_LIBRARY)
         self._schemas: dict[str, int] = {}
         self._channels: dict[str, int] = {}
@@ -118,6 +130,7 @@ class McapBagWriter:
             return
         self._write_metadata_record()
         self._mcap.finish()
+        _write_summary_crc(self._file)
         self._file.close()
         (self.path / "metadata.yaml").write_text(rosbag2.metadata_file(self.metadata()))
 
@@ -129,3 +142,20 @@ class McapBagWriter:
         """`<folder>/<folder>_0.mcap`: rosbag2's name for a bag's first (here only) file
         (sequential_writer.cpp:303-312 and mcap_storage.cpp:385)."""
         return self.path / f"{self.path.name}_0.mcap"
+
+
+def _write_summary_crc(f: IO[bytes]) -> None:
+    """Fill in the footer's summary_crc of the finished MCAP file `f`: the CRC-32 of the
+    summary section and of the footer's fields before the CRC (MCAP spec, Footer)."""
+    f.flush()
+    footer = f.seek(0, 2) - len(MCAP0_MAGIC) - _FOOTER_HEAD.size - _FOOTER_CRC.size
+    f.seek(footer)
+    head = f.read(_FOOTER_HEAD.size)
+    summary_start = _FOOTER_HEAD.unpack(head)[2]
+    summary = b""
+    if summary_start:
+        f.seek(summary_start)
+        summary = f.read(footer - summary_start)
+    f.seek(footer + _FOOTER_HEAD.size)
+    f.write(_FOOTER_CRC.pack(zlib.crc32(head, zlib.crc32(summary))))
+    f.flush()

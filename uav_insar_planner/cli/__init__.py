@@ -7,7 +7,9 @@ True`. A verb with `ROS_ARGS = True` also takes `--ros-args ...`, which the
 dispatcher takes out before argparse (parser.split_ros_args) and hands over as `args.ros_args`;
 the rclpy work of such a verb is in ros/tools/, imported only when it runs. The exit codes are
 exit_codes.py's for every verb; errors are one line on stderr: a ParamError line as
-`uav-insar: error: ...`, a CommandFailed or a usage error after the verb's name.
+`uav-insar: error: ...`, a CommandFailed or a usage error after the verb's name. A verb
+stopped by SIGINT (Ctrl-C) that does not take it as its own way to stop (record, echo,
+start-missions do) ends with one line and EXIT_INTERRUPTED, not a KeyboardInterrupt traceback.
 """
 from __future__ import annotations
 
@@ -19,7 +21,13 @@ from types import ModuleType
 
 from uav_insar_planner.cli.extras import missing_line
 from uav_insar_planner.cli.parser import OneLineParser, one_line, split_ros_args
-from uav_insar_planner.exit_codes import EXIT_BAD_INPUT, EXIT_CRASH, EXIT_OK, CommandFailed
+from uav_insar_planner.exit_codes import (
+    EXIT_BAD_INPUT,
+    EXIT_CRASH,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+    CommandFailed,
+)
 from uav_insar_planner.params import ParamError
 from uav_insar_planner.solver import SolverFailure
 
@@ -64,10 +72,10 @@ def build_parser(table: dict[str, ModuleType]) -> tuple[argparse.ArgumentParser,
 def main(argv: Sequence[str] | None = None) -> int:
     """Run `uav-insar` with `argv` (default sys.argv[1:]); returns the exit code."""
     argv = list(sys.argv[1:] if argv is None else argv)
-    table = verbs()
-    verb = table.get(argv[0]) if argv else None
     ros_args: list[str] = []
     try:
+        table = verbs()
+        verb = table.get(argv[0]) if argv else None
         if getattr(verb, "ROS_ARGS", False):
             own, ros_args = split_ros_args(argv[1:])
             argv = [argv[0], *own]
@@ -89,6 +97,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SolverFailure as exc:
         print(one_line(f"{PROG}: error: {exc}"), file=sys.stderr)
         return EXIT_CRASH
+    except KeyboardInterrupt:
+        print(f"{' '.join([PROG, *argv[:1]])}: interrupted (SIGINT) before it finished",
+              file=sys.stderr)
+        return EXIT_INTERRUPTED
     except BrokenPipeError:
         # The reader of our output stopped (`uav-insar solve --json | head`): nothing is
         # wrong, as for any Unix filter. Point stdout at /dev/null so that the interpreter's

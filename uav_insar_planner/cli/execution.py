@@ -1,5 +1,7 @@
 """Where the solves of `uav-insar sweep` and `map` run (`--jobs`, `--scheduler`) and their
-progress bar (`--no-progress`); the runners are study/executors.py's."""
+progress bar (`--no-progress`); the runners are study/executors.py's. `--jobs 1` is the
+serial run with its threads pinned as the workers' are (executors.serial), so every way of
+running gives the same floats."""
 from __future__ import annotations
 
 import argparse
@@ -8,14 +10,16 @@ import sys
 from collections.abc import Iterator
 from contextlib import ExitStack, contextmanager
 
+from uav_insar_planner.cli import PROG
 from uav_insar_planner.cli.checks import jobs_count, scheduler_address
+from uav_insar_planner.cli.parser import one_line
 from uav_insar_planner.params import ParamError
 from uav_insar_planner.study.executors import (
     Runner,
     SchedulerUnavailable,
     dask_scheduler,
     process_pool,
-    run_serial,
+    serial,
 )
 
 
@@ -41,13 +45,19 @@ def solving(args: argparse.Namespace, solves: int) -> Iterator[tuple[Runner, obj
     with ExitStack() as stack:
         if args.scheduler:
             try:
-                run = stack.enter_context(dask_scheduler(args.scheduler))
+                run = stack.enter_context(dask_scheduler(args.scheduler, say=_say(args)))
             except SchedulerUnavailable as exc:
                 raise ParamError([f"--scheduler: value {args.scheduler!r} is not usable; "
                                   f"{exc}"]) from None
         else:
             jobs = min(args.jobs or os.cpu_count() or 1, solves)
-            run = stack.enter_context(process_pool(jobs)) if jobs > 1 else run_serial
+            run = stack.enter_context(process_pool(jobs) if jobs > 1 else serial())
         bar = stack.enter_context(tqdm(total=solves, unit="solve", file=sys.stderr,
                                        disable=args.no_progress))
         yield run, bar
+
+
+def _say(args: argparse.Namespace):
+    """One line on stderr, after the verb's name, as the errors are."""
+    return lambda line: print(one_line(f"{PROG} {args.verb}: {line}"), file=sys.stderr,
+                              flush=True)

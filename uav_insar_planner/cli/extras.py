@@ -11,7 +11,7 @@ from collections.abc import Sequence
 INSTALL_PLANNER = "pip install 'uav_insar_planner[planner]'"
 #: What the `planner` extra installs (setup.py PLANNER), by top-level module name.
 SOLVER_MODULES = ("scipy", "cvxpy", "clarabel")
-PLANNER_MODULES = (*SOLVER_MODULES, "matplotlib", "tqdm", "rosbags", "mcap")
+PLANNER_MODULES = (*SOLVER_MODULES, "matplotlib", "tqdm", "rosbags", "mcap", "threadpoolctl")
 
 
 def missing_line(modules: Sequence[str] = PLANNER_MODULES) -> str | None:

@@ -20,6 +20,7 @@ from uav_insar_planner.cli.checks import (
     sweep_count,
 )
 from uav_insar_planner.cli.execution import add_execution_arguments, solving
+from uav_insar_planner.cli.output import whole_file
 from uav_insar_planner.cli.scenario import add_scenario_arguments, scenario_params
 from uav_insar_planner.exit_codes import EXIT_OK
 from uav_insar_planner.params import SCHEMES, ParamError
@@ -74,11 +75,13 @@ def main(args: argparse.Namespace) -> int:
               + (f"; least sigma_h {best.point.sigma_h_m:.5f} m at {args.name1}="
                  f"{best.value1:.4g}, {args.name2}={best.value2:.4g}" if best else ""))
     if args.csv:
-        write_map_csv(rows, args.csv, args.name1, args.name2)
+        with whole_file(args.csv) as tmp:
+            write_map_csv(rows, tmp, args.name1, args.name2)
         print(f"wrote {args.csv}")
     if args.plot:
         from uav_insar_planner.report.figures import plot_map
 
-        plot_map(rows, args.name1, args.name2, args.plot)
+        with whole_file(args.plot) as tmp:
+            plot_map(rows, args.name1, args.name2, tmp)
         print(f"wrote {args.plot}")
     return EXIT_OK

@@ -15,6 +15,7 @@ import argparse
 
 from uav_insar_planner.cli.checks import check_output_path, finite_float, sweep_count
 from uav_insar_planner.cli.execution import add_execution_arguments, solving
+from uav_insar_planner.cli.output import whole_file
 from uav_insar_planner.cli.scenario import add_scenario_arguments, scenario_params
 from uav_insar_planner.exit_codes import EXIT_OK
 from uav_insar_planner.params import SCHEMES
@@ -69,12 +70,14 @@ def main(args: argparse.Namespace) -> int:
                          progress=bar.update, montecarlo=mc, run=run)
     _print_rows(rows, args, mc)
     if args.csv:
-        write_csv(rows, args.csv, args.name)
+        with whole_file(args.csv) as tmp:
+            write_csv(rows, tmp, args.name)
         print(f"wrote {args.csv}")
     if args.plot:
         from uav_insar_planner.report.figures import plot_sweep
 
-        plot_sweep(rows, args.name, args.plot)
+        with whole_file(args.plot) as tmp:
+            plot_sweep(rows, args.name, tmp)
         print(f"wrote {args.plot}")
     return EXIT_OK
 

@@ -154,9 +154,8 @@ class Bridge:
         self.stop()
 
     def set_formation(self, poses: Sequence[Vec3 | None]) -> None:
-        """New formation: poses[k] = (x_k, y_start, z_k) in the track frame, None (or a
-        non-finite pose) for a UAV that is not flown. A formation with a different y_start
-        restarts the approach; one with the same y_start keeps the track clock running."""
+        """New formation: poses[k] = (x_k, y_start, z_k) in the track frame, None or NaN: not
+        flown. Another y_start restarts the approach; the same keeps the track clock."""
         clean = clean_formation(poses, self._count)
         with self._lock:
             now = self._clock()
@@ -209,34 +208,35 @@ class Bridge:
             return self._pass.t_start is not None and self._clock() >= self._pass.t_start
 
     def set_start(self, wall_time_s: float, label: str, offset_m: float = 0.0) -> None:
-        """pass_start "planner": the pass of plan `label` starts at `wall_time_s` (time.time()
-        seconds, see pass_start.planner_start); ignored under "capture"."""
+        """pass_start "planner": plan `label`'s pass starts at `wall_time_s` (time.time()),
+        `offset_m` past its start line (pass_start.planner_start)."""
         if self.config.pass_start != "planner":
             return
         with self._lock:
             now = self._clock()
             text = planner_start(self._pass, wall_time_s, now, time.time(), label, offset_m)
             self._start_label = label if self._pass.formation is not None else ""
-            if text:  # a new start: a held vehicle near its new target rejoins
+            if text:  # held ones near their targets rejoin, ones too late to keep up hold
                 self._event(-1, "info", text)
-                self._rejoin(now, "a new pass start")
+                self._rejoin(now, "a new pass start", late=True)
 
     def target(self, uav: int, now: float) -> tuple[Vec3, Vec3] | None:
         """(position, velocity) of UAV `uav` in the track frame at `now`, or None."""
         with self._lock:
             return self._pass.target(uav, now)
 
-    def _rejoin(self, now: float, why: str, here: bool = False) -> None:
-        """Held vehicles near their targets rejoin (`holding.rejoin`); `here`: the bridge's
-        own clock first moves to where the rearmost held vehicle stands."""
-        if not self._holding.held:
-            return
+    def _rejoin(self, now: float, why: str, here: bool = False, late: bool = False) -> None:
+        """Held vehicles near their targets rejoin (`holding.rejoin`); `here`: the clock first
+        moves to where the rearmost held one stands; `late`: `holding.fall_back`."""
         lag = lags(self._vehicles, self._pass, self.frame, now)
         held = [lag[v.uav] for v in self._vehicles if self._holding.stopped(v)]
         if here and (text := resume_where_held(self._pass, held)):
             self._event(-1, "info", text)
             lag = lags(self._vehicles, self._pass, self.frame, now)
-        self._holding.rejoin(self._vehicles, lag, self.config.speed_mps * REJOIN_S, why)
+        rejoin_m = self.config.speed_mps * REJOIN_S
+        self._holding.rejoin(self._vehicles, lag, rejoin_m, why)
+        if late:
+            self._holding.fall_back(self._vehicles, lag, rejoin_m, why)
 
     # ------------------------------------------------------------------ the I/O thread
     def _run(self) -> None:

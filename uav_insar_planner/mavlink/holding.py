@@ -143,6 +143,23 @@ class Holding:
                 self.behind[v.uav] = text
                 self._emit(v.uav, "warn", f"{why}: {text}")
 
+    def fall_back(self, vehicles: Sequence[WatchedVehicle], lags: Mapping[int, float | None],
+                  rejoin_m: float, why: str) -> None:
+        """A pass start heard late (after a lossy radio's repair): each flying vehicle more
+        than `rejoin_m` behind its target holds rather than sprint, reported `behind`."""
+        for v in vehicles:
+            lag = lags.get(v.uav)
+            if v.uav in self._stopped or lag is None or lag <= rejoin_m:
+                continue
+            self._stopped.add(v.uav)
+            self.resume.release([v.uav])
+            self.hold.engage([v.uav])
+            self.behind[v.uav] = (f"{lag:.2f} m behind its target, more than the "
+                                  f"{rejoin_m:.2f} m it may catch up: cannot keep the pass, "
+                                  "keeps holding")
+            self._emit(v.uav, "warn", f"{why}: {self.behind[v.uav]} ({self.hold.mode_name}, "
+                                      "no sprint)")
+
     def _give_back(self, v: WatchedVehicle, text: str) -> None:
         self._stopped.discard(v.uav)
         self.behind.pop(v.uav, None)

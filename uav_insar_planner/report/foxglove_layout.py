@@ -17,9 +17,11 @@ as Foxglove exports it (`configById`, `globalVariables`, `userNodes`, `playbackC
 
 Topic names are the suite's (ros/topics.py, which imports rclpy and so cannot be imported
 here; test/test_foxglove_layout.py holds both to the same names and to a recorded bag).
-SHIPPED is the layout generated for Table I's swarm (swarm.DEFAULT_NUM_UAVS), shipped as
-package data; `python -m uav_insar_planner.report.foxglove_layout` writes it again.
-`uav-insar report` writes the layout for the number of UAVs in the bag beside its plots.
+Any swarm of swarm.py's sizes (MIN_UAVS..MAX_UAVS) has its layout: the plots get one series
+per UAV, the other panels do not depend on the count. SHIPPED is the layout generated for
+Table I's swarm (swarm.DEFAULT_NUM_UAVS), shipped as package data; `python -m
+uav_insar_planner.report.foxglove_layout` writes it again. `uav-insar report` writes the
+layout for the number of UAVs in the bag beside its plots.
 """
 from __future__ import annotations
 
@@ -33,7 +35,7 @@ from uav_insar_planner.report.planner_messages import (
     POSITION_ERROR_KEY,
     uav_status_name,
 )
-from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, uav_name, uavs
+from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, count_problem, uav_name, uavs
 
 LAYOUT_FILE = "foxglove_layout.json"
 SHIPPED = Path(__file__).with_name(LAYOUT_FILE)
@@ -85,7 +87,10 @@ def _split(first: Any, second: Any, direction: str, percent: float) -> dict[str,
 
 
 def foxglove_layout(num_uavs: int = DEFAULT_NUM_UAVS) -> dict[str, Any]:
-    """The layout (see the module docstring) for UAVs uav0..uav(num_uavs-1)."""
+    """The layout (see the module docstring) for UAVs uav0..uav(num_uavs-1); ValueError (one
+    line) for a count that is no swarm's."""
+    if problem := count_problem("num_uavs", num_uavs):
+        raise ValueError(problem)
     swarm = uavs(num_uavs)
     config = {
         "3D!markers": _three_d(),

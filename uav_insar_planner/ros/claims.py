@@ -10,7 +10,9 @@ other claimant (`on_refused(line)`; the node exits 2). A claim that turns up lat
 older than ours (graphs that joined late, a discovery slower than the window) refuses us then:
 the older bridge keeps flying, two never command one vehicle for longer than discovery takes.
 A bridge that stops takes its latched claim with it (the DDS writer goes); one killed hard
-keeps it until the middleware's liveliness lease runs out. Claims that do not parse are
+cannot send it to a bridge started after it died (a latched sample comes from its live
+writer), so a restart in its place is granted; a bridge already running keeps the dead
+claim until the middleware's liveliness lease runs out. Claims that do not parse are
 dropped, counted and logged rate-limited.
 """
 from __future__ import annotations
