@@ -179,6 +179,14 @@ class Pass:
         """Per UAV, the duration [s] of each slot it flew that began at or after `since`."""
         return {k: np.diff(c)[c[:-1] >= self.since(since)] for k, c in self.crossed.items()}
 
+    def short_slots(self, shortest_s: float,
+                    since: float | None = None) -> dict[int, list[tuple[int, float]]]:
+        """Per UAV, (slot, duration [s]) of each slot begun at or after `since` that lasted
+        less than `shortest_s`."""
+        return {k: [(n, round(float(d), 2)) for n, d in enumerate(np.diff(c))
+                    if c[n] >= self.since(since) and d < shortest_s]
+                for k, c in self.crossed.items()}
+
     def speeds(self, since: float | None = None,
                window_s: float = 1.0) -> dict[int, tuple[float, float]]:
         """Per UAV, its fastest (along-track, ground) speed [m/s] over `window_s` from
