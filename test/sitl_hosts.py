@@ -1,7 +1,7 @@
 """Three ArduCopter SITL copters (../shared/sitl/) on four hosts, in wind, taking off beside
 the track start: the mission test_sitl_across_hosts.py asserts. Not a test file.
 
-Hosts: Linux network namespaces on the lossy user-space switch of test_swarm_across_hosts.py
+Hosts: Linux network namespaces on the lossy user-space switch of netlab_swarm.py
 (uav_insar_sim/netlab, RADIO each way), DDS between them, MAVLink only inside each UAV:
 - ground: the planner and `uav-insar record` (the bag is what reached the ground);
 - uavK: `arducopter -I0` (a working directory of its own, MAVLink on the namespace's own
@@ -33,11 +33,11 @@ from pathlib import Path
 import numpy as np
 import sitl_autopilot as sitl
 import yaml
-from test_swarm_across_hosts import (
+from netlab_swarm import (
     FAST_DDS_HEARTBEAT_S,
     RADIO,
     Output,
-    _base_env,
+    base_env,
     stop_recorder,
     wait_for,
 )
@@ -103,7 +103,7 @@ class Flight:
 def start_hosts(lab: NetLab, domain: int, workdir: Path) -> Flight:
     """Start every process of the module doc; their outputs are read as they come."""
     parm, params = write_inputs(workdir)
-    env = dds_env("subnet", [], {**_base_env(), "ROS_DOMAIN_ID": str(domain)})
+    env = dds_env("subnet", [], {**base_env(), "ROS_DOMAIN_ID": str(domain)})
     flight = Flight({}, workdir / "bag", {})
     ros = ["--ros-args", "--params-file", str(params)]
 

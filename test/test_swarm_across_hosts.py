@@ -10,164 +10,59 @@ cuts frames as a bad radio does), DDS between them, MAVLink only inside each UAV
   position jittering as under GNSS noise, so it climbs and crosses to its formation point on
   the slot 0 line: no agent may start slot 0 before the planner's pass start.
 
+The lossy-radio swarm is judged by how it flew too (issue 27's late pass start, which made a
+bridge join 1-4 s late and its UAV catch up): every bridge heard the planner's pass start
+before its instant, and from the bag (swarm_track.py) the swarm's along-track spread and
+each UAV's slot durations stay within what the position noise allows.
+
 Everything observed crosses the lossy links: the bag is written on the ground, from what
 reached it. Skipped with the lab's reason where namespaces or TAP devices are not permitted.
 """
 from __future__ import annotations
 
-import os
 import re
-import signal
-import subprocess
-import threading
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
-import yaml
+from netlab_swarm import (
+    FAST_DDS_HEARTBEAT_S,
+    RADIO,
+    UAVS,
+    lab_fixture,
+    read_bag,
+    start_swarm,
+    stop_recorder,
+    wait_for,
+)
+from swarm_track import Pass
 
-from uav_insar_planner.demo.processes import executable
-from uav_insar_planner.param_specs import FIRST_SYSID
-from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, uav_name, uav_names, uavs
-from uav_insar_sim.mission import home_position
-from uav_insar_sim.netlab.dds_env import dds_env
-from uav_insar_sim.netlab.lab import LabUnavailable, NetLab
-
-# Table I's swarm: this test is of three UAVs (test_num_uavs.py flies others)
-UAVS = uavs(DEFAULT_NUM_UAVS)
-UAV_NAMES = uav_names(DEFAULT_NUM_UAVS)
+from uav_insar_planner import load_params
+from uav_insar_planner.swarm import uav_name
 
 pytestmark = pytest.mark.timeout(240)
 
 NUM_SLOTS = 8
 UAV_TIMEOUT_S = 3.0
 GCS_TIMEOUT_S = 3.0
-FAST_DDS_HEARTBEAT_S = 3.0  # a reliable writer's default heartbeat period
-RADIO = "loss=0.1 delay=0.05 jitter=0.02"  # 10 % loss, 50 ms +- 20 ms, each way
-VEHICLE_PORT = 14552  # on each UAV's own loopback: every UAV can use the same
 CUT = UAVS[-1]  # the UAV whose link is cut
-SCENARIO = {"num_slots": NUM_SLOTS, "slot_duration_s": 1.0}
-VEHICLE_HEIGHT_M = 10.0  # airborne above the agent's home moved beside the track start
-POSITION_NOISE_STD_M = 0.3  # the reported position's error per axis, as GNSS under an EKF
+V_Y = load_params().speed  # the scenario's speed along the track [m/s]
+# The reported positions wander by 0.3 m per axis (tau 2 s; a 2 s moving average hardly
+# narrows it) and the truth is not in the bag: measured, the noise-free swarm's 0.5 m spread
+# reads 1.1-1.2 m here, its 0.8-1.2 s slots 0.8-1.4 s. So the formation's 1 m and 0.9-slot
+# bounds (held by the noise-free swarms of test_field_faults.py) widen here; a late pass
+# start made 0.46 s slots and 15 m of spread (issue 27): still far outside.
+SMOOTH_S = 2.0
+SPREAD_MAX_M = 2.0
+SLOT_MIN_S = 0.6
 SLOT0 = re.compile(r"slot 0 started at y = (-?[\d.]+) m .*, ([+-][\d.]+) s from the pass start")
-LOG_TIME = re.compile(r"\[(\d+\.\d+)\]")
 
-
-class Output:
-    """Reads a process's output lines as they come, with the wall time each arrived."""
-
-    def __init__(self, proc: subprocess.Popen, name: str) -> None:
-        self.proc, self.name = proc, name
-        self.lines: list[tuple[float, str]] = []
-        threading.Thread(target=self._read, daemon=True).start()
-
-    def _read(self) -> None:
-        for line in self.proc.stdout:
-            self.lines.append((time.time(), line.rstrip()))
-
-    def text(self) -> str:
-        return "\n".join(line for _, line in self.lines)
-
-    def first(self, pattern: str, after: float = 0.0) -> float | None:
-        """The wall time of the first line matching `pattern` logged after `after`: the
-        ROS log line's own stamp where it has one, else its arrival time."""
-        for t, line in self.lines:
-            if re.search(pattern, line):
-                m = LOG_TIME.search(line)
-                stamp = float(m[1]) if m else t
-                if stamp >= after:
-                    return stamp
-        return None
-
-
-def wait_for(done, timeout: float, procs=()) -> bool:
-    end = time.monotonic() + timeout
-    while not done():
-        if time.monotonic() > end or any(p.poll() is not None for p in procs):
-            return False
-        time.sleep(0.1)
-    return True
-
-
-@pytest.fixture
-def lab():
-    try:
-        with NetLab(["ground", *UAV_NAMES]) as net:
-            for name in UAV_NAMES:
-                net.switch(f"set {name} {RADIO}")
-            yield net
-    except LabUnavailable as exc:
-        pytest.skip(f"no network lab here: {exc}")
-
-
-def start_swarm(lab: NetLab, domain: int, tmp_path: Path, discovery: str) -> dict:
-    """The ground station and the three UAV stacks; their Output readers by name."""
-    params = tmp_path / "params.yaml"
-    params.write_text(yaml.safe_dump({"/**": {"ros__parameters": {
-        # the planner's default capture radius: a tighter one waits on the position noise
-        **SCENARIO, "uav_timeout_s": UAV_TIMEOUT_S, "capture_radius_m": 1.0,
-        "gcs_timeout_s": GCS_TIMEOUT_S, "velocity_feedforward": True,
-        # one slot more than the mission, so every UAV crosses the line after its last slot
-        "track_duration_s": float(NUM_SLOTS + 1)}}}))
-    addresses = {name: lab.address(name) for name in ["ground", *UAV_NAMES]}
-
-    def env(host: str) -> dict[str, str]:
-        peers = [a for n, a in addresses.items() if n != host] if discovery == "static" else []
-        return dds_env(discovery, peers, {**_base_env(), "ROS_DOMAIN_ID": str(domain)})
-
-    out: dict[str, Output] = {}
-
-    def start(host: str, name: str, cmd: list[str]) -> None:
-        proc = lab.start(host, cmd, env=env(host), stderr=subprocess.STDOUT)
-        out[name] = Output(proc, name)
-
-    ros = ["--ros-args", "--params-file", str(params)]
-    for k in UAVS:
-        host = uav_name(k)
-        x, _, _ = home_position(k)  # beside the track start (y = 0), not behind it
-        start(host, f"vehicle{k}", [*executable("uav-insar-vehicle"), "--sysid",
-                                    str(FIRST_SYSID + k), "--listen",
-                                    f"udpin:127.0.0.1:{VEHICLE_PORT}", "--airborne",
-                                    "--start-ned", "0", str(x), str(-VEHICLE_HEIGHT_M),
-                                    "--position-noise-std", str(POSITION_NOISE_STD_M),
-                                    "--noise-seed", str(domain)])
-        start(host, f"bridge{k}", [*executable("mavlink_bridge"), *ros, "-r",
-                                   f"__ns:=/{host}", "-p", f"uav_id:={k}", "-p",
-                                   f"connections:=['udpout:127.0.0.1:{VEHICLE_PORT}']",
-                                   "-p", f"target_sysids:=[{FIRST_SYSID + k}]"])
-        start(host, f"agent{k}", [*executable("agent"), *ros, "-r", f"__ns:=/{host}",
-                                  "-p", f"uav_id:={k}", "-p", "position_source:=autopilot"])
-    start("ground", "planner", [*executable("planner"), *ros])
-    start("ground", "recorder", [*executable("uav-insar"), "record", str(tmp_path / "bag")])
-    return out
-
-
-def _base_env() -> dict[str, str]:
-    return {**os.environ, "PYTHONUNBUFFERED": "1"}
-
-
-def stop_recorder(out: dict) -> None:
-    """SIGINT the recorder so that it closes the bag; the lab kills the rest."""
-    rec = out["recorder"].proc
-    os.killpg(rec.pid, signal.SIGINT)
-    rec.wait(timeout=30)
-    assert rec.returncode == 0, out["recorder"].text()[-2000:]
-
-
-def read_bag(path: Path) -> dict[str, list]:
-    from rosbags.highlevel import AnyReader
-
-    topics: dict[str, list] = {}
-    with AnyReader([path]) as reader:
-        for conn, stamp, raw in reader.messages():
-            topics.setdefault(conn.topic, []).append(
-                (stamp * 1e-9, reader.deserialize(raw, conn.msgtype)))
-    return topics
+lab = lab_fixture(RADIO)
 
 
 def test_a_lossy_radio_loses_no_slot_and_no_plan(lab, ros_domain, tmp_path):
-    out = start_swarm(lab, ros_domain, tmp_path, "subnet")
+    out = start_swarm(lab, ros_domain, tmp_path, "subnet", num_slots=NUM_SLOTS,
+                      uav_timeout_s=UAV_TIMEOUT_S, gcs_timeout_s=GCS_TIMEOUT_S).out
     procs = [o.proc for o in out.values()]
     done = [f"{uav_name(k)}: mission complete: {NUM_SLOTS} slots" for k in UAVS]
     assert wait_for(lambda: all(out[f"agent{k}"].first(done[k]) for k in UAVS), 150.0, procs), \
@@ -195,6 +90,21 @@ def test_a_lossy_radio_loses_no_slot_and_no_plan(lab, ros_domain, tmp_path):
                    for k in UAVS])
     assert np.all(ys > 0.0)
     assert_slot0_on_the_pass_start(out)
+    assert_every_bridge_before_the_instant(out)
+    flown = Pass(bag, UAVS, NUM_SLOTS, V_Y, 1.0, smooth_s=SMOOTH_S)
+    print(flown.text())
+    assert flown.spread() < SPREAD_MAX_M, flown.text()
+    for durations in flown.durations().values():
+        assert len(durations) == NUM_SLOTS, flown.text()
+        assert durations.min() >= SLOT_MIN_S, flown.text()
+
+
+def assert_every_bridge_before_the_instant(out: dict) -> None:
+    """Every bridge heard the planner's pass start before its instant: none joined late."""
+    for k in UAVS:
+        log = out[f"bridge{k}"].text()
+        ahead = re.findall(r"pass start from the planner \(.*\): in ([\d.]+) s", log)
+        assert ahead and "joining the pass" not in log, log[-2000:]
 
 
 def assert_slot0_on_the_pass_start(out: dict) -> None:
@@ -216,7 +126,8 @@ def assert_slot0_on_the_pass_start(out: dict) -> None:
 
 def test_a_cut_link_loses_the_uav_on_the_ground_and_holds_it_in_the_air(lab, ros_domain,
                                                                           tmp_path):
-    out = start_swarm(lab, ros_domain, tmp_path, "static")
+    out = start_swarm(lab, ros_domain, tmp_path, "static", num_slots=NUM_SLOTS,
+                      uav_timeout_s=UAV_TIMEOUT_S, gcs_timeout_s=GCS_TIMEOUT_S).out
     procs = [o.proc for o in out.values()]
     assert wait_for(lambda: all(out[f"agent{k}"].first(r"slot 0 started") for k in UAVS),
                     150.0, procs), \
