@@ -171,3 +171,17 @@ def test_a_planner_gone_from_the_graph_is_forgotten(plans):
     assert pairing.choose(["/planner2"], ["/planner2"]) is None  # /planner left
     _pair(pairing, single, PlanId(12, 0, "/planner2"))
     assert pairing.choose(["/planner2"], ["/planner2"])[1].plan_id == PlanId(12, 0, "/planner2")
+
+
+def test_a_killed_planner_still_in_the_graph_beside_its_successor_gives_way_to_it(plans):
+    """SIGKILLed, a planner's participant stays in the graph until the lease expires (20 s):
+    its successor under the same name is followed at once with its own, newer plan."""
+    proposed, single = plans
+    pairing = PlanPairing()
+    _pair(pairing, proposed, PlanId(10, 0, "/planner"))
+    assert pairing.choose(["/planner"], ["/planner"])[1].plan_id == PlanId(10, 0, "/planner")
+    twice = ["/planner", "/planner"]
+    assert pairing.choose(twice, twice) is None  # nothing new yet
+    _pair(pairing, single, PlanId(30, 0, "/planner"))  # the successor's plan
+    assert pairing.choose(twice, twice)[1].plan_id == PlanId(30, 0, "/planner")
+    assert pairing.choose(twice, ["/planner", "/planner2"]) is None  # two names: holds

@@ -14,8 +14,11 @@ the sole publisher of both topics in the ROS graph:
   so a plan is adopted only on a graph check that names its planner as the sole publisher,
   done on arrival and again every GRAPH_PERIOD_S; and a planner that leaves the graph has
   its plans forgotten, so one restarted under the same name is followed only with its own.
-  Limit: two live processes under one name, whose data beats the graph, cannot be told apart
-  until the graph shows both.
+- several publishers under ONE name: a planner SIGKILLed and started again, whose dead
+  participant stays in the graph until the middleware's lease expires (20 s in Fast DDS,
+  measured across hosts): that name's newest plan is followed (its stamps increase), with a
+  warning. Limit: two live planners under one name cannot be told apart; each of them warns
+  of the other (ros/plan_watch.py).
 With `flown_topic` (an agent's `uav{K}/plan`), the plan in use is published there
 (std_msgs/String, latched) as its identity label, for the planner to report which plan each
 agent flies. `prefix` starts every log line (e.g. "uav1: "). The topics are those of
@@ -92,9 +95,10 @@ class PlanPairing:
             for stamp in [s for s, p in self._powers.items() if p.plan_id.planner == gone]:
                 del self._powers[stamp]
         self._in_graph = present
-        if len(formation_pubs) != 1 or list(power_pubs) != list(formation_pubs):
+        names = set(formation_pubs)
+        if len(names) != 1 or set(power_pubs) != names:
             return None
-        pair = self.latest.get(formation_pubs[0])
+        pair = self.latest.get(next(iter(names)))
         if pair is None or pair[1].plan_id == self.current:
             return None
         self.current = pair[1].plan_id
@@ -179,7 +183,12 @@ class PlanGate:
         held = tuple(formation_pubs) if len(formation_pubs) > 1 else ()
         if held != self._held:
             self._held = held
-            if held:
+            if held and len(set(held)) == 1:
+                log.warning(f"{self._prefix}{len(held)} publishers of formation under one "
+                            f"name, {held[0]}: a planner started again while its killed "
+                            "predecessor is still in the graph (until the middleware's lease "
+                            "expires); following that name's newest plan")
+            elif held:
                 log.error(f"{self._prefix}{len(held)} publishers of formation "
                           f"({', '.join(held)}): keeping {self.current or 'no plan'}, "
                           "nothing new is applied until one remains")

@@ -79,21 +79,29 @@ class PlanWatch:
 
     def _publishers_status(self) -> report.Status:
         others = self.other_publishers()
+        same_name = bool(others) and set(others) == {self._me}
         if others != self._others:
             self._others = others
-            if others:
-                self._node.get_logger().error(_second_planner_text(others))
+            if same_name:
+                self._node.get_logger().warning(_second_planner_text(others, self._me))
+            elif others:
+                self._node.get_logger().error(_second_planner_text(others, self._me))
             else:
                 self._node.get_logger().info("this planner is the only publisher of formation")
         values = [("publishers", " ".join(sorted([self._me, *others])))]
         if others:
-            return report.Status(report.ERROR, PUBLISHERS_STATUS_NAME,
-                                 _second_planner_text(others), values)
+            return report.Status(report.WARN if same_name else report.ERROR,
+                                 PUBLISHERS_STATUS_NAME, _second_planner_text(others, self._me),
+                                 values)
         return report.Status(report.OK, PUBLISHERS_STATUS_NAME,
                              "this planner is the only publisher of formation", values)
 
 
-def _second_planner_text(others: list[str]) -> str:
+def _second_planner_text(others: list[str], me: str) -> str:
+    if set(others) == {me}:
+        return (f"another publisher of formation under this planner's name {me} (a killed "
+                "predecessor, until the middleware's lease expires, or a second planner under "
+                "one name): bridges and agents follow this name's newest plan")
     who = ", ".join(others)
     return (f"second planner {who} publishes formation: plans are not applied until one "
             "remains")
