@@ -239,7 +239,7 @@ class AgentNode(Node):
             return
         durations = self.mission.durations()
         if n < len(durations) and (n, durations[n]) in self.mission.off_speed():
-            planned = self.mission.line_time(n + 1) - self.mission.line_time(n)
+            planned = self.mission.planned_s[n]
             self.get_logger().warning(
                 f"{self.uav_name}: slot {n} took {durations[n]:.2f} s from its line to the "
                 f"next, planned {planned:.2f} s: not flown at the planned speed (held, or "

@@ -65,6 +65,9 @@ class ObservedMission(SlotSchedule):
         self.ramp_from_m: float | None = 0.0  # where the target ramps up (None: no ramp)
         self.slot_times_s: list[float] = []  # wall clock of the observation that started each
         self.end_time_s: float | None = None  # when the line after the last slot was reached
+        # each slot's planned duration, fixed when it ends: by the pass clock flown then (a
+        # later resumed start changes the clock, not what was planned for the slots before)
+        self.planned_s: list[float] = []
         self._history: deque[tuple[float, Vec3]] = deque()  # (read at, position), oldest first
 
     def actual_position(self) -> Vec3 | None:
@@ -120,13 +123,20 @@ class ObservedMission(SlotSchedule):
             self.slot_times_s.append(wall_time_s if before_t is None or not crossed else
                                      max(before_t + s * (wall_time_s - before_t),
                                          self.pass_start_s))
+            self._plan_ended(len(self.slot_times_s) - 2)
         if self.all_flown and here[1] >= self.slot_line(self.num_slots):
             self.phase = "done"
             line = self.slot_line(self.num_slots)
             crossed = before is not None and before_t is not None and before[1] < line
             self.end_time_s = (before_t + (line - before[1]) / (here[1] - before[1])
                                * (wall_time_s - before_t) if crossed else wall_time_s)
+            self._plan_ended(self.num_slots - 1)
         return started
+
+    def _plan_ended(self, n: int) -> None:
+        """Slot n just ended: keep its planned duration by the clock flown now."""
+        if n >= 0 and len(self.planned_s) == n:
+            self.planned_s.append(self.line_time(n + 1) - self.line_time(n))
 
     def line_time(self, n: int) -> float:
         """When the plan's target crosses slot n's line (wall clock; the pass started)."""
@@ -151,12 +161,9 @@ class ObservedMission(SlotSchedule):
 
     def off_speed(self) -> list[tuple[int, float]]:
         """(slot, duration) of every slot flown off the planned speed (module doc)."""
-        out = []
-        for n, d in enumerate(self.durations()):
-            planned = self.line_time(n + 1) - self.line_time(n)
-            if abs(d - planned) > max(SPEED_TOLERANCE * planned, OFF_SPEED_MIN_S):
-                out.append((n, d))
-        return out
+        return [(n, d) for n, (d, planned) in enumerate(zip(self.durations(), self.planned_s,
+                                                              strict=False))
+                if abs(d - planned) > max(SPEED_TOLERANCE * planned, OFF_SPEED_MIN_S)]
 
     def lag(self, wall_now_s: float) -> tuple[int, float, float] | None:
         """(next slot n, seconds since the clock put the UAV on its line, metres still to go
