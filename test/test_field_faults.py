@@ -151,3 +151,53 @@ def test_a_whole_mission_at_30_percent_loss_flies_in_formation(lossy_lab, ros_do
         assert "ground station silent" not in log, log[-3000:]  # no hold for lost heartbeats
     assert flown.spread() < SPREAD_MAX_M, flown.text()
     _assert_every_slot(swarm, flown, SLOT_MIN * SLOT_S)
+
+
+SILENT_SLOTS = 30
+SHORT_CUT_S = 3.5  # gcs_timeout_s 3 s: a hold, then the ground heard again at once
+LONG_CUT_S = 7.0  # 4 s of a 4.3 m/s pass held: 17 m behind, far more than 1 s of it
+
+
+def test_a_ground_heard_again_soon_is_rejoined_and_late_replans_the_uav_out(lab, ros_domain,
+                                                                           tmp_path):
+    """The radio to uav2 only (ground -> UAV) cut twice: its bridge holds on the silence
+    while the planner still hears its poses (issue 27's third fault: it held to the end, and
+    nothing was said). Back after a short cut it rejoins the pass; after a long one it says it
+    cannot keep the pass, and the planner re-plans without it while the others fly on."""
+    swarm = start_swarm(lab, ros_domain, tmp_path, "subnet", num_slots=SILENT_SLOTS,
+                        noise_std_m=0.0)
+    out, cut = swarm.out, uav_name(UAVS[-1])
+    pass_start = _started(swarm)
+    time.sleep(max(0.0, pass_start + 4 * SLOT_S - time.time()))
+    lab.switch(f"cut {cut} dir=out")
+    time.sleep(SHORT_CUT_S)
+    lab.switch(f"restore {cut} dir=out")
+    bridge = out[f"bridge{UAVS[-1]}"]
+    assert wait_for(lambda: bridge.first(r"rejoins the pass"), 5.0, swarm.procs()), \
+        _story(swarm)
+    time.sleep(4.0)
+    lab.switch(f"cut {cut} dir=out")
+    long_at = time.time()
+    time.sleep(LONG_CUT_S)
+    lab.switch(f"restore {cut} dir=out")
+    planner = out["planner"]
+    assert wait_for(lambda: planner.first(rf"{cut} lost at slot .*cannot keep the pass",
+                                          long_at), 15.0, swarm.procs()), _story(swarm)
+    others = [k for k in UAVS if k != UAVS[-1]]
+    assert wait_for(lambda: all(out[f"agent{k}"].first(r"mission complete") for k in others),
+                    SILENT_SLOTS * SLOT_S + FINISH_S, swarm.procs()), _story(swarm)
+    flown = _flown(swarm)
+    text = bridge.text()
+    assert text.count("ground station silent for") == 2, text[-3000:]
+    assert "cannot keep the pass, keeps holding" in text, text[-3000:]
+    assert "no target in the new plan" in text or "no target in the plan flown" in text, \
+        text[-3000:]
+    assert "ground station silent" not in "".join(out[f"bridge{k}"].text() for k in others)
+    for k in others:
+        assert f"mission complete: {SILENT_SLOTS} slots" in out[f"agent{k}"].text()
+    # the others flew on in formation, at the planned speed, through both cuts and the re-plan
+    survivors = Pass(read_bag(swarm.tmp_path / "bag"), others, SILENT_SLOTS, V_Y, SLOT_S)
+    print(survivors.text())
+    assert survivors.spread() < SPREAD_MAX_M, survivors.text()
+    assert not any(survivors.short_slots(SLOT_MIN * SLOT_S).values()), survivors.text()
+    assert len(flown.crossed[UAVS[-1]]) < SILENT_SLOTS + 1  # it stayed where it held

@@ -9,6 +9,7 @@ import math
 import pytest
 
 from uav_insar_planner import load_params
+from uav_insar_planner.mavlink.catch_up import CATCH_UP_MPS, CatchUp, governed
 from uav_insar_planner.mavlink.frames import TrackFrame
 from uav_insar_planner.mavlink.holding import Holding
 from uav_insar_planner.mavlink.pass_start import lags, planner_start, resume_where_held
@@ -155,3 +156,20 @@ def test_a_start_heard_too_late_holds_the_uav_rather_than_sprint():
     assert holding.hold.engaged(1) and "cannot keep the pass" in holding.phase(late)
     assert events == ["a new pass start: 9.00 m behind its target, more than the 2.00 m it may "
                       "catch up: cannot keep the pass, keeps holding (LOITER, no sprint)"]
+
+
+def test_a_rejoining_vehicle_catches_up_at_most_1_m_s_faster_than_the_pass():
+    pass_ = PassTrajectory(4.3, 0.0)
+    pass_.set_formation([(0.0, 0.0, 50.0)])
+    pass_.t_start, pass_.ramp = 0.0, False  # running for 10 s at t = 10
+    catch_ups = {0: CatchUp(10.0, 40.0, 4.3)}  # standing 3 m behind its target (43 m)
+    speeds, t = [], 10.0
+    while 0 in catch_ups:
+        position, velocity = governed(catch_ups, 0, pass_.target(0, t), t)
+        speeds.append(velocity[1])
+        t = round(t + 0.1, 6)
+        assert t < 60.0, "never caught up"
+    assert max(speeds) == pytest.approx(4.3 + CATCH_UP_MPS)
+    assert speeds[0] == 0.0 and speeds[:-1] == sorted(speeds[:-1])  # from rest, ramping up
+    assert governed(catch_ups, 0, pass_.target(0, t), t) == pass_.target(0, t)  # the clock's
+    print(f"3 m behind: caught up in {t - 10.0:.1f} s")

@@ -34,11 +34,12 @@ from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 
+from uav_insar_planner.mavlink.catch_up import CATCH_UP_FROM_M, CatchUp, governed
 from uav_insar_planner.mavlink.config import BridgeConfig
 from uav_insar_planner.mavlink.frames import TrackFrame, Vec3
 from uav_insar_planner.mavlink.guard import DropLog
 from uav_insar_planner.mavlink.holding import REJOIN_S, Holding
-from uav_insar_planner.mavlink.link import MAV, Link, LinkStats, Source
+from uav_insar_planner.mavlink.link import MAV, Link, LinkStats, Source, open_links
 from uav_insar_planner.mavlink.pass_start import (
     capture_start,
     lags,
@@ -58,7 +59,6 @@ from uav_insar_planner.mavlink.setpoints import (
     companion_heartbeat,
     setpoint_message,
 )
-from uav_insar_planner.mavlink.signing import read_key_file, signing_state
 from uav_insar_planner.mavlink.supervision import WatchedVehicle, is_vehicle_heartbeat
 from uav_insar_planner.mavlink.trajectory import PassTrajectory, clean_formation, separation
 from uav_insar_planner.swarm import MAX_UAVS
@@ -92,25 +92,13 @@ class Bridge:
         self._events: deque[BridgeEvent] = deque(maxlen=1000)
         self._pass = PassTrajectory(config.speed_mps, config.track_duration_s)
         self._start_label = ""  # the plan whose pass start the track clock is (planner)
+        self._catch_up: dict[int, CatchUp] = {}  # vehicles catching up after a rejoin
         self._drops = DropLog(clock=clock)
-        key = None
-        if config.signing_key_file:
-            try:
-                key, warning = read_key_file(config.signing_key_file)
-            except ValueError as exc:
-                raise ValueError(f"signing_key_file: {exc}") from None
-            if warning:
-                self._event(-1, "warn", warning)
-        self._links: dict[str, Link] = {}
+        self._links, warning = open_links(config.addresses(), config.source_sysid,
+                                          BRIDGE_COMPID, config.signing_key_file)
+        if warning:
+            self._event(-1, "warn", warning)
         addresses = config.addresses()
-        try:
-            for i, address in enumerate(dict.fromkeys(addresses)):
-                signing = None if key is None else signing_state(key, link_id=i)
-                self._links[address] = Link(address, config.source_sysid, BRIDGE_COMPID,
-                                            signing)
-        except ValueError as exc:
-            self.close()
-            raise ValueError(f"connections: {exc}") from None
         self.uavs = config.uavs()  # the UAV index of each vehicle
         self._vehicles = [WatchedVehicle(k, sysid, self._links[address],
                                          expected_source=self._links[address].peer_address)
@@ -234,9 +222,14 @@ class Bridge:
             self._event(-1, "info", text)
             lag = lags(self._vehicles, self._pass, self.frame, now)
         rejoin_m = self.config.speed_mps * REJOIN_S
-        self._holding.rejoin(self._vehicles, lag, rejoin_m, why)
+        given = self._holding.rejoin(self._vehicles, lag, rejoin_m, why)
         if late:
             self._holding.fall_back(self._vehicles, lag, rejoin_m, why)
+        for v in self._vehicles:  # behind a moving target: a gentle catch-up (`catch_up`)
+            if (v.uav in given or late and not self._holding.stopped(v)) and (
+                    lag[v.uav] or 0.0) > CATCH_UP_FROM_M:
+                y = self.frame.from_ned(*v.position_ned)[1]
+                self._catch_up[v.uav] = CatchUp(now, y, self.config.speed_mps)
 
     # ------------------------------------------------------------------ the I/O thread
     def _run(self) -> None:
@@ -376,7 +369,7 @@ class Bridge:
             if order := self._holding.order_due(v, now):
                 self._send_command(v, order.command, order.params)
                 order.sent(v, now)
-            target = self._pass.target(v.uav, now)
+            target = governed(self._catch_up, v.uav, self._pass.target(v.uav, now), now)
             ardupilot = self.config.autopilot == "ardupilot"
             holding = ardupilot and (self._running(v) or v.custom_mode != COPTER_MODE_GUIDED)
             if target is None or holding or self._holding.stopped(v):

@@ -122,12 +122,13 @@ class Holding:
                                f"{self.hold.mode_name} to every vehicle")
 
     def rejoin(self, vehicles: Sequence[WatchedVehicle], lags: Mapping[int, float | None],
-               rejoin_m: float, why: str) -> None:
+               rejoin_m: float, why: str) -> list[int]:
         """Give back every held vehicle whose target is at most `rejoin_m` ahead of it
         (`lags`, metres along track; None: no target or no position), see the module doc;
-        `why` names the occasion for the log."""
+        `why` names the occasion for the log; the UAVs given back."""
+        given: list[int] = []
         if self.gcs.silent:
-            return  # still silent: nothing is given back
+            return given  # still silent: nothing is given back
         for v in vehicles:
             if v.uav not in self._stopped:
                 continue
@@ -135,6 +136,7 @@ class Holding:
             if lag is not None and lag <= rejoin_m:
                 self._give_back(v, f"{why}: rejoins the pass, {max(lag, 0.0):.2f} m behind its "
                                    f"target (rejoin limit {rejoin_m:.2f} m)")
+                given.append(v.uav)
                 continue
             text = ("no target in the plan flown: keeps holding" if lag is None else
                     f"{lag:.2f} m behind its target, more than the {rejoin_m:.2f} m it may "
@@ -142,6 +144,7 @@ class Holding:
             if self.behind.get(v.uav) != text:
                 self.behind[v.uav] = text
                 self._emit(v.uav, "warn", f"{why}: {text}")
+        return given
 
     def fall_back(self, vehicles: Sequence[WatchedVehicle], lags: Mapping[int, float | None],
                   rejoin_m: float, why: str) -> None:

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from uav_insar_planner.mavlink.signing import SigningParser
+from uav_insar_planner.mavlink.signing import SigningParser, read_key_file, signing_state
 from uav_insar_planner.mavlink.tcp import TcpClient
 
 #: The MAVLink 2 dialect module (message classes, MAV_* constants) every user of this link
@@ -287,3 +287,26 @@ class Link:
             self.conn.close()
         except (OSError, ValueError):
             pass
+
+
+def open_links(addresses: list[str], sysid: int, compid: int, key_file: str
+               ) -> tuple[dict[str, Link], str]:
+    """One Link per distinct address, every one signing with the key of `key_file` (""
+    unsigned), as (links by address, the key file's warning or ""); ValueError naming the
+    parameter (signing_key_file or connections), with every link opened so far closed."""
+    key, warning = None, ""
+    if key_file:
+        try:
+            key, warning = read_key_file(key_file)
+        except ValueError as exc:
+            raise ValueError(f"signing_key_file: {exc}") from None
+    links: dict[str, Link] = {}
+    try:
+        for i, address in enumerate(dict.fromkeys(addresses)):
+            links[address] = Link(address, sysid, compid,
+                                  None if key is None else signing_state(key, link_id=i))
+    except ValueError as exc:
+        for link in links.values():
+            link.close()
+        raise ValueError(f"connections: {exc}") from None
+    return links, warning or ""
