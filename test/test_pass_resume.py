@@ -79,7 +79,8 @@ class FakeBridges:
             message="holding (LOITER): 9.00 m behind its target ...",
             values=[KeyValue(key="pass_plan", value=label),
                     KeyValue(key="behind", value="9.00 m behind its target, more than the "
-                                                 "4.30 m it may catch up")])
+                                                 "4.30 m it may catch up: cannot keep the "
+                                                 "pass, keeps holding")])
             for k in self.held]))
 
     def hold(self, ks) -> None:

@@ -249,7 +249,7 @@ class PassStart:
             if everyone is not None:
                 self._resume(everyone, delay, "every flown UAV holds behind its target")
             for k, why in left_behind:
-                self._declare_lost(k, f"cannot keep the pass: {why}")
+                self._declare_lost(k, why)  # (the bridge's words: "... cannot keep the pass")
             return
         if rear is not None:
             self._resume(rear, delay, "the UAVs are on their tracks past the start line "
