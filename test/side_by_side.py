@@ -4,8 +4,9 @@ A test module registers its flight with `@flight(name, group)`: a function of a 
 directory and a private ROS domain that flies it and returns what the checks need (or raises
 AssertionError naming what did not happen). Its test carries `@pytest.mark.side_by_side(name)`
 and asks the session fixture `side_by_side` (conftest) for `result(name)`. The first such
-request starts every flight of that group whose test was selected, each in a thread of its
-own; each test then waits for its own flight and gets its result, or its exception re-raised.
+request (or a `start(group)` from a test that runs beside them) starts every flight of that
+group whose test was selected, each in a thread of its own; each test then waits for its own
+flight and gets its result, or its exception re-raised.
 
 Why: an ArduCopter SITL test mostly waits (its EKF takes about 25 s of wall time to use GPS,
 then the pass is flown in real time), and takes a small share of a core while it does. Four
@@ -63,14 +64,19 @@ class SideBySide:
         f.thread = threading.Thread(target=run, name=f"flight {f.name}")
         f.thread.start()
 
+    def start(self, group: str, also: Flight | None = None) -> None:
+        """Starts every selected flight of `group` (and `also`) not yet started: a test that
+        runs beside them calls it first, then goes on with its own work."""
+        with self.lock:
+            for f in _FLIGHTS.values():
+                if f.thread is None and f.group == group and (f.name in self.selected
+                                                              or f is also):
+                    self._start(f)
+
     def result(self, name: str) -> object:
         """Flight `name`'s result, once it has flown; its exception if it failed."""
         own = _FLIGHTS[name]
-        with self.lock:
-            for f in _FLIGHTS.values():
-                if f.thread is None and f.group == own.group and (
-                        f.name in self.selected or f is own):
-                    self._start(f)
+        self.start(own.group, own)
         own.thread.join()
         if len(own.outcome) == 2:
             raise own.outcome[1]
