@@ -5,8 +5,9 @@ directory and a private ROS domain that flies it and returns what the checks nee
 AssertionError naming what did not happen). Its test carries `@pytest.mark.side_by_side(name)`
 and asks the session fixture `side_by_side` (conftest) for `result(name)`. The first such
 request (or a `start(group)` from a test that runs beside them) starts every flight of that
-group whose test was selected, each in a thread of its own; each test then waits for its own
-flight and gets its result, or its exception re-raised.
+group whose test was selected, each in a thread of its own; the first result waits for all of
+them, so nothing of the group flies on beside the tests that follow. Each test gets its own
+flight's result, or its exception re-raised.
 
 Why: an ArduCopter SITL test mostly waits (its EKF takes about 25 s of wall time to use GPS,
 then the pass is flown in real time), and takes a small share of a core while it does. Four
@@ -74,10 +75,13 @@ class SideBySide:
                     self._start(f)
 
     def result(self, name: str) -> object:
-        """Flight `name`'s result, once it has flown; its exception if it failed."""
+        """Flight `name`'s result, once every started flight of its group has flown (so none
+        flies on beside the tests that follow); its exception if it failed."""
         own = _FLIGHTS[name]
         self.start(own.group, own)
-        own.thread.join()
+        for f in _FLIGHTS.values():
+            if f.group == own.group and f.thread is not None:
+                f.thread.join()
         if len(own.outcome) == 2:
             raise own.outcome[1]
         return own.outcome[0]

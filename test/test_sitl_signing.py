@@ -24,7 +24,7 @@ BASE = 5760 + 10 * INSTANCE
 ARDUCOPTER = Path(__file__).resolve().parent.parent.parent / "shared" / "sitl" / "arducopter"
 KEY = bytes(range(1, 33))
 pytestmark = [
-    pytest.mark.timeout(120),
+    pytest.mark.timeout(240),  # it may wait for the other SITL flights (side_by_side.py)
     pytest.mark.skipif(not ARDUCOPTER.exists(),
                        reason=f"ArduCopter SITL not found at {ARDUCOPTER}: a user's machine "
                               "does not have it"),
