@@ -18,7 +18,6 @@ import numpy as np
 import process_group
 import pytest
 from geometry_msgs.msg import Pose, PoseArray
-from side_by_side import flight
 
 from uav_insar_planner.ros import plan_msgs
 from uav_insar_planner.swarm import uav_name
@@ -97,13 +96,10 @@ def _last_slot(w, k: int) -> int:
 
 
 def test_a_slave_lost_from_five_is_replanned_to_four_and_the_survivors_finish(ros_context,
-                                                                                procs,
-                                                                                side_by_side):
+                                                                                procs):
     """Five agent processes and the planner; agent 3's process group is killed (the fault) in
     mid-mission: the planner publishes a plan with uav3's row NaN (power zero) and the other
-    four finite, and uav0, 1, 2 and 4 fly every slot. The module's two demo runs (each on its
-    own domain and ports) fly beside it (test/side_by_side.py)."""
-    side_by_side.start("num-uavs")
+    four finite, and uav0, 1, 2 and 4 fly every slot."""
     n, slots, lost = 5, 40, 3
     w = _watcher(ros_context, n)
     try:
@@ -148,29 +144,13 @@ def _run_group(cmd: list[str], timeout: float) -> tuple[int, str]:
     return done.returncode, done.stdout
 
 
-@flight("demo-five", "num-uavs")
-def demo_five(tmp_path: Path, domain: int) -> dict:
-    """`demo --uavs 5` recorded, then `uav-insar report` of its bag: their exit codes and
-    outputs, and where the report is."""
+def test_demo_flies_five_vehicles_and_the_report_follows_the_bag(ros_domain, tmp_path):
+    """`demo --uavs 5`: five agents, five vehicles flown by the bridge over MAVLink, recorded;
+    `uav-insar report` of the bag has five UAVs in its table and a five-UAV layout."""
     bag = tmp_path / "five"
     code, out = _run_group([sys.executable, "-m", "uav_insar_planner.demo", "--uavs", "5",
                             "--num-slots", "6", "--bag", str(bag),
-                            "--domain-id", str(domain)], 200.0)
-    if code != 0:
-        return {"code": code, "out": out}
-    report_code, report = _run_group([sys.executable, "-m", "uav_insar_planner.cli", "report",
-                                      str(bag), "--out", str(tmp_path / "r"), "--no-progress"],
-                                     120.0)
-    return {"code": code, "out": out, "report_code": report_code, "report": report,
-            "report_dir": tmp_path / "r"}
-
-
-@pytest.mark.side_by_side("demo-five")
-def test_demo_flies_five_vehicles_and_the_report_follows_the_bag(side_by_side):
-    """`demo --uavs 5`: five agents, five vehicles flown by the bridge over MAVLink, recorded;
-    `uav-insar report` of the bag has five UAVs in its table and a five-UAV layout."""
-    five = side_by_side.result("demo-five")
-    code, out = five["code"], five["out"]
+                            "--domain-id", str(ros_domain)], 200.0)
     assert code == 0, out[-4000:]
     assert "5 UAVs, 6 slots" in out and "MAVLink vehicles sysid 2..6" in out
     for k in range(5):
@@ -184,26 +164,20 @@ def test_demo_flies_five_vehicles_and_the_report_follows_the_bag(side_by_side):
     for k, m in slots.items():
         assert float(m[3]) >= -0.02 * rate_min_bps[k], m[0]
     assert "uav5" not in out
-    report, where = five["report"], five["report_dir"]
-    assert five["report_code"] == 0, report
+    code, report = _run_group([sys.executable, "-m", "uav_insar_planner.cli", "report",
+                               str(bag), "--out", str(tmp_path / "r"), "--no-progress"], 120.0)
+    assert code == 0, report
     assert [f"{uav_name(k)}: on the track" in report for k in range(5)] == [True] * 5, report
-    layout = json.loads((where / "foxglove_layout.json").read_text())
+    layout = json.loads((tmp_path / "r" / "foxglove_layout.json").read_text())
     labels = [p["label"] for p in layout["configById"]["Plot!rate"]["paths"]]
     assert labels == [uav_name(k) for k in range(5)]
-    assert report.strip().splitlines()[-1].endswith(str(where / "foxglove_layout.json"))
+    assert report.strip().splitlines()[-1].endswith(str(tmp_path / "r" / "foxglove_layout.json"))
 
 
-@flight("demo-two", "num-uavs")
-def demo_two(workdir: Path, domain: int) -> tuple[int, str]:
-    """`demo --uavs 2`, self-flown at time scale 40 (`workdir` is unused: --no-bag)."""
-    return _run_group([sys.executable, "-m", "uav_insar_planner.demo", "--uavs", "2",
-                       "--num-slots", "6", "--time-scale", "40", "--no-mavlink",
-                       "--no-bag", "--domain-id", str(domain)], 150.0)
-
-
-@pytest.mark.side_by_side("demo-two")
-def test_demo_flies_two_uavs_on_the_mission_clock(side_by_side):
-    code, out = side_by_side.result("demo-two")
+def test_demo_flies_two_uavs_on_the_mission_clock(ros_domain):
+    code, out = _run_group([sys.executable, "-m", "uav_insar_planner.demo", "--uavs", "2",
+                            "--num-slots", "6", "--time-scale", "40", "--no-mavlink",
+                            "--no-bag", "--domain-id", str(ros_domain)], 150.0)
     assert code == 0, out[-4000:]
     assert "2 UAVs, 6 slots" in out and "uav1 (R_min 16.95 Mbit/s)" in out
     assert "uav2" not in out
