@@ -127,17 +127,17 @@ def watcher(ros_context):
 
 
 @contextmanager
-def private_graph(num_uavs: int = 3):
-    """A private domain of its own for processes started with `env` (discovery on this host,
-    no static peers), and a TopicWatcher of `num_uavs` UAVs' topics on it; both shut down on
-    leaving, so nothing of it stays on the graph for the tests that follow. Yields (env,
-    watcher)."""
+def private_graph(num_uavs: int = 3, domain: int | None = None):
+    """A private domain of its own (`domain`, or the next free one) for processes started with
+    `env` (discovery on this host, no static peers), and a TopicWatcher of `num_uavs` UAVs'
+    topics on it; both shut down on leaving, so nothing of it stays on the graph for the tests
+    that follow. Yields (env, watcher)."""
     import rclpy
 
     from uav_insar_planner.demo.processes import ros_env
     from uav_insar_planner.ros.tools.topic_watcher import TopicWatcher
 
-    domain = _next_domain()
+    domain = _next_domain() if domain is None else domain
     env = dict(ros_env(domain), PYTHONPATH=str(REPO))
     env.pop("ROS_STATIC_PEERS", None)
     ctx = rclpy.Context()
@@ -193,3 +193,16 @@ def mission(tmp_path_factory):
         finally:
             stop_nodes(nodes + [recorder])
     yield seen
+
+
+@pytest.fixture(scope="session")
+def side_by_side(request, tmp_path_factory):
+    """The session's slow flights flown side by side (test/side_by_side.py): those whose
+    tests were selected start together on the first request of their group."""
+    from side_by_side import SideBySide
+
+    selected = {m.args[0] for item in request.session.items
+                for m in item.iter_markers("side_by_side")}
+    flights = SideBySide(selected, tmp_path_factory.mktemp, _next_domain)
+    yield flights
+    flights.close()

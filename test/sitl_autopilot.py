@@ -2,8 +2,8 @@
 agents on `position_source:=autopilot`: what test_sitl_wind.py asserts and
 benchmarks/sitl_wind.py prints. Not a test file.
 
-Processes, all on one private ROS domain: three `arducopter` instances (-I0..-I2, TCP
-5760/5770/5780, one working directory each, wind from a parm file given to --defaults after
+Processes, all on one private ROS domain: three `arducopter` instances (SERIAL0 on TCP
+BASE_PORTS, one working directory each, wind from a parm file given to --defaults after
 ArduPilot's copter.parm), `uav-insar record`, `mavlink_bridge` (arm_and_takeoff, track origin
 ORIGIN_N_M north of home, so the copters reach the pass start from behind it, moving forward),
 three agents and the planner. The watcher in this process keeps every uavK/mavlink/pose.
@@ -11,7 +11,7 @@ three agents and the planner. The watcher in this process keeps every uavK/mavli
 `fly` returns the figures: per UAV its across-track error x - x_k and height error z - z_k on
 the pass (the poses between the first and the one-past-last slot line), mean, std and max; the
 distance between the two slaves (3-D, uav2 interpolated at uav1's stamps) on the pass, against
-the plan's; the report's sigma_h planned and flown (report.recorded on the bag).
+the plan's; the report's sigma_h planned and flown (report.recorded on the bag); the bag.
 """
 from __future__ import annotations
 
@@ -29,25 +29,30 @@ SITL_DIR = REPO.parent / "shared" / "sitl"
 ARDUCOPTER = SITL_DIR / "arducopter"
 SPEEDUP = 2  # as test_sitl.py: stable with three instances on a 2-core machine
 HOME = "-35.363261,149.165230,584,353"
-PORTS = (5760, 5770, 5780)
+# SERIAL0 of each copter; SERIAL1/2 at +2/+3, its RC input at +1 and IRLock at +4 (UDP): clear
+# of test_sitl.py's -I0..-I2, which flies side by side with this mission (side_by_side.py)
+BASE_PORTS = (32200, 32210, 32220)
 SYSIDS = (2, 3, 4)
 ORIGIN_N_M = 20.0  # track y = N - 20: home is 20 m behind the pass start
 N_SLOTS = 12  # 12 slots of 1 s at Table I's 4.3 m/s: a 51.6 m pass
 WIND_DIR_DEG = 90.0  # from the east: across the track (y = north), pushing towards -x
 
 
-def sitl_command(instance: int, sysid: int, parm: Path) -> list[str]:
-    """arducopter instance `instance` (ports 5760 + 10 * instance) with ArduPilot's copter.parm
-    and then `parm` as defaults, at HOME."""
-    return [str(ARDUCOPTER), "--model", "+", "--speedup", str(SPEEDUP), f"-I{instance}",
+def sitl_command(sysid: int, parm: Path, base_port: int | None = None) -> list[str]:
+    """arducopter with ArduPilot's copter.parm and then `parm` as defaults, at HOME: instance 0
+    (SERIAL0 on TCP 5760), or with every port moved to `base_port` and after (BASE_PORTS)."""
+    ports = [] if base_port is None else [
+        "--base-port", str(base_port), "--rc-in-port", str(base_port + 1),
+        "--irlock-port", str(base_port + 4)]
+    return [str(ARDUCOPTER), "--model", "+", "--speedup", str(SPEEDUP), *ports, "-I0",
             "--sysid", str(sysid), "--defaults", f"{SITL_DIR / 'copter.parm'},{parm}",
             "--home", HOME]
 
 
 def start_sitl(k: int, workdir: Path, parm: Path) -> subprocess.Popen:
     log = open(workdir / "sitl.log", "w")  # noqa: SIM115 - closed with the process
-    return subprocess.Popen(sitl_command(k, SYSIDS[k], parm), cwd=workdir, stdout=log,
-                            stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+    return subprocess.Popen(sitl_command(SYSIDS[k], parm, BASE_PORTS[k]), cwd=workdir,
+                            stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
                             start_new_session=True)
 
 
@@ -99,7 +104,7 @@ def fly(wind_mps: float, turbulence: float, workdir: Path, domain: int,
             sitls.append(start_sitl(k, workdir / f"copter{k}", parm))
         nodes.append(start_process([sys.executable, "-m", "uav_insar_planner.ros.tools.record",
                                     str(bag)], env))
-        connections = ", ".join(f"'tcp:127.0.0.1:{p}'" for p in PORTS)
+        connections = ", ".join(f"'tcp:127.0.0.1:{p}'" for p in BASE_PORTS)
         nodes.append(start_node("mavlink_bridge", [
             "-p", f"connections:=[{connections}]", "-p", "target_sysids:=[2, 3, 4]",
             "-p", "arm_and_takeoff:=true", "-p", "velocity_feedforward:=true",
@@ -131,6 +136,7 @@ def fly(wind_mps: float, turbulence: float, workdir: Path, domain: int,
     y1 = y0 + N_SLOTS * params.speed * params.slot_duration_s
     on_pass = {k: pass_rows(w.mavlink_poses[k], y0, y1) for k in range(3)}
     figures: dict = {"wind_mps": wind_mps, "turbulence": turbulence, "recorder": code,
+                     "bag": bag,
                      "mission_s": round(mission_s, 1),
                      "slots": [len(w.rates[k]) for k in range(3)],
                      "offload_slots": [[int(o[0]) for o in w.offloads[k]] for k in range(3)],

@@ -117,7 +117,7 @@ def start_hosts(lab: NetLab, domain: int, workdir: Path) -> Flight:
         copter.mkdir()
         # each SITL is instance 0 of its own host: the same ports, on different loopbacks
         with open(copter / "sitl.log", "w") as log:
-            lab.start(host, sitl.sitl_command(0, sysid, parm), cwd=copter, stdout=log,
+            lab.start(host, sitl.sitl_command(sysid, parm), cwd=copter, stdout=log,
                       stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)
         flight.truth[k] = copter / "simstate.csv"
         with open(copter / "simstate.log", "w") as log:

@@ -1,29 +1,56 @@
 """`make demo` end to end: the demo module as a user runs it (a subprocess that starts the
 planner, three agents, three MAVLink vehicles and the bridge as processes of their own; the
 agents on position_source:=autopilot take their positions from the bridge-flown vehicles), and
-the same brought up as one stack per UAV (`--per-uav-stacks`)."""
+the same brought up as one stack per UAV (`--per-uav-stacks`). The four runs that fly a
+mission run side by side (the `demos` fixture), each checked by its own test."""
 from __future__ import annotations
 
 import re
 import subprocess
 import sys
+from concurrent.futures import Future, ThreadPoolExecutor
 
 import process_group
 import pytest
 
 pytestmark = pytest.mark.timeout(90)
+DEMO = [sys.executable, "-m", "uav_insar_planner.demo"]
 SLOTS_LINE = re.compile(r"uav(\d): x= *[-\d.]+ m z= *[-\d.]+ m  10/10 slots, (rate met in every "
                         r"slot|missed in \d+), worst margin ([-+\d.e]+) bit/s")
 MAVLINK_LINE = re.compile(r"uav(\d) via MAVLink: across-track error max ([\d.]+) m, "
                           r"final ([\d.]+) m; flew ([-\d.]+) m along track \(pass ([\d.]+) m\)")
 
 
-def test_demo_flies_the_whole_chain_and_exits_0(ros_domain, repo, tmp_path):
-    bag = tmp_path / "demo_bag"
-    proc = process_group.run(
-        [sys.executable, "-m", "uav_insar_planner.demo", "--num-slots", "10",
-         "--domain-id", str(ros_domain), "--bag", str(bag)],
-        cwd=repo, capture_output=True, text=True, timeout=60)
+@pytest.fixture(scope="module")
+def demos(tmp_path_factory) -> dict[str, Future]:
+    """The four demo runs that fly a mission, started side by side (each on a ROS domain of its
+    own, its vehicles on free ports; each mostly waits for its flight, in real time or at
+    --time-scale 40): name -> the future of (CompletedProcess, bag)."""
+    from conftest import REPO, _next_domain
+
+    tmp = tmp_path_factory.mktemp("demos")
+    runs = {  # name: (options, bag, timeout, stderr into stdout)
+        "chain": (["--num-slots", "10"], tmp / "demo_bag", 60, False),
+        "stacks": (["--per-uav-stacks", "--num-slots", "6"], tmp / "stacks_bag", 80, True),
+        "no_mavlink": (["--num-slots", "5", "--time-scale", "40", "--no-mavlink"], None, 60,
+                       False),
+        "closed_loop": (["--num-slots", "8", "--time-scale", "40", "--no-mavlink",
+                         "--offloading", "closed", "--fading", "--wind", "5", "0", "0",
+                         "--seed", "3"], None, 60, False)}
+
+    def run(options: list[str], bag, timeout: float, merged: bool):
+        where = ["--bag", str(bag)] if bag else ["--no-bag"]
+        streams = {"stdout": subprocess.PIPE, "stderr": subprocess.STDOUT} if merged else {
+            "capture_output": True}
+        return process_group.run([*DEMO, *options, "--domain-id", str(_next_domain()), *where],
+                                 cwd=REPO, text=True, timeout=timeout, **streams), bag
+
+    with ThreadPoolExecutor(len(runs)) as pool:
+        return {name: pool.submit(run, *how) for name, how in runs.items()}
+
+
+def test_demo_flies_the_whole_chain_and_exits_0(demos):
+    proc, bag = demos["chain"].result()
     out = proc.stdout
     assert proc.returncode == 0, out + proc.stderr
     summary = out[out.index("\nsummary"):]
@@ -48,11 +75,8 @@ def test_demo_flies_the_whole_chain_and_exits_0(ros_domain, repo, tmp_path):
     assert_both_readers_decode(bag, mavlink=True, slots=10)
 
 
-def test_demo_without_mavlink_starts_no_bridge(ros_domain, repo):
-    proc = process_group.run(
-        [sys.executable, "-m", "uav_insar_planner.demo", "--num-slots", "5",
-         "--time-scale", "40", "--no-mavlink", "--no-bag", "--domain-id", str(ros_domain)],
-        cwd=repo, capture_output=True, text=True, timeout=60)
+def test_demo_without_mavlink_starts_no_bridge(demos):
+    proc, _ = demos["no_mavlink"].result()
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert "[bridge]" not in proc.stdout and "MAVLink" not in proc.stdout
     assert "(exit codes [0, 0, 0, 0])" in proc.stdout
@@ -76,12 +100,8 @@ def test_self_flown_options_without_no_mavlink_exit_2(repo):
         assert f"{option[0]}: applies to self-flown agents only" in line, proc.stderr
 
 
-def test_demo_flies_closed_loop_under_fading_and_wind(ros_domain, repo):
-    proc = process_group.run(
-        [sys.executable, "-m", "uav_insar_planner.demo", "--num-slots", "8", "--time-scale",
-         "40", "--no-mavlink", "--offloading", "closed", "--fading", "--wind", "5", "0", "0",
-         "--seed", "3", "--no-bag", "--domain-id", str(ros_domain)],
-        cwd=repo, capture_output=True, text=True, timeout=60)
+def test_demo_flies_closed_loop_under_fading_and_wind(demos):
+    proc, _ = demos["closed_loop"].result()
     assert proc.returncode == 0, proc.stdout + proc.stderr
     summary = proc.stdout[proc.stdout.index("\nsummary"):]
     energies = [float(e) for e in re.findall(r"energy ([\d.]+) of 594 J", summary)]
@@ -95,14 +115,10 @@ def test_bad_wind_exits_2(repo):
     assert proc.returncode == 2 and "--wind" in proc.stderr
 
 
-def test_demo_flies_one_stack_per_uav(ros_domain, repo, tmp_path):
+def test_demo_flies_one_stack_per_uav(demos):
     """--per-uav-stacks: a bridge per UAV in /uavK flying its own vehicle, the agents in
     /uavK, and the planner's one start for every pass; the mission still completes."""
-    bag = tmp_path / "stacks_bag"
-    proc = process_group.run(
-        [sys.executable, "-m", "uav_insar_planner.demo", "--per-uav-stacks", "--num-slots",
-         "6", "--domain-id", str(ros_domain), "--bag", str(bag)],
-        cwd=repo, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=80)
+    proc, bag = demos["stacks"].result()
     out = proc.stdout
     assert proc.returncode == 0, out[-4000:]
     starts = re.findall(r"\[uav(\d)\.mavlink_bridge\]: swarm: pass start from the planner "

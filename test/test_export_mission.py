@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 import process_group
 import pytest
+from side_by_side import flight
 
 from uav_insar_planner import load_params
 from uav_insar_planner.cli import main as cli
@@ -556,7 +557,23 @@ def crossing(track: list[tuple], y: float, after: float) -> tuple:
 @pytest.mark.timeout(300)
 @pytest.mark.skipif(not ARDUCOPTER.exists(), reason=f"ArduCopter SITL not found at "
                     f"{ARDUCOPTER}: a user's machine does not have it")
-def test_sitl_three_copters_fly_their_files(tmp_path):
+@pytest.mark.side_by_side("sitl-mission-files")
+def test_sitl_three_copters_fly_their_files(side_by_side):
+    figures = side_by_side.result("sitl-mission-files")
+    print("SITL export-mission figures:", figures)
+    for k in UAVS:
+        ground = RAISED_M if k == RAISED else 0.0
+        assert abs(figures[f"uav{k}_ground_above_origin_m"] - ground) < 1.0, figures
+        assert 0.0 <= figures[f"uav{k}_depart_after_start_s"] < 2.0, figures
+        assert abs(figures[f"uav{k}_pass_start_dx_m"]) < 0.5, figures
+        assert abs(figures[f"uav{k}_pass_start_dz_m"]) < 0.5, figures
+    assert figures["along_track_spread_own_clocks_m"] < 1.0, figures
+
+
+@flight("sitl-mission-files", "sitl")
+def fly_files(tmp_path: Path, domain: int) -> dict:
+    """Three SITL copters fly their exported files in AUTO, side by side with the suite's other
+    SITL flights (test/side_by_side.py; no ROS here, `domain` is unused); the figures."""
     import time
 
     copters: list[Copter] = []
@@ -638,11 +655,4 @@ def test_sitl_three_copters_fly_their_files(tmp_path):
         (max(v[0] for v in at_zero.values()) - first) * SITL_SPEEDUP, 3)
     # each on its own clock, 3 s after the start: the spread with clocks that agree (GNSS)
     figures["along_track_spread_own_clocks_m"] = round(float(max(ys_own) - min(ys_own)), 3)
-    print("SITL export-mission figures:", figures)
-    for c in copters:
-        ground = RAISED_M if c.k == RAISED else 0.0
-        assert abs(figures[f"uav{c.k}_ground_above_origin_m"] - ground) < 1.0, figures
-        assert 0.0 <= figures[f"uav{c.k}_depart_after_start_s"] < 2.0, figures
-        assert abs(figures[f"uav{c.k}_pass_start_dx_m"]) < 0.5, figures
-        assert abs(figures[f"uav{c.k}_pass_start_dz_m"]) < 0.5, figures
-    assert figures["along_track_spread_own_clocks_m"] < 1.0, figures
+    return figures

@@ -15,7 +15,8 @@ interpolated onto the line when the one before was behind it); every agent says 
 complete".
 
 Ports 29600-29699 (this file's own), a private ROS domain per run (conftest
-`private_graph`); one swarm run per take-off place, shared by the checks.
+`private_graph`); one swarm run per take-off place, shared by the checks, the runs flown side
+by side.
 """
 from __future__ import annotations
 
@@ -24,6 +25,7 @@ import signal
 import subprocess
 import threading
 import time
+from concurrent.futures import Future, ThreadPoolExecutor
 
 import numpy as np
 import process_group
@@ -89,16 +91,30 @@ def _stamp(msg) -> float:
     return msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
 
 
+@pytest.fixture(scope="module")
+def flights(tmp_path_factory) -> dict[str, Future]:
+    """Every case's swarm run, flown side by side (each mostly waits for its vehicles, which
+    fly in real time); case -> its future."""
+    plan = solve(load_params(overrides=SCENARIO))
+    with ThreadPoolExecutor(len(STARTS)) as pool:
+        return {case: pool.submit(fly, case, plan, tmp_path_factory.mktemp(f"field-{case}"))
+                for case in STARTS}
+
+
 @pytest.fixture(scope="module", params=list(STARTS))
-def flown(request, tmp_path_factory):
-    """One swarm run with every vehicle starting STARTS[param] metres along the track from
+def flown(request, flights):
+    """The run of case `param`, its exception if it failed."""
+    seen = flights[request.param].result()
+    print(f"\n{seen['case']}: run {seen['run_s']:.1f} s")
+    return seen
+
+
+def fly(case: str, plan, tmp) -> dict:
+    """One swarm run with every vehicle starting STARTS[case] metres along the track from
     its formation point; what was seen of it."""
     from conftest import private_graph
 
-    case = request.param
     params = load_params(overrides=SCENARIO)
-    plan = solve(params)
-    tmp = tmp_path_factory.mktemp(f"field-{case}")
     params_file = tmp / "params.yaml"
     params_file.write_text(yaml.safe_dump({"/**": {"ros__parameters": {
         **SCENARIO, "velocity_feedforward": True,
@@ -161,8 +177,7 @@ def flown(request, tmp_path_factory):
             "logs": {n: o.text() for n, o in out.items()}, "uavs": list(uavs),
             "codes": {n: o.proc.returncode for n, o in out.items()},
             "run_s": time.monotonic() - t_begin}
-    print(f"\n{case}: run {seen['run_s']:.1f} s")
-    yield seen
+    return seen
 
 
 def pass_start(flown) -> float:

@@ -2,18 +2,23 @@
 in mid-mission (the fault), the planner and the other agents real `ros2 run`-style processes
 on a private domain, watched over real rclpy; what the operator sees on `formation`,
 `formation/power` and /diagnostics is asserted, and the new plan is re-checked with the
-independent checker (evaluate.py)."""
+independent checker (evaluate.py). The demo's kill run (its own processes and domain) runs
+beside the first test (test/side_by_side.py)."""
 from __future__ import annotations
 
 import math
 import signal
+import subprocess
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
 import process_group
 import pytest
+from conftest import REPO
 from diagnostic_msgs.msg import DiagnosticStatus
+from side_by_side import flight
 
 from uav_insar_planner import load_params, replan, solve
 from uav_insar_planner.demo.processes import stop_nodes
@@ -44,7 +49,8 @@ def last_slot(w, k) -> int:
     return int(w.offloads[k][-1][0]) if w.offloads[k] else -1
 
 
-def test_killed_slave_is_replanned_out_and_the_survivors_finish(watcher, procs):
+def test_killed_slave_is_replanned_out_and_the_survivors_finish(watcher, procs, side_by_side):
+    side_by_side.start("replanning")  # the demo's kill run (the last test) flies beside this
     params = load_params(CONFIG, {"num_slots": N})
     plan = solve(params)
     w = watcher
@@ -155,15 +161,21 @@ def test_killed_master_stops_the_mission_and_the_slaves_hold(watcher, procs):
     assert "holding position after" in agents[1].stdout.read()
 
 
-def test_demo_kill_uav_shows_the_replan_in_its_summary(ros_domain, repo):
-    import re
-    import sys
-
-    proc = process_group.run(
+@flight("demo-kill-uav", "replanning")
+def demo_kill_uav(workdir: Path, domain: int) -> subprocess.CompletedProcess:
+    """`make demo`'s kill run on its own domain (`workdir` is unused: --no-bag)."""
+    return process_group.run(
         [sys.executable, "-m", "uav_insar_planner.demo", "--num-slots", "30", "--no-mavlink",
          "--no-bag", "--kill-uav", "2", "--at", "3", "--uav-timeout", str(TIMEOUT_S),
-         "--domain-id", str(ros_domain)],
-        cwd=repo, capture_output=True, text=True, timeout=90)
+         "--domain-id", str(domain)],
+        cwd=REPO, capture_output=True, text=True, timeout=90)
+
+
+@pytest.mark.side_by_side("demo-kill-uav")
+def test_demo_kill_uav_shows_the_replan_in_its_summary(side_by_side):
+    import re
+
+    proc = side_by_side.result("demo-kill-uav")
     out = proc.stdout
     assert proc.returncode == 0, out + proc.stderr
     summary = out[out.index("\nsummary"):]

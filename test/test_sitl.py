@@ -5,8 +5,9 @@ Asserted: all three armed and airborne, within 0.5 m of the planned across-track
 and height (bridge's uavK/mavlink/pose vs /formation), moving along the pass; then one
 instance is killed mid-pass and its /diagnostics status says "lost" within
 heartbeat_timeout_s (5 s) + margin while the other two keep reporting poses. Skipped when the
-SITL binary is absent (a user's machine does not have it). Every SITL process is killed in a
-finalizer.
+SITL binary is absent (a user's machine does not have it). Every SITL and node process is
+killed when the flight ends. Flown side by side with the suite's other SITL flights
+(test/side_by_side.py), on a private ROS domain of its own.
 
 Time scale: SITL runs its physics SPEEDUP times faster than wall time, the bridge runs in wall
 time. Both ends tolerate it: ArduPilot's heartbeats come SPEEDUP times as often and the
@@ -22,6 +23,7 @@ from pathlib import Path
 
 import process_group
 import pytest
+from side_by_side import flight
 
 REPO = Path(__file__).resolve().parent.parent
 SITL_DIR = REPO.parent / "shared" / "sitl"
@@ -73,10 +75,33 @@ def uav_status(watcher, k: int):
     return None, {}
 
 
-def test_three_arducopters_cold_start_fly_the_pass_and_one_is_lost(
-        watcher, procs, tmp_path, request):
+@flight("sitl-cold-start", "sitl")
+def fly_cold_start(workdir: Path, domain: int) -> dict:
+    """The flight and its checks (module doc), on a private domain of its own; the figures."""
+    from conftest import private_graph
+
     sitls: list[subprocess.Popen] = []
-    request.addfinalizer(lambda: [kill(p) for p in sitls])
+    nodes: list[subprocess.Popen] = []
+    try:
+        with private_graph(domain=domain) as (env, watcher):
+            return _fly(workdir, env, watcher, sitls, nodes)
+    finally:
+        for proc in sitls + nodes:
+            kill(proc)
+
+
+@pytest.mark.side_by_side("sitl-cold-start")
+def test_three_arducopters_cold_start_fly_the_pass_and_one_is_lost(side_by_side):
+    figures = side_by_side.result("sitl-cold-start")
+    print("SITL figures:", {k: v for k, v in figures.items() if k != "bridge_log"})
+    print("bridge log:\n" + figures["bridge_log"])
+
+
+def _fly(tmp_path: Path, env: dict, watcher, sitls: list, nodes: list) -> dict:
+    """fly_cold_start's flight; the SITL and node processes it starts go to `sitls` and
+    `nodes`."""
+    from uav_insar_planner.demo.processes import start_node
+
     t0 = time.monotonic()
     for k in range(3):
         workdir = tmp_path / f"copter{k}"
@@ -84,14 +109,16 @@ def test_three_arducopters_cold_start_fly_the_pass_and_one_is_lost(
         sitls.append(start_sitl(k, workdir))
     connections = ", ".join(f"'tcp:127.0.0.1:{p}'" for p in PORTS)
     bridge_out: list[tuple[float, str]] = []
-    bridge = procs("mavlink_bridge", "-p", f"connections:=[{connections}]",
-                   "-p", "target_sysids:=[2, 3, 4]", "-p", "arm_and_takeoff:=true",
-                   "-p", f"speed_mps:={SPEED_MPS}", "-p", f"track_duration_s:={PASS_S}",
-                   "-p", f"heartbeat_timeout_s:={HEARTBEAT_TIMEOUT_S}")
+    bridge = start_node("mavlink_bridge", [
+        "-p", f"connections:=[{connections}]", "-p", "target_sysids:=[2, 3, 4]",
+        "-p", "arm_and_takeoff:=true", "-p", f"speed_mps:={SPEED_MPS}",
+        "-p", f"track_duration_s:={PASS_S}", "-p", f"heartbeat_timeout_s:={HEARTBEAT_TIMEOUT_S}"],
+        env)
+    nodes.append(bridge)
     read_lines(bridge, bridge_out)
-    planner = procs("planner")
+    planner = start_node("planner", [], env)
+    nodes.append(planner)
     read_lines(planner, [])
-    nodes = [bridge, planner]
     figures: dict[str, object] = {}
 
     def log() -> str:
@@ -168,5 +195,5 @@ def test_three_arducopters_cold_start_fly_the_pass_and_one_is_lost(
         assert cross_error(k) < 0.5, (k, pose(k), planned(k))
     figures["max_error_m"] = [round(w, 3) for w in worst]
     figures["final_error_m"] = [round(cross_error(k), 3) for k in (0, 1)]
-    print("SITL figures:", figures)
-    print("bridge log:\n" + "\n".join(line for _, line in bridge_out))
+    figures["bridge_log"] = "\n".join(line for _, line in bridge_out)
+    return figures

@@ -23,8 +23,9 @@ own physics state (SIMSTATE, recorded inside each UAV's namespace):
   within TRUE_MEAN_M of the plan.
 
 Skipped with the reason where the SITL binary is missing, or namespaces / TAP devices are not
-permitted (NetLab's LabUnavailable). About 2 minutes on 2 cores; every process is killed by
-process group and every namespace deleted when the lab closes.
+permitted (NetLab's LabUnavailable). About 70 s on 2 cores, flown side by side with the suite's
+other SITL flights (test/side_by_side.py); every process is killed by process group and every
+namespace deleted when the lab closes.
 """
 from __future__ import annotations
 
@@ -34,6 +35,7 @@ import re
 import pytest
 import sitl_autopilot as sitl
 import sitl_hosts as hosts
+from side_by_side import flight
 
 from uav_insar_planner.swarm import uav_name
 from uav_insar_sim.netlab.lab import LabUnavailable, NetLab
@@ -55,21 +57,21 @@ pytestmark = [
 ]
 
 
-@pytest.fixture
-def lab():
+@flight("sitl-across-hosts", "sitl")
+def fly_on_four_hosts(workdir, domain: int) -> dict:
+    """The mission in the lab (the namespaces are deleted when it ends); its figures."""
+    with NetLab(hosts.HOST_NAMES) as lab:
+        for name in hosts.HOST_NAMES[1:]:
+            lab.switch(f"set {name} {hosts.RADIO}")
+        return hosts.figures(hosts.fly(lab, domain, workdir))
+
+
+@pytest.mark.side_by_side("sitl-across-hosts")
+def test_arducopters_on_their_own_hosts_fly_every_slot_from_the_pass_start(side_by_side):
     try:
-        with NetLab(hosts.HOST_NAMES) as net:
-            for name in hosts.HOST_NAMES[1:]:
-                net.switch(f"set {name} {hosts.RADIO}")
-            yield net
+        f = side_by_side.result("sitl-across-hosts")
     except LabUnavailable as exc:
         pytest.skip(f"no network lab here: {exc}")
-
-
-def test_arducopters_on_their_own_hosts_fly_every_slot_from_the_pass_start(lab, ros_domain,
-                                                                         tmp_path):
-    flight = hosts.fly(lab, ros_domain, tmp_path)
-    f = hosts.figures(flight)
     print("\n" + hosts.table(f))
     n = hosts.N_SLOTS
     for k, u in f["uav"].items():

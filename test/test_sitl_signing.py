@@ -13,6 +13,7 @@ from pathlib import Path
 
 import process_group
 import pytest
+from side_by_side import flight
 
 from uav_insar_planner.mavlink.bridge import Bridge, BridgeConfig
 from uav_insar_planner.mavlink.link import Link
@@ -23,7 +24,7 @@ BASE = 5760 + 10 * INSTANCE
 ARDUCOPTER = Path(__file__).resolve().parent.parent.parent / "shared" / "sitl" / "arducopter"
 KEY = bytes(range(1, 33))
 pytestmark = [
-    pytest.mark.timeout(120),
+    pytest.mark.timeout(240),  # it may wait for the other SITL flights (side_by_side.py)
     pytest.mark.skipif(not ARDUCOPTER.exists(),
                        reason=f"ArduCopter SITL not found at {ARDUCOPTER}: a user's machine "
                               "does not have it"),
@@ -36,7 +37,15 @@ def bridge(port: int, key_path: str) -> Bridge:
                                signing_key_file=key_path))
 
 
-def test_arducopter_obeys_only_the_signed_bridge(tmp_path):
+@pytest.mark.side_by_side("sitl-signing")
+def test_arducopter_obeys_only_the_signed_bridge(side_by_side):
+    side_by_side.result("sitl-signing")
+
+
+@flight("sitl-signing", "sitl")
+def sign_and_command(tmp_path: Path, domain: int) -> None:
+    """The checks of the module doc, side by side with the suite's other SITL flights
+    (test/side_by_side.py; no ROS here, `domain` is unused)."""
     (tmp_path / "right").write_bytes(KEY)
     (tmp_path / "wrong").write_bytes(bytes(range(50, 82)))
     for name in ("right", "wrong"):

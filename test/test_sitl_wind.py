@@ -3,7 +3,8 @@
 from a parm file given to --defaults), cold-started and flown by mavlink_bridge
 (arm_and_takeoff), three agents with position_source:=autopilot, the planner and the recorder
 (test/sitl_autopilot.py has the mission; benchmarks/sitl_wind.py prints it with and without
-wind). Skipped when the SITL binary is absent (a user's machine does not have it); about 75 s.
+wind). Skipped when the SITL binary is absent (a user's machine does not have it); about 60 s,
+flown side by side with the suite's other SITL flights (test/side_by_side.py).
 
 Asserted: every UAV reports every slot, once and in order; the positions in the bag's
 uavK/pose are the autopilot's own (each one a uavK/mavlink/pose of the bag); the report's
@@ -22,6 +23,7 @@ import math
 import numpy as np
 import pytest
 import sitl_autopilot as sitl
+from side_by_side import flight
 
 DISPLACEMENT_M = 0.5
 
@@ -44,12 +46,18 @@ def sigma_bound(params, formation_xz: np.ndarray, power: np.ndarray, scheme: str
                                           repeat=formation_xz.size))
 
 
-def test_three_arducopters_in_wind_carry_the_agents(ros_domain, tmp_path):
+@flight("sitl-wind", "sitl")
+def fly_in_wind(workdir, domain: int) -> dict:
+    return sitl.fly(5.0, 2.0, workdir, domain)
+
+
+@pytest.mark.side_by_side("sitl-wind")
+def test_three_arducopters_in_wind_carry_the_agents(side_by_side):
     from test_agent_autopilot import _bag_poses
 
     from uav_insar_planner import load_params
 
-    f = sitl.fly(5.0, 2.0, tmp_path, ros_domain)
+    f = side_by_side.result("sitl-wind")
     print("\n" + sitl.table(f))
     n = sitl.N_SLOTS
     assert f["slots"] == [n] * 3 and f["offload_slots"] == [list(range(n))] * 3, f["slots"]
@@ -57,7 +65,7 @@ def test_three_arducopters_in_wind_carry_the_agents(ros_domain, tmp_path):
     record = f["record"]
     for k in range(3):
         agent = {tuple(r) for r in record.poses[k][:, 1:]}
-        autopilot = _bag_poses(tmp_path / "bag", f"/uav{k}/mavlink/pose")
+        autopilot = _bag_poses(f["bag"], f"/uav{k}/mavlink/pose")
         assert agent <= {tuple(r) for r in autopilot[:, 1:]}, k
         assert len(agent) >= 0.9 * len(autopilot), (k, len(agent), len(autopilot))
         # the autopilot feeds the agent through the pass: ~10 Hz, 4.6 Hz seen in CI on a
