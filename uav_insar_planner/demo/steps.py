@@ -22,6 +22,7 @@ from uav_insar_planner.demo.processes import (
     stop_nodes,
 )
 from uav_insar_planner.demo.recorder import recorder_ready, start_recorder, stop_recorder
+from uav_insar_planner.mavlink.trajectory import ramp_delay_s
 from uav_insar_planner.param_specs import FIRST_SYSID, PORT_STEP
 from uav_insar_planner.report.flown import MavlinkPass, mavlink_table, rate_table, summary
 from uav_insar_planner.swarm import MASTER, MAX_UAVS, agent_name, uav_name, uavs
@@ -290,7 +291,8 @@ class Mission:
                                 else self.targets[k])
                             for k, p in enumerate(last.poses) if k in self.targets}
         flew_pass = self.mavlink_pass is None or MASTER in killed or w.spin_until(
-            lambda: self.mavlink_pass.done(time.monotonic(), self.pass_s + SETTLE_S),
+            lambda: self.mavlink_pass.done(
+                time.monotonic(), self.pass_s + ramp_delay_s(self.params.speed) + SETTLE_S),
             MAVLINK_TIMEOUT_S, self.running)
         return complete, flew_pass, kill_lines
 

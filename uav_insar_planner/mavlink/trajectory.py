@@ -28,6 +28,11 @@ RAMP_MPS2 = BRAKE_MPS2
 JOIN_GRACE_S = 0.5
 
 
+def ramp_delay_s(speed: float) -> float:
+    """How far behind an unramped clock a pass ramped up from a hover runs [s]."""
+    return ramp_up(speed / RAMP_MPS2, speed)[2] if speed > 0.0 else 0.0
+
+
 def ramp_up(elapsed: float, speed: float) -> tuple[float, float, float]:
     """(offset, velocity, shift) `elapsed` seconds after a start from rest: RAMP_MPS2 up to
     `speed`, then cruising; shift = how far behind an unramped clock it runs then (seconds)."""
