@@ -65,7 +65,7 @@ from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension
 from uav_insar_planner.evaluate import rate_tolerance_bps
 from uav_insar_planner.exit_codes import EXIT_CRASH
 from uav_insar_planner.mavlink.guard import DropLog, finite
-from uav_insar_planner.mavlink.trajectory import JOIN_GRACE_S
+from uav_insar_planner.mavlink.trajectory import from_hover
 from uav_insar_planner.param_specs import AGENT_SCENARIO_SPECS as SCENARIO_SPECS
 from uav_insar_planner.param_specs import AGENT_SPECS, MAVLINK_SPECS
 from uav_insar_planner.params import ParamError, params_from_mapping
@@ -198,7 +198,7 @@ class AgentNode(Node):
         if self.mission.pass_start_s == clock:
             return
         # heard before its instant: the bridge ramps its target up from the hover there
-        ramp = offset_m if wall_time_s >= time.time() - JOIN_GRACE_S else None
+        ramp = offset_m if from_hover(wall_time_s, time.time()) else None
         late = self.mission.set_pass_start(clock, ramp)
         self._late += late
         ahead = wall_time_s - time.time()

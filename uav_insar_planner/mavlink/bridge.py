@@ -94,11 +94,11 @@ class Bridge:
         self._start_label = ""  # the plan whose pass start the track clock is (planner)
         self._catch_up: dict[int, CatchUp] = {}  # vehicles catching up after a rejoin
         self._drops = DropLog(clock=clock)
-        self._links, warning = open_links(config.addresses(), config.source_sysid,
+        addresses = config.addresses()
+        self._links, warning = open_links(addresses, config.source_sysid,
                                           BRIDGE_COMPID, config.signing_key_file)
         if warning:
             self._event(-1, "warn", warning)
-        addresses = config.addresses()
         self.uavs = config.uavs()  # the UAV index of each vehicle
         self._vehicles = [WatchedVehicle(k, sysid, self._links[address],
                                          expected_source=self._links[address].peer_address)

@@ -19,7 +19,7 @@ from uav_insar_planner.mavlink.config import BridgeConfig
 from uav_insar_planner.mavlink.frames import TrackFrame
 from uav_insar_planner.mavlink.sequencer import ArmingSequence
 from uav_insar_planner.mavlink.supervision import WatchedVehicle
-from uav_insar_planner.mavlink.trajectory import JOIN_GRACE_S, PassTrajectory
+from uav_insar_planner.mavlink.trajectory import PassTrajectory, from_hover
 
 # The same start re-published under a re-plan's identity converts to a clock a few
 # microseconds off: below this the running track clock is kept, not nudged.
@@ -74,7 +74,7 @@ def planner_start(pass_: PassTrajectory, wall_time_s: float, mono_now: float,
             and abs(pass_.t_offset - t_offset) < SAME_START_S):
         return ""
     pass_.t_start, pass_.t_offset = t_start, t_offset
-    pass_.ramp = t_start >= mono_now - JOIN_GRACE_S  # from the hover, else joining it
+    pass_.ramp = from_hover(t_start, mono_now)
     ahead = t_start - mono_now
     when = f"in {ahead:.2f} s" if ahead >= 0 else f"{-ahead:.2f} s ago (joining the pass)"
     where = f", resuming {offset_m:.2f} m past the start line" if offset_m > 0.0 else ""

@@ -28,6 +28,12 @@ RAMP_MPS2 = BRAKE_MPS2
 JOIN_GRACE_S = 0.5
 
 
+def from_hover(start: float, now: float) -> bool:
+    """Whether a start at `start` heard at `now` (one clock) starts the pass from the hover
+    (ramped up), rather than joining a running one (JOIN_GRACE_S)."""
+    return start >= now - JOIN_GRACE_S
+
+
 def ramp_delay_s(speed: float) -> float:
     """How far behind an unramped clock a pass ramped up from a hover runs [s]."""
     return ramp_up(speed / RAMP_MPS2, speed)[2] if speed > 0.0 else 0.0
