@@ -21,7 +21,7 @@ import argparse
 
 from uav_insar_planner.evaluate import evaluate
 from uav_insar_planner.montecarlo import pairs_of_formation, simulate
-from uav_insar_planner.param_specs import SOLVERS
+from uav_insar_planner.param_specs.science import SOLVERS
 from uav_insar_planner.params import Params, default_params
 from uav_insar_planner.solver import solve
 from uav_insar_planner.swarm import DEFAULT_NUM_UAVS

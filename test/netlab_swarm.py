@@ -29,7 +29,7 @@ import pytest
 import yaml
 
 from uav_insar_planner.demo.processes import executable
-from uav_insar_planner.param_specs import FIRST_SYSID
+from uav_insar_planner.param_specs.nodes import FIRST_SYSID
 from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, uav_name, uav_names, uavs
 from uav_insar_sim.mission import home_position
 from uav_insar_sim.netlab.dds_env import dds_env

@@ -18,7 +18,7 @@ import pytest
 from conftest import REPO
 
 from uav_insar_planner import load_params, model, solve
-from uav_insar_planner.param_specs import FIRST_SYSID
+from uav_insar_planner.param_specs.nodes import FIRST_SYSID
 
 pytestmark = pytest.mark.timeout(120)
 N = 10

@@ -12,7 +12,8 @@ import pytest
 
 from uav_insar_planner import exit_codes
 from uav_insar_planner.cli import PROG, build_parser, verbs
-from uav_insar_planner.param_specs import NODE_SPECS, PARAM_SPECS
+from uav_insar_planner.param_specs.nodes import NODE_SPECS
+from uav_insar_planner.param_specs.science import PARAM_SPECS
 from uav_insar_planner.params_file import read_params_file, yaml_load
 from uav_insar_planner.ros.topics import INTERFACE
 

@@ -35,7 +35,7 @@ from std_msgs.msg import Float64MultiArray, Header
 
 from uav_insar_planner import load_params, model, solve
 from uav_insar_planner.demo.processes import executable, start_node, start_process
-from uav_insar_planner.param_specs import FIRST_SYSID
+from uav_insar_planner.param_specs.nodes import FIRST_SYSID
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.start_msgs import decode_start
 from uav_insar_sim.mission import home_position

@@ -13,7 +13,7 @@ from pymavlink import mavutil
 
 from uav_insar_planner.mavlink.bridge import Bridge, BridgeConfig
 from uav_insar_planner.mavlink.holding import GcsWatch
-from uav_insar_planner.param_specs import GCS_HEARTBEAT_PERIOD_S
+from uav_insar_planner.param_specs.nodes import GCS_HEARTBEAT_PERIOD_S
 from uav_insar_sim.vehicle.simulator import SimVehicle
 
 pytestmark = pytest.mark.timeout(60)

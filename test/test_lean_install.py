@@ -24,7 +24,7 @@ from conftest import REPO
 
 from uav_insar_planner.cli.extras import INSTALL_PLANNER, PLANNER_MODULES, SOLVER_MODULES
 from uav_insar_planner.demo.processes import executable, start_process
-from uav_insar_planner.param_specs import FIRST_SYSID
+from uav_insar_planner.param_specs.nodes import FIRST_SYSID
 from uav_insar_planner.params import params_from_mapping
 from uav_insar_planner.report.planner_messages import formation_points
 from uav_insar_planner.solver import solve

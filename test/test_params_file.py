@@ -15,12 +15,8 @@ import pytest
 from rcl_interfaces.msg import ParameterType
 from rcl_interfaces.srv import GetParameters, ListParameters
 
-from uav_insar_planner.param_specs import (
-    NODE_SPECS,
-    RCLPY_PARAMETER_NAMES,
-    SPEC_BY_NAME,
-    nodes_taking,
-)
+from uav_insar_planner.param_specs.nodes import NODE_SPECS, RCLPY_PARAMETER_NAMES, nodes_taking
+from uav_insar_planner.param_specs.science import SPEC_BY_NAME
 from uav_insar_planner.params import ParamError, unknown_parameter
 from uav_insar_planner.params_file import load_params, read_params_file, section_matches
 

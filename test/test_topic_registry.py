@@ -11,7 +11,7 @@ import process_group
 import pytest
 
 from uav_insar_planner.demo.processes import free_udp_ports
-from uav_insar_planner.param_specs import NODE_SPECS
+from uav_insar_planner.param_specs.nodes import NODE_SPECS
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.topics import INTERFACE, QOS_PROFILES, TopicSpec
 from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, uavs

@@ -1,9 +1,10 @@
-"""Scenario parameters: the one place where dB, dBm, degrees and Mbit/s become SI.
+"""Scenario parameters: validated, then converted to SI.
 
-`PARAM_SPECS` (param_specs.py) is the single table of every scenario parameter: name, type,
-default, allowed range, unit and description. The planner node declares its ROS parameters
-from it; the CLI and `params_file.load_params` validate against it. `Params` holds the values
-converted to SI. Reading params files and `NAME=VALUE` overrides is `params_file`'s job.
+`PARAM_SPECS` (param_specs/science.py) is the single table of every scenario parameter: name,
+type, default, allowed range, unit, description, and its SI value's name in `Params` with the
+conversion to it. The planner node declares its ROS parameters from it; the CLI and
+`params_file.load_params` validate against it, and `params_from_mapping` builds `Params` from
+it. Reading params files and `NAME=VALUE` overrides is `params_file`'s job.
 """
 from __future__ import annotations
 
@@ -13,18 +14,16 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from uav_insar_planner.param_specs import (
+from uav_insar_planner.param_specs import ParamSpec
+from uav_insar_planner.param_specs.nodes import NODE_SPECS, SUITE_PARAMETER_NAMES, nodes_taking
+from uav_insar_planner.param_specs.science import (
     LENGTH_MAX_M,
     MULTILOOK_MAX_LOOKS,
-    NODE_SPECS,
     OBJECTIVES,
     PARAM_SPECS,
     SCHEMES,
     SOLVERS,
     SPEC_BY_NAME,
-    SUITE_PARAMETER_NAMES,
-    ParamSpec,
-    nodes_taking,
 )
 from uav_insar_planner.swarm import MAX_UAVS, MIN_UAVS
 
@@ -34,16 +33,6 @@ __all__ = ["LENGTH_MAX_M", "MULTILOOK_MAX_LOOKS", "OBJECTIVES", "PARAM_SPECS", "
 
 SPEED_OF_LIGHT = 299_792_458.0
 BOLTZMANN = 1.380649e-23
-
-
-def db_to_linear(db: float) -> float:
-    return 10.0 ** (db / 10.0)
-
-
-def dbm_to_watt(dbm: float) -> float:
-    return 10.0 ** ((dbm - 30.0) / 10.0)
-
-
 
 
 class ParamError(ValueError):
@@ -291,52 +280,8 @@ def params_from_mapping(values: Mapping[str, Any]) -> Params:
     v, problems = validate(values)
     if problems:
         raise ParamError(problems)
-    deg = math.radians
-    return Params(
-        raw=dict(v),
-        num_uavs=v["num_uavs"],
-        num_slots=v["num_slots"],
-        slot_duration_s=v["slot_duration_s"],
-        z_min=v["z_min_m"],
-        z_max=v["z_max_m"],
-        h_amb_min=v["h_amb_min_m"],
-        h_amb_ratio=v["h_amb_ratio"],
-        x_t=v["target_x_m"],
-        ground_station=v["ground_station_m"],
-        d_min=v["d_min_m"],
-        swath_min=v["swath_min_m"],
-        speed=v["speed_mps"],
-        p_max_w=db_to_linear(v["p_com_max_db"]),
-        e_max_j=v["e_com_max_j"],
-        rate_min_bps=tuple(r * 1e6 for r in v["rate_min_mbps"]),
-        rate_margin=v["rate_margin"],
-        comm_bandwidth_hz=v["comm_bandwidth_hz"],
-        beta_c=db_to_linear(v["ref_snr_db"]),
-        coherence_rg_min=v["coherence_rg_min"],
-        coherence_snr_min=v["coherence_snr_min"],
-        coherence_other=v["coherence_other"],
-        sigma0=db_to_linear(v["sigma0_db"]),
-        radar_power_w=dbm_to_watt(v["radar_power_dbm"]),
-        gain_tx=db_to_linear(v["gain_tx_dbi"]),
-        gain_rx=db_to_linear(v["gain_rx_dbi"]),
-        wavelength=v["wavelength_m"],
-        duty_cycle=v["duty_cycle"],
-        theta0=deg(v["look_angle_deg"]),
-        system_temperature_k=v["system_temperature_k"],
-        radar_bandwidth_hz=v["radar_bandwidth_hz"],
-        noise_figure=db_to_linear(v["noise_figure_db"]),
-        losses=db_to_linear(v["losses_db"]),
-        center_frequency_hz=v["center_frequency_hz"],
-        beamwidth=deg(v["beamwidth_deg"]),
-        theta_min=deg(v["slave_look_angle_min_deg"]),
-        theta_max=deg(v["slave_look_angle_max_deg"]),
-        looks=v["looks"],
-        tolerance=v["tolerance"],
-        master_fixed=v["master_fixed_xz_m"],
-        scheme=v["scheme"],
-        objective=v["objective"],
-        solver=v["solver"],
-    )
+    return Params(raw=dict(v), **{spec.attribute: spec.si_value(v[spec.name])
+                                  for spec in PARAM_SPECS})
 
 
 def default_params() -> Params:

@@ -20,7 +20,8 @@ from typing import Any
 
 import yaml
 
-from uav_insar_planner.param_specs import SPEC_BY_NAME, SUITE_PARAMETER_NAMES, spec_named
+from uav_insar_planner.param_specs.nodes import SUITE_PARAMETER_NAMES, spec_named
+from uav_insar_planner.param_specs.science import SPEC_BY_NAME
 from uav_insar_planner.params import ParamError, Params, params_from_mapping, shown
 from uav_insar_planner.swarm import MASTER, MAX_UAVS, agent_name, uavs
 

@@ -41,7 +41,7 @@ plan and no pass start says so once; one whose UAV has not reached its next line
 after the clock put it there says so, with how far it is behind, every LAG_LOG_PERIOD_S
 until it does.
 
-Parameters (param_specs.py, all read-only: a mission is set up once): uav_id, time_scale
+Parameters (param_specs/nodes.py, all read-only: a mission is set up once): uav_id, time_scale
 (mission seconds per wall second), position_noise_std_m, noise_seed, max_speed_mps,
 max_accel_mps2, offloading, position_source, the simulated link's shadowing_std_db,
 shadowing_corr_m, small_scale_fading, rician_k_db, fading_seed and the wind's wind_mps,
@@ -66,8 +66,8 @@ from uav_insar_planner.evaluate import rate_tolerance_bps
 from uav_insar_planner.exit_codes import EXIT_CRASH
 from uav_insar_planner.mavlink.guard import DropLog, finite
 from uav_insar_planner.mavlink.trajectory import from_hover
-from uav_insar_planner.param_specs import AGENT_SCENARIO_SPECS as SCENARIO_SPECS
-from uav_insar_planner.param_specs import AGENT_SPECS, MAVLINK_SPECS
+from uav_insar_planner.param_specs.nodes import AGENT_SCENARIO_SPECS as SCENARIO_SPECS
+from uav_insar_planner.param_specs.nodes import AGENT_SPECS, MAVLINK_SPECS
 from uav_insar_planner.params import ParamError, params_from_mapping
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.parameters import (

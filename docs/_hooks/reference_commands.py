@@ -14,7 +14,7 @@ from reference_topics import shown_name, topic_anchor
 from uav_insar_planner.cli import PROG, build_parser, verbs
 from uav_insar_planner.demo.options import build_parser as demo_parser
 from uav_insar_planner.demo.processes import MODULES
-from uav_insar_planner.param_specs import NODE_SPECS
+from uav_insar_planner.param_specs.nodes import NODE_SPECS
 from uav_insar_planner.ros.topics import INTERFACE
 
 #: Columns of every help text: fixed, so the page does not depend on the terminal it was
@@ -81,7 +81,7 @@ def commands_page() -> str:
     lines = ["# Commands", "",
              md.generated_from("uav_insar_planner/cli/", "uav_insar_planner/demo/options.py",
                                "uav_insar_sim/vehicle/cli.py",
-                               "uav_insar_planner/param_specs.py"), "",
+                               "uav_insar_planner/param_specs/"), "",
              f"Every command's `--help`, {HELP_WIDTH} columns wide. Every command and node ends "
              "with a code of [one table](exit-codes.md).", "",
              f"## `{PROG}`", "", "```text", help_text(top).rstrip(), "```", ""]

@@ -1,4 +1,4 @@
-"""The parameters page: every parameter of every node, from uav_insar_planner/param_specs.py."""
+"""The parameters page: every parameter of every node, from uav_insar_planner/param_specs/."""
 from __future__ import annotations
 
 import json
@@ -8,18 +8,18 @@ from typing import Any
 
 import reference_md as md
 
-from uav_insar_planner.param_specs import (
+from uav_insar_planner.param_specs import ParamSpec
+from uav_insar_planner.param_specs.nodes import (
     AGENT_SCENARIO_SPECS,
     AGENT_SPECS,
     BRIDGE_SPECS,
     MAVLINK_SPECS,
     NODE_SPECS,
-    PARAM_SPECS,
     PLANNER_SPECS,
     RCLPY_PARAMETER_NAMES,
-    ParamSpec,
     nodes_taking,
 )
+from uav_insar_planner.param_specs.science import PARAM_SPECS
 from uav_insar_planner.params_file import yaml_load
 
 # param_specs writes a unit as ` [unit]` inside the description, once at most.
@@ -134,7 +134,7 @@ def parameters_page() -> str:
     """The Markdown of reference/parameters.md."""
     where = anchors()
     lines = ["# Parameters", "",
-             md.generated_from("uav_insar_planner/param_specs.py"), "",
+             md.generated_from("uav_insar_planner/param_specs/"), "",
              "Every ROS parameter of every node of the suite: its type, its default as a params "
              "file writes it, its unit, what is allowed and why the range stops there, and the "
              "nodes that take it. A value outside what is allowed stops a node at start (exit "

@@ -2,7 +2,7 @@
 
 Each node the demo would start gets the values a node of its name takes: the params file's
 matching sections, then every `-p`, then what the demo sets itself. Each value is judged by
-the node's specs (param_specs.NODE_SPECS, with `params.check_value`, the check the nodes make
+the node's specs (param_specs.nodes.NODE_SPECS, with `params.check_value`, the check the nodes make
 at start-up), and the bridge's whole configuration by its own cross-field rules
 (`mavlink.config`: gcs_timeout_s 0 or at least 1 s, ...), so a value a node would refuse is
 one line and exit 2 here, not a swarm started and then stopped by one refusing node. The
@@ -15,7 +15,9 @@ import argparse
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
-from uav_insar_planner.param_specs import NODE_SPECS, SPEC_BY_NAME, ParamSpec
+from uav_insar_planner.param_specs import ParamSpec
+from uav_insar_planner.param_specs.nodes import NODE_SPECS
+from uav_insar_planner.param_specs.science import SPEC_BY_NAME
 from uav_insar_planner.params import check_value, shown
 from uav_insar_planner.swarm import uavs
 
@@ -49,7 +51,7 @@ def bridge_problem(values: Mapping[str, Any], flown: list[int], stacks: bool,
     """The bridge's own verdict (mavlink.config) on its values with the demo's wiring: one
     bridge flying the UAVs `flown`, or (`stacks`) the stack of the one UAV in `flown`."""
     from uav_insar_planner.mavlink.config import from_parameters
-    from uav_insar_planner.param_specs import BRIDGE_SPECS, FIRST_SYSID
+    from uav_insar_planner.param_specs.nodes import BRIDGE_SPECS, FIRST_SYSID
 
     given = {spec.name: values.get(spec.name, spec.default) for spec in BRIDGE_SPECS}
     given |= {"connections": [_WIRED], "target_sysids": [FIRST_SYSID + k for k in flown],

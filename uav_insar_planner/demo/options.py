@@ -8,7 +8,7 @@ from typing import Any
 
 from uav_insar_planner.cli.parser import OneLineParser
 from uav_insar_planner.demo.recorder import default_bag_path
-from uav_insar_planner.param_specs import PORT_STEP
+from uav_insar_planner.param_specs.nodes import PORT_STEP
 from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, MAX_UAVS, MIN_UAVS
 
 REPO_CONFIG = Path(__file__).resolve().parents[1] / "config" / "params.yaml"
@@ -129,7 +129,7 @@ def fit_swarm(args: argparse.Namespace, overrides: dict[str, Any]) -> list[str]:
     for N UAVs: the params file's first N, its last repeated (Table I's [10, 16.95, 1] gives
     [10, 16.95] for two UAVs, [10, 16.95, 1, 1, 1] for five). Returns the problems (one line
     each) of a --kill-uav beyond the swarm flown."""
-    from uav_insar_planner.param_specs import SPEC_BY_NAME
+    from uav_insar_planner.param_specs.science import SPEC_BY_NAME
     from uav_insar_planner.params_file import read_params_file
 
     file = read_params_file(args.params_file, "planner") if args.params_file else {}

@@ -10,7 +10,7 @@ AUTO.LOITER, "TAKEOFF" AUTO.TAKEOFF, "LAND" AUTO.LAND, "RTL" AUTO.RTL.
 from __future__ import annotations
 
 # The choices of the bridge's `autopilot` parameter, kept with the parameter tables.
-from uav_insar_planner.param_specs import AUTOPILOTS as AUTOPILOTS
+from uav_insar_planner.param_specs.nodes import AUTOPILOTS as AUTOPILOTS
 
 #: ArduCopter mode numbers (ArduCopter's `Mode::Number`).
 COPTER_MODES = {"STABILIZE": 0, "ALT_HOLD": 2, "GUIDED": 4, "LOITER": 5, "RTL": 6, "LAND": 9,

@@ -1,14 +1,19 @@
-"""The bridge's configuration and its validation (one line per problem); its parameters are
-`param_specs.BRIDGE_SPECS` (the ROS descriptors, the generated parameter reference and
-`validate` use them)."""
+"""The bridge's configuration and its validation (one line per problem).
+
+Its parameters are `param_specs.nodes.BRIDGE_SPECS`, described there once (the ROS
+descriptors, the generated parameter reference and `validate` use them): `BridgeConfig`'s
+attributes are the specs' names in their order, its defaults the specs' defaults, lists as
+tuples. A config built in code differs in the two "auto" values `from_parameters` resolves for
+the node (IN_CODE_DEFAULTS).
+"""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TypeVar
 
 from uav_insar_planner.mavlink.frames import Vec3
 from uav_insar_planner.mavlink.link import parse_address
-from uav_insar_planner.param_specs import (
+from uav_insar_planner.param_specs.nodes import (
     BRIDGE_SPECS,
     FIRST_SYSID,
     GCS_TIMEOUT_AUTO,
@@ -18,57 +23,62 @@ from uav_insar_planner.param_specs import (
     vehicle_connection,
 )
 from uav_insar_planner.params import check_value, shown
-from uav_insar_planner.plan import SAFE_SEPARATION_M as DEFAULT_MIN_SEPARATION_M
 from uav_insar_planner.swarm import MAX_UAVS
 
-_DEFAULTS = {spec.name: spec.default for spec in BRIDGE_SPECS}
+#: A config built in code (a test, a script flying without a planner) starts its own pass at
+#: capture and has no ground station to hear; the node resolves "auto" (from_parameters).
+IN_CODE_DEFAULTS = {"pass_start": "capture", "gcs_timeout_s": 0.0}
+_DEFAULTS = {spec.attribute: spec.si_value(spec.default) for spec in BRIDGE_SPECS}
+_Class = TypeVar("_Class", bound=type)
+
+
+def _defaults_from_specs(cls: _Class) -> _Class:
+    """`cls` with each field's default from BRIDGE_SPECS (or IN_CODE_DEFAULTS); a field
+    without a spec, or a spec without a field, stops the import."""
+    fields = list(cls.__annotations__)
+    if fields != list(_DEFAULTS):
+        raise TypeError(f"{cls.__name__}: fields {fields} are not BRIDGE_SPECS' "
+                        f"{list(_DEFAULTS)}")
+    for name, default in (_DEFAULTS | IN_CODE_DEFAULTS).items():
+        setattr(cls, name, default)
+    return cls
 
 
 @dataclass(frozen=True)
+@_defaults_from_specs
 class BridgeConfig:
-    """Everything the bridge needs; SI inside, degrees only in `track_bearing_deg`.
+    """Everything the bridge needs; SI inside, degrees only in `track_bearing_deg`. Each
+    attribute is the BRIDGE_SPECS parameter of its name (the parameter reference says what
+    it means); beside them:
 
     - connections: one per UAV in `target_sysids`, or one shared by all (a router).
-    - setpoint_rate_hz: 2..50 (PX4 leaves offboard below 2 Hz).
-    - velocity_feedforward: also send the track velocity with each setpoint.
-    - arm_and_takeoff: run the arming sequence for `autopilot` (see `sequencer`).
-    - track_duration_s: 0 for an endless pass, else the pass brakes to a stop after it.
-    - capture_radius_m: how close every UAV must be to its start before the pass (0: at once).
-    - heartbeat_timeout_s: a UAV is lost after this long without a heartbeat.
-    - readiness_timeout_s: with arm_and_takeoff, how long each UAV may take to report a
-      position, hold its mode and pass its arming checks (FAILED / TEMPORARILY_REJECTED are
-      retried meanwhile) before its sequence fails; a cold-booting ArduCopter needs ~45 s.
-    - min_separation_m: the bridge warns when two planned UAVs are closer (0: no check); see
-      DEFAULT_MIN_SEPARATION_M for the figure.
-    - signing_key_file: MAVLink 2 signing on every link with this key (`signing`); "" off.
-    - gcs_timeout_s: hold when the ground station is silent this long (`holding`); 0 off,
-      else at least GCS_TIMEOUT_MIN_S.
-    - uav_id: -1 flies UAV k = 0.. of `target_sysids` each (N entries for N UAVs);
-      0..MAX_UAVS-1 flies that UAV alone (one sysid, one connection: a stack per UAV).
-    - pass_start: "capture" (the bridge's own capture gate, for a bridge flown without a
-      planner) or "planner" (`Bridge.set_start`, the planner's formation/start, which the
-      agents' slots follow too).
+    - setpoint_rate_hz: PX4 leaves offboard below 2 Hz.
+    - readiness_timeout_s: FAILED / TEMPORARILY_REJECTED arming checks are retried meanwhile;
+      a cold-booting ArduCopter needs ~45 s.
+    - gcs_timeout_s: 0 off, else at least GCS_TIMEOUT_MIN_S (`holding`).
+    - pass_start: "capture" (the bridge's own capture gate) or "planner" (`Bridge.set_start`,
+      the planner's formation/start, which the agents' slots follow too).
     """
 
+    uav_id: int
+    pass_start: str
     connections: tuple[str, ...]
     target_sysids: tuple[int, ...]
-    source_sysid: int = 255
-    track_bearing_deg: float = 0.0
-    origin_ned_m: Vec3 = (0.0, 0.0, 0.0)
-    setpoint_rate_hz: float = 10.0
-    velocity_feedforward: bool = False
-    arm_and_takeoff: bool = False
-    autopilot: str = "ardupilot"
-    speed_mps: float = 4.3
-    track_duration_s: float = 0.0
-    capture_radius_m: float = 1.0
-    heartbeat_timeout_s: float = 5.0
-    readiness_timeout_s: float = 120.0
-    min_separation_m: float = DEFAULT_MIN_SEPARATION_M
-    signing_key_file: str = ""
-    gcs_timeout_s: float = 0.0
-    uav_id: int = -1
-    pass_start: str = "capture"
+    source_sysid: int
+    track_bearing_deg: float
+    origin_ned_m: Vec3
+    setpoint_rate_hz: float
+    velocity_feedforward: bool
+    arm_and_takeoff: bool
+    autopilot: str
+    speed_mps: float
+    track_duration_s: float
+    capture_radius_m: float
+    heartbeat_timeout_s: float
+    readiness_timeout_s: float
+    min_separation_m: float
+    signing_key_file: str
+    gcs_timeout_s: float
 
     def validate(self) -> None:
         """Raise ValueError with one line naming the first bad value and what is allowed."""
@@ -136,7 +146,7 @@ class BridgeConfig:
 def from_parameters(values: dict[str, Any]) -> BridgeConfig:
     """The config of the node's parameter values (lists as given). With `uav_id` K >= 0,
     `connections` and `target_sysids` left at their defaults (Table I's three UAVs') mean UAV
-    K's own default (param_specs.vehicle_connection(K), sysid FIRST_SYSID + K, any K < 6);
+    K's own default (param_specs.nodes.vehicle_connection(K), sysid FIRST_SYSID + K, any K < 6);
     "auto" `pass_start` is planner (one mission clock, which the agents' slots follow too), and
     "auto" (-1) `gcs_timeout_s`
     GCS_TIMEOUT_DEFAULT_S with a uav_id, else off. TypeError or ValueError (one line) when a
@@ -146,7 +156,7 @@ def from_parameters(values: dict[str, Any]) -> BridgeConfig:
     if isinstance(k, int) and 0 <= k < MAX_UAVS:
         own = {"connections": vehicle_connection(k), "target_sysids": FIRST_SYSID + k}
         for name in ("connections", "target_sysids"):
-            if values.get(name) == tuple(_DEFAULTS[name]):
+            if values.get(name) == _DEFAULTS[name]:
                 values[name] = (own[name],)
     if values.get("gcs_timeout_s", GCS_TIMEOUT_AUTO) == GCS_TIMEOUT_AUTO:
         values["gcs_timeout_s"] = (GCS_TIMEOUT_DEFAULT_S if isinstance(k, int) and k >= 0

@@ -135,8 +135,8 @@ class PassTrajectory:
 def too_close(formation: Sequence[Vec3 | None], min_separation_m: float
               ) -> list[tuple[int, int, float]]:
     """Every pair (j, k, distance) of flown UAVs planned closer than `min_separation_m`
-    (0: no check). Their positions are only as good as their GNSS (see config
-    DEFAULT_MIN_SEPARATION_M), so a plan below that figure risks a collision."""
+    (0: no check). Their positions are only as good as their GNSS (see plan
+    SAFE_SEPARATION_M), so a plan below that figure risks a collision."""
     out = []
     for j in range(len(formation)):
         for k in range(j + 1, len(formation)):

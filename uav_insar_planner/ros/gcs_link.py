@@ -1,7 +1,7 @@
 """The ground station's heartbeat, both ends: the planner sends it, a bridge listens.
 
 `GcsHeartbeat(node)` (the planner): std_msgs/Header on `gcs/heartbeat` (topics.GCS_HEARTBEAT,
-best effort, volatile: topics.GCS_HEARTBEAT_QOS) every param_specs.GCS_HEARTBEAT_PERIOD_S;
+best effort, volatile: topics.GCS_HEARTBEAT_QOS) every param_specs.nodes.GCS_HEARTBEAT_PERIOD_S;
 stamp = the node's clock (wall clock unless use_sim_time), frame_id = its fully qualified
 name. The stamp is for people and logs: the bridge times the silence on its own monotonic
 clock from when it received something, so the two clocks need not agree.
@@ -23,7 +23,7 @@ from collections.abc import Callable
 from rclpy.node import Node
 from std_msgs.msg import Header
 
-from uav_insar_planner.param_specs import GCS_HEARTBEAT_PERIOD_S
+from uav_insar_planner.param_specs.nodes import GCS_HEARTBEAT_PERIOD_S
 from uav_insar_planner.ros import topics
 
 MAX_NAME = 100  # characters of the sender's name kept for the log

@@ -1,7 +1,7 @@
 """The MAVLink bridge node (`ros2 run uav_insar_planner mavlink_bridge`): a thin ROS adapter
 over `uav_insar_planner.mavlink.bridge.Bridge`, which does all MAVLink work in its own thread.
 
-Parameters (param_specs.py BRIDGE_SPECS, all read-only: the links are opened once):
+Parameters (param_specs/nodes.py BRIDGE_SPECS, all read-only: the links are opened once):
   uav_id (-1: every UAV of target_sysids, N entries for N UAVs; 0..5: this UAV only, a
   stack per UAV, in namespace /uavK or the swarm's; another UAV's namespace is refused; a plan
   with fewer UAVs holds it, one line), pass_start (auto|capture|planner),
@@ -54,7 +54,7 @@ from rclpy.node import Node
 from uav_insar_planner.exit_codes import EXIT_BAD_INPUT, EXIT_CRASH
 from uav_insar_planner.mavlink.bridge import Bridge, VehicleStatus
 from uav_insar_planner.mavlink.config import from_parameters
-from uav_insar_planner.param_specs import BRIDGE_SPECS
+from uav_insar_planner.param_specs.nodes import BRIDGE_SPECS
 from uav_insar_planner.report import planner_messages as report
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.claims import DISCOVERY_WINDOW_S, UavClaims

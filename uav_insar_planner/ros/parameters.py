@@ -1,6 +1,6 @@
 """The ROS parameters of every node of the suite, and how a node declares and guards them.
 
-The tables are plain data in `param_specs.py` (NODE_SPECS says which node takes which): the
+The tables are plain data in `param_specs/` (NODE_SPECS says which node takes which): the
 planner's are PARAM_SPECS (Table I, all settable at run time) and PLANNER_SPECS (its own, not
 the scenario's: uav_timeout_s, settable at run time); the agent's are AGENT_SPECS,
 MAVLINK_SPECS and the scenario subset AGENT_SCENARIO_SPECS; the bridge's are BRIDGE_SPECS.
@@ -30,7 +30,7 @@ from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValu
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
-from uav_insar_planner.param_specs import SUITE_PARAMETER_NAMES
+from uav_insar_planner.param_specs.nodes import SUITE_PARAMETER_NAMES
 from uav_insar_planner.params import ParamSpec, check_value, shown, unknown_parameter
 
 

@@ -26,7 +26,7 @@ swarm watch (swarm_watch.py: lost UAVs, saturated closed loops, the re-plans the
 also uav{K}/offload and /diagnostics; the pass start (pass_start.py) uav{K}/mavlink/pose, and
 publishes formation/start (std_msgs/Header, latched: the wall-clock start of the pass and the
 plan it starts) once every flown UAV is captured. Planner-only parameters: uav_timeout_s,
-capture_radius_m, start_delay_s (param_specs.PLANNER_SPECS).
+capture_radius_m, start_delay_s (param_specs.nodes.PLANNER_SPECS).
 Service ~/replan (std_srvs/Trigger): solve again with the current parameters.
 Solves run on a worker thread (solve_worker), so the node keeps serving while one runs; a
 worker that dies turns the plan status ERROR ("solve worker died: ...") and the node exits
@@ -48,7 +48,7 @@ from std_srvs.srv import Trigger
 
 from uav_insar_planner.cli.extras import SOLVER_MODULES, missing_line
 from uav_insar_planner.exit_codes import EXIT_CRASH
-from uav_insar_planner.param_specs import PLANNER_SPECS
+from uav_insar_planner.param_specs.nodes import PLANNER_SPECS
 from uav_insar_planner.params import (
     PARAM_SPECS,
     SPEC_BY_NAME,

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-from uav_insar_planner.param_specs import GCS_HEARTBEAT_PERIOD_S
+from uav_insar_planner.param_specs.nodes import GCS_HEARTBEAT_PERIOD_S
 from uav_insar_planner.swarm import uav_index, uav_name
 
 FRAME_ID = "insar_track"
