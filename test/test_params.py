@@ -1,4 +1,5 @@
 """Parameter files: Table I defaults, SI conversion in one place, and one clear line per error."""
+import dataclasses
 import math
 import sys
 from pathlib import Path
@@ -30,6 +31,20 @@ def test_si_conversion():
     assert p.theta0 == pytest.approx(math.pi / 4)
     assert p.beamwidth == pytest.approx(math.radians(33.44))
     assert p.losses == pytest.approx(10 ** 0.6)
+
+
+def test_every_params_field_is_one_specs_value_in_si():
+    """Params is built from the table alone: each field is a spec's value through its own
+    conversion, whatever the value."""
+    fields = {f.name for f in dataclasses.fields(default_params())}
+    assert {s.attribute for s in PARAM_SPECS} == fields - {"raw", "energy_budget_uav_j"}
+    changed = default_params().replace(look_angle_deg=30.0, radar_power_dbm=30.0,
+                                       rate_min_mbps=[2.0, 3.0, 4.0], losses_db=3.0)
+    assert changed.theta0 == pytest.approx(math.pi / 6) and changed.radar_power_w == 1.0
+    assert changed.rate_min_bps == (2e6, 3e6, 4e6)
+    assert changed.losses == pytest.approx(10 ** 0.3)
+    for spec in PARAM_SPECS:
+        assert getattr(changed, spec.attribute) == spec.si_value(changed.raw[spec.name])
 
 
 def test_node_section_overrides_global_section(tmp_path):

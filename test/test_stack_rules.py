@@ -3,13 +3,14 @@ who wins a claim, when the planner starts the pass, the start message's validati
 bridge's track clock under a planner start."""
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 
 import pytest
 from std_msgs.msg import Header
 
-from uav_insar_planner.mavlink.config import from_parameters
+from uav_insar_planner.mavlink.config import IN_CODE_DEFAULTS, BridgeConfig, from_parameters
 from uav_insar_planner.mavlink.pass_start import planner_start
 from uav_insar_planner.mavlink.trajectory import RAMP_MPS2, PassTrajectory, ramp_up
 from uav_insar_planner.param_specs.nodes import BRIDGE_SPECS
@@ -35,6 +36,19 @@ def test_a_uav_id_takes_that_uavs_default_entry_and_every_bridge_the_planners_st
                                target_sysids=[7], pass_start="capture"))
     assert own.connections == ("tcp:10.0.0.2:5760",) and own.target_sysids == (7,)
     assert own.pass_start == "capture"
+
+
+def test_a_config_built_in_code_has_the_nodes_defaults_but_starts_its_own_pass():
+    """BridgeConfig's fields are BRIDGE_SPECS in their order, with their defaults; only the
+    two "auto" values differ: a config built in code starts at capture, hears no ground."""
+    built = BridgeConfig()
+    built.validate()
+    assert [f.name for f in dataclasses.fields(built)] == [s.name for s in BRIDGE_SPECS]
+    node = from_parameters(DEFAULTS)
+    assert dataclasses.replace(node, **IN_CODE_DEFAULTS) == built
+    assert (node.pass_start, node.gcs_timeout_s) == ("planner", 0.0)
+    assert (built.pass_start, built.gcs_timeout_s) == ("capture", 0.0)
+    assert built.origin_ned_m == (0.0, 0.0, 0.0) and built.target_sysids == (2, 3, 4)
 
 
 @pytest.mark.parametrize("k", [3, 5])
