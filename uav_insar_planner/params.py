@@ -45,7 +45,9 @@ class ParamError(ValueError):
 
 @dataclass(frozen=True)
 class Params:
-    """Validated scenario in SI units (metres, seconds, watts, bit/s, radians, linear ratios)."""
+    """Validated scenario in SI units (metres, seconds, watts, bit/s, radians, linear ratios):
+    each field but `raw` and `energy_budget_uav_j` is one PARAM_SPECS value, named and converted
+    by its spec (`ParamSpec.attribute`, `ParamSpec.si_value`)."""
 
     raw: Mapping[str, Any] = field(repr=False)
     num_uavs: int

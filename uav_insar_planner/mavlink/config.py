@@ -52,10 +52,12 @@ class BridgeConfig:
     it means); beside them:
 
     - connections: one per UAV in `target_sysids`, or one shared by all (a router).
+    - arm_and_takeoff: `sequencer` runs the arming sequence for `autopilot`.
     - setpoint_rate_hz: PX4 leaves offboard below 2 Hz.
     - readiness_timeout_s: FAILED / TEMPORARILY_REJECTED arming checks are retried meanwhile;
       a cold-booting ArduCopter needs ~45 s.
-    - gcs_timeout_s: 0 off, else at least GCS_TIMEOUT_MIN_S (`holding`).
+    - signing_key_file, gcs_timeout_s: `signing` and `holding` do the work; gcs_timeout_s is
+      0 (off) or at least GCS_TIMEOUT_MIN_S.
     - pass_start: "capture" (the bridge's own capture gate) or "planner" (`Bridge.set_start`,
       the planner's formation/start, which the agents' slots follow too).
     """

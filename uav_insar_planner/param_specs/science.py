@@ -21,6 +21,7 @@ _LOOKS_WHY = "beyond any UAV SAR product; the multilook objective and the Monte-
 SOLVERS = ("global", "paper-ao", "evolution")
 
 
+# A spec's `to_si`: from the unit of its name to SI.
 def db_to_linear(db: float) -> float:
     return 10.0 ** (db / 10.0)
 
