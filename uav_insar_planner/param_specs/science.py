@@ -1,8 +1,8 @@
 """The scenario's parameters (`PARAM_SPECS`, Table I): name, type, default, allowed range with
 the reason it stops there, unit, description, and the SI value's name in `Params` with the
 conversion to it. `params` validates values against the table and builds `Params` from it; the
-planner node declares its ROS parameters from it. The one place where dB, dBm, degrees and
-Mbit/s become SI: the conversions below, each named by the spec that needs it.
+planner node declares its ROS parameters from it. The scenario's dB, dBm, degrees and Mbit/s
+become SI here, once: each spec names its conversion (`to_si`).
 """
 from __future__ import annotations
 
