@@ -18,12 +18,12 @@ import numpy as np  # noqa: E402
 from uav_insar_planner import model  # noqa: E402
 from uav_insar_planner.params import Params  # noqa: E402
 from uav_insar_planner.plan import Plan  # noqa: E402
-from uav_insar_planner.scene import swath_edges  # noqa: E402
+from uav_insar_planner.report.scene import swath_edges  # noqa: E402
 from uav_insar_planner.solver import rays  # noqa: E402
 from uav_insar_planner.solver.power import station_radius_sq  # noqa: E402
 from uav_insar_planner.study.grid import MapRow  # noqa: E402
+from uav_insar_planner.study.sweep import SweepRow  # noqa: E402
 from uav_insar_planner.swarm import UAV_COLORS  # noqa: E402
-from uav_insar_planner.sweep import SweepRow  # noqa: E402
 
 SCHEME_STYLE = {
     "proposed": ("tab:blue", "o", "Proposed"),

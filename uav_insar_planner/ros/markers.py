@@ -14,9 +14,10 @@ replaces the old one, even with fewer UAVs), then, per namespace, so that each c
 
 UAV colours: U0 red, U1 blue, U2 green (as in `uav-insar plot-formation`), then orange,
 purple and brown for the slaves of larger swarms (swarm.MAX_UAVS = 6); geometry from
-scene.py. `formation/markers/flown` (MarkerArray, depth 10, at most every FLOWN_PERIOD_S): per
-UAV that reported a pose, `actual` SPHERE (id k) at its latest uav{K}/pose and `flown`
-LINE_STRIP (id k), the path flown, a point every TRAIL_STEP_M, at most TRAIL_POINTS.
+report/scene.py. `formation/markers/flown` (MarkerArray, depth 10, at most every
+FLOWN_PERIOD_S): per UAV that reported a pose, `actual` SPHERE (id k) at its latest
+uav{K}/pose and `flown` LINE_STRIP (id k), the path flown, a point every TRAIL_STEP_M, at
+most TRAIL_POINTS.
 """
 from __future__ import annotations
 
@@ -33,8 +34,8 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 from uav_insar_planner.params import Params
 from uav_insar_planner.plan import Plan
+from uav_insar_planner.report.scene import Scene, Vec3, scene
 from uav_insar_planner.ros import topics
-from uav_insar_planner.scene import Scene, Vec3, scene
 
 # matplotlib's tab10 red, blue, green, orange, purple, brown: one colour per UAV of swarm.py.
 UAV_RGB = ((0.84, 0.15, 0.16), (0.12, 0.47, 0.71), (0.17, 0.63, 0.17), (1.0, 0.50, 0.05),

@@ -44,7 +44,7 @@ from geometry_msgs.msg import PoseStamped
 from rclpy.node import Node
 from std_msgs.msg import Header
 
-from uav_insar_planner.report import planner_messages as report
+from uav_insar_planner import published
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.plan_msgs import PlanId
 from uav_insar_planner.ros.start_msgs import encode_start
@@ -219,7 +219,7 @@ class PassStart:
     def _on_diagnostics(self, msg: DiagnosticArray) -> None:
         now = time.monotonic()
         for s in msg.status:
-            k = report.bridge_status_uav(s.name)
+            k = published.bridge_status_uav(s.name)
             if k is None:
                 continue
             values = {kv.key: kv.value for kv in s.values}

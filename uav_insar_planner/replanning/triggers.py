@@ -30,7 +30,7 @@ import numpy as np
 
 from uav_insar_planner.evaluate import rate_tolerance_bps
 from uav_insar_planner.params import Params
-from uav_insar_planner.replan import measured_gain
+from uav_insar_planner.replanning.plans import measured_gain
 
 SATURATED_MISSES = 3
 SATURATION_RTOL = 1e-3
@@ -76,7 +76,7 @@ class UavState:
     back: bool = False  # heard again after it was declared lost
 
 
-class SwarmMonitor:
+class ReplanTriggers:
     """The state machine of the module doc for the scenario `params` (SI)."""
 
     def __init__(self, params: Params, num_uavs: int | None = None):
