@@ -123,7 +123,7 @@ def test_hold_plan_is_all_nan_and_no_power(table1):
     assert hold.active_uavs == [] and hold.p_com_w.shape == (3, p.num_slots)
 
 
-# --- the monitor -----------------------------------------------------------------------------
+# --- the triggers ----------------------------------------------------------------------------
 def heard(m, k, t, slot=None, left=500.0, power=1.0, rate=None):
     m.heard_pose(k, t, (0.0, 0.0, 50.0))
     if slot is not None:

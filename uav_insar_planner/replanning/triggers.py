@@ -1,5 +1,6 @@
-"""What the planner knows of the swarm in flight: who is heard, who is lost, whose closed loop
-saturates. Plain Python on a clock the caller passes (no ROS; `swarm_watch` feeds it).
+"""What calls for a re-plan (`ReplanTriggers`): what the planner knows of the swarm in flight,
+who is heard, who is lost, whose closed loop saturates. Plain Python on a clock the caller
+passes (no ROS; ros/swarm_watch.py feeds it).
 
 Lost: a UAV heard at least once (any of uavK/pose, uavK/achieved_rate, uavK/offload) that
 then stays silent for more than `timeout_s`, or that the MAVLink bridge reports lost on

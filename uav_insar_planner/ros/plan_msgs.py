@@ -109,13 +109,15 @@ def next_stamp(now: tuple[int, int], last: tuple[int, int] | None) -> tuple[int,
     return (sec + 1, 0) if nanosec >= 1_000_000_000 else (sec, nanosec)
 
 
-def encode(plan: Plan, plan_id: PlanId) -> tuple[PoseArray, Float64MultiArray]:
-    """The two messages of `plan` under `plan_id` (see the module docstring)."""
+def encode(points: Sequence[tuple[float, float, float]], plan: Plan,
+           plan_id: PlanId) -> tuple[PoseArray, Float64MultiArray]:
+    """The two messages of `plan` under `plan_id` (see the module docstring); `points` are
+    its `published.formation_points`, which the planner also hands the pass start."""
     formation = PoseArray()
     formation.header.stamp = Time(sec=plan_id.sec, nanosec=plan_id.nanosec)
     formation.header.frame_id = topics.FRAME_ID
     formation.poses = [Pose(position=Point(x=x, y=y, z=z), orientation=Quaternion(w=1.0))
-                       for x, y, z in published.formation_points(plan)]
+                       for x, y, z in points]
     rows, cols, data = published.power_rows(plan)
     power = Float64MultiArray(data=data)
     power.layout.dim = [MultiArrayDimension(label="uav", size=rows, stride=rows * cols),

@@ -117,7 +117,7 @@ class PlannerNode(Node):
         self.add_post_set_parameters_callback(self._after_set_parameters)
         self.create_timer(DIAGNOSTICS_PERIOD_S, self._on_diagnostics_timer)
         self._worker = SolveWorker(solve, self._on_solved)
-        self._swarm = SwarmWatch(self, params)
+        self._swarm = SwarmWatch(self, params, self._publish_replan, self._set_plan_status)
         self._pass_start = PassStart(self, self._swarm.lost_uavs, self._swarm.declare_lost)
         self._watch_uavs(params.num_uavs)
         self._worker.request(params, "start")
@@ -217,7 +217,7 @@ class PlannerNode(Node):
         self._publish_diagnostics()
 
     # --- the swarm watch's re-plans (swarm_watch.py) -------------------------------------
-    def publish_replan(self, plan: Plan, status: published.Status) -> None:
+    def _publish_replan(self, plan: Plan, status: published.Status) -> None:
         """Adopt and publish a re-plan (a reduced or power re-plan, or the hold plan)."""
         with self._state_lock:
             self._plan_status = status
@@ -226,7 +226,7 @@ class PlannerNode(Node):
         self._publish_plan(plan)
         self._publish_diagnostics()
 
-    def set_plan_status(self, status: published.Status) -> None:
+    def _set_plan_status(self, status: published.Status) -> None:
         """Report a re-plan that could not be published."""
         with self._state_lock:
             self._plan_status = status
@@ -241,11 +241,12 @@ class PlannerNode(Node):
                 self.get_clock().now().seconds_nanoseconds(), last),
                 self.get_fully_qualified_name())
             plan_id, scenario = self._plan_id, self._scenario
-        msg, power = plan_msgs.encode(plan, plan_id)
+        points = published.formation_points(plan)
+        msg, power = plan_msgs.encode(points, plan, plan_id)
         self._formation_pub.publish(msg)
         self._power_pub.publish(power)
         self._markers.publish_plan(scenario, plan)
-        self._pass_start.on_plan(plan_id, published.formation_points(plan), scenario.speed,
+        self._pass_start.on_plan(plan_id, points, scenario.speed,
                                  scenario.speed * scenario.slot_duration_s * scenario.num_slots)
 
     def _on_diagnostics_timer(self) -> None:
