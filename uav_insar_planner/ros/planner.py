@@ -59,6 +59,7 @@ from uav_insar_planner.params import (
 )
 from uav_insar_planner.plan import Plan
 from uav_insar_planner.ros import plan_msgs, topics
+from uav_insar_planner.ros.formation_start import FormationStart
 from uav_insar_planner.ros.gcs_link import GcsHeartbeat
 from uav_insar_planner.ros.markers import PlannerMarkers
 from uav_insar_planner.ros.parameters import (
@@ -68,7 +69,6 @@ from uav_insar_planner.ros.parameters import (
     spec_values,
     unknown_overrides,
 )
-from uav_insar_planner.ros.pass_start import PassStart
 from uav_insar_planner.ros.plan_msgs import PlanId
 from uav_insar_planner.ros.plan_watch import PlanWatch
 from uav_insar_planner.ros.run import run_node
@@ -118,7 +118,8 @@ class PlannerNode(Node):
         self.create_timer(DIAGNOSTICS_PERIOD_S, self._on_diagnostics_timer)
         self._worker = SolveWorker(solve, self._on_solved)
         self._swarm = SwarmWatch(self, params, self._publish_replan, self._set_plan_status)
-        self._pass_start = PassStart(self, self._swarm.lost_uavs, self._swarm.declare_lost)
+        self._formation_start = FormationStart(self, self._swarm.lost_uavs,
+                                               self._swarm.declare_lost)
         self._watch_uavs(params.num_uavs)
         self._worker.request(params, "start")
 
@@ -134,7 +135,7 @@ class PlannerNode(Node):
                                      lambda msg, k=k: self._on_rate(k, msg), topics.RATE_DEPTH)
             self._plans.watch_uav(k)
             self._swarm.watch_uav(k)
-            self._pass_start.watch_uav(k)
+            self._formation_start.watch_uav(k)
         with self._state_lock:
             self._watched = max(self._watched, n)
             self._reports += [published.UavReport()
@@ -246,7 +247,7 @@ class PlannerNode(Node):
         self._formation_pub.publish(msg)
         self._power_pub.publish(power)
         self._markers.publish_plan(scenario, plan)
-        self._pass_start.on_plan(plan_id, points, scenario.speed,
+        self._formation_start.on_plan(plan_id, points, scenario.speed,
                                  scenario.speed * scenario.slot_duration_s * scenario.num_slots)
 
     def _on_diagnostics_timer(self) -> None:
