@@ -124,8 +124,9 @@ def _reach(graph: Graph, node: str) -> set[str]:
 def folder_imports() -> str:
     """The layout page's part: the folder graph as a Mermaid picture (an arrow A --> B: A
     imports B, directly or through the folders between) and as a list, floor by floor."""
-    graph = {n: deps for n, deps in folder_graph().items()
-             if deps or any(n in d for d in folder_graph().values())}
+    full = folder_graph()
+    imported = set().union(*full.values())
+    graph = {n: deps for n, deps in full.items() if deps or n in imported}  # no lone nodes
     if circle := find_circle(graph):
         raise ValueError("folder import circle: " + " -> ".join(circle))
     floor = floors(graph)
