@@ -49,7 +49,7 @@ setup(
     # installs this (docs/hardware.md); pyserial for the autopilot on a serial port.
     install_requires=["numpy>=1.24", "pyyaml>=6", "pymavlink>=2.4.40", "pyserial>=3.5"],
     extras_require={
-        # The planner node and the uav-insar tools: cli/extras.py PLANNER_MODULES names them
+        # The planner node and the uav-insar tools: extras.py PLANNER_MODULES names them
         # all, for the one line a lean install gives instead of a traceback.
         "planner": PLANNER,
         # ROS 2 Jazzy from PyPI wheels (x86_64 Linux, CPython 3.10-3.13), with the planner's

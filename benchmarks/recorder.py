@@ -3,7 +3,7 @@
 On a private ROS_DOMAIN_ID (random, discovery on this host), for each target rate this process
 publishes geometry_msgs/PoseStamped (the suite's most frequent type) on /bench/pose, reliable,
 keep-last 1000, paced to the rate for --seconds; two processes subscribe: the recorder
-(`python -m uav_insar_planner.ros.tools.record OUT --topics /bench/pose`, raw bytes into an MCAP
+(`python -m uav_insar_planner.cli record OUT --topics /bench/pose`, raw bytes into an MCAP
 bag) and, side by side, a bare rclpy node that only counts raw messages (the floor of what a
 Python subscriber costs). Both are stopped with SIGINT 2 s after the last message; the
 recorded count comes from the bag's metadata.yaml, the recorder's CPU seconds from /proc
@@ -61,7 +61,7 @@ def run_rate(rate: float, seconds: float, env: dict[str, str], folder: Path) -> 
     from rclpy.qos import QoSProfile
 
     bag = folder / f"bench_{int(rate)}"
-    recorder = subprocess.Popen([sys.executable, "-m", "uav_insar_planner.ros.tools.record",
+    recorder = subprocess.Popen([sys.executable, "-m", "uav_insar_planner.cli", "record",
                                  str(bag), "--topics", TOPIC], env=env, text=True,
                                 stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
     counter = subprocess.Popen([sys.executable, "-c", COUNTER], env=env, text=True,

@@ -13,8 +13,8 @@ import argparse
 import statistics
 import time
 
-from uav_insar_planner import replan
 from uav_insar_planner.params import default_params
+from uav_insar_planner.replanning import plans
 from uav_insar_planner.solver import solve
 
 
@@ -40,11 +40,11 @@ def main() -> None:
         full = median_s(lambda p=p: solve(p), args.runs)
         for lost, survivor in ((1, 2), (2, 1)):
             for n0 in (0, 40, 70):
-                energy = {k: replan.energy_left_j(p, plan.p_com_w, k, n0) for k in range(3)}
+                energy = {k: plans.energy_left_j(p, plan.p_com_w, k, n0) for k in range(3)}
 
                 def run(p=p, power=plan.p_com_w, lost=lost, survivor=survivor, n0=n0,
                         energy=energy):
-                    return replan.replan_without(p, power, lost, (survivor,), n0, energy)
+                    return plans.replan_without(p, power, lost, (survivor,), n0, energy)
 
                 t = median_s(run, args.runs)
                 new, _ = run()

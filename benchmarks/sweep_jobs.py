@@ -23,7 +23,7 @@ import numpy as np
 from uav_insar_planner.params import SCHEMES, default_params
 from uav_insar_planner.study.executors import process_pool, run_serial
 from uav_insar_planner.study.grid import map_params, run_map
-from uav_insar_planner.sweep import run_sweep
+from uav_insar_planner.study.sweep import run_sweep
 
 FIGURES = [("h_amb_min_m", np.linspace(0.5, 2.0, 16),
             {"master_fixed_xz_m": [-54.0, 74.0], "p_com_max_db": 10.1}),

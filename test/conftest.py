@@ -166,7 +166,7 @@ def mission(tmp_path_factory):
 
     with private_graph() as (env, w):
         bag = tmp_path_factory.mktemp("bags") / "mission"
-        recorder = start_process([sys.executable, "-m", "uav_insar_planner.ros.tools.record",
+        recorder = start_process([sys.executable, "-m", "uav_insar_planner.cli", "record",
                                   str(bag)], env)
         nodes = [start_node("agent", ["-p", f"uav_id:={k}", "-p", "time_scale:=40.0", "-p",
                                       f"num_slots:={MISSION_SLOTS}", "-r", f"__node:=agent{k}"],

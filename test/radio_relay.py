@@ -19,7 +19,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from std_msgs.msg import Float64, Float64MultiArray, Header, String
 
-from uav_insar_planner.report.planner_messages import bridge_status_name
+from uav_insar_planner.published import bridge_status_name
 from uav_insar_planner.ros import topics
 
 

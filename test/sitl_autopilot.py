@@ -102,7 +102,7 @@ def fly(wind_mps: float, turbulence: float, workdir: Path, domain: int,
         for k in range(3):
             (workdir / f"copter{k}").mkdir()
             sitls.append(start_sitl(k, workdir / f"copter{k}", parm))
-        nodes.append(start_process([sys.executable, "-m", "uav_insar_planner.ros.tools.record",
+        nodes.append(start_process([sys.executable, "-m", "uav_insar_planner.cli", "record",
                                     str(bag)], env))
         connections = ", ".join(f"'tcp:127.0.0.1:{p}'" for p in BASE_PORTS)
         nodes.append(start_node("mavlink_bridge", [

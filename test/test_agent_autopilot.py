@@ -69,7 +69,7 @@ def flown(tmp_path_factory):
         ports = [BASE_PORT + 10 * k for k in range(3)]
         # Each vehicle starts airborne a few metres off its planned start, so the bridge's approach
         # is short but real (N = y, E = x, D = -z: the bridge's default frame).
-        procs = [start_process([sys.executable, "-m", "uav_insar_planner.ros.tools.record",
+        procs = [start_process([sys.executable, "-m", "uav_insar_planner.cli", "record",
                                 str(bag)], env)]
         procs += [start_process([*executable("uav-insar-vehicle"), "--sysid", str(FIRST_SYSID + k),
                                  "--listen", f"udpin:127.0.0.1:{port}", "--airborne",

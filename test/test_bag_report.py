@@ -12,6 +12,7 @@ from conftest import REPO
 
 from uav_insar_planner.evaluate import evaluate
 from uav_insar_planner.params import default_params
+from uav_insar_planner.swarm import MAX_UAVS, uav_color, uav_rgb
 
 N = 5
 T0_NS = 1_700_000_000 * 10**9
@@ -119,6 +120,19 @@ def test_figures_of_a_known_bag(known_bag):
     assert f.sigma_h_flown_m == pytest.approx(evaluate(P, flown, POWER, "proposed").sigma_h)
     assert f.sigma_h_flown_m != pytest.approx(f.sigma_h_plan_m, rel=1e-4)
     assert f.sigma_h_recorded_m == 0.0736
+
+
+def test_every_uav_has_its_colour_past_the_largest_swarm():
+    """One colour table for the report's plots and the markers: Table I's U0 red, U1 blue,
+    U2 green, a colour of its own for each UAV a swarm may have, and one (no IndexError) for
+    the seventh UAV and past it, should MAX_UAVS grow."""
+    import matplotlib.colors
+
+    assert [uav_color(k) for k in range(3)] == [
+        matplotlib.colors.to_hex(name) for name in ("tab:red", "tab:blue", "tab:green")]
+    assert len({uav_color(k) for k in range(MAX_UAVS)}) == MAX_UAVS
+    for k in range(3 * MAX_UAVS):
+        assert matplotlib.colors.to_rgb(uav_color(k)) == pytest.approx(uav_rgb(k))
 
 
 def test_report_cli_prints_the_table_and_writes_the_plots(known_bag, tmp_path):

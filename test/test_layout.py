@@ -3,17 +3,18 @@ from __future__ import annotations
 
 import ast
 import re
+import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "docs" / "_hooks"))  # as MkDocs loads the hooks: their folder
+
+from reference_layout import find_circle, folder_graph, module_graph, product_files  # noqa: E402
+
 PLANNER = ROOT / "uav_insar_planner"
 ROS_IMPORT = re.compile(r"^\s*(?:import|from)\s+(rclpy|\w+_msgs|std_srvs|rcl_interfaces)\b",
                         re.MULTILINE)
 MAX_LINES = 400
-
-
-def product_files() -> list[Path]:
-    return sorted([*PLANNER.rglob("*.py"), *(ROOT / "uav_insar_sim").rglob("*.py")])
 
 
 def test_only_the_ros_folder_imports_ros():
@@ -34,8 +35,8 @@ def test_the_science_imports_nothing_of_ros_or_mavlink():
     """Every module flat at the top of the package is the science (or a convention of the
     whole suite: swarm.py, exit_codes.py) and imports nothing of ROS or MAVLink."""
     science = sorted(PLANNER.glob("*.py")) + sorted((PLANNER / "solver").rglob("*.py"))
-    science += sorted((PLANNER / "bag").rglob("*.py")) + sorted((PLANNER / "report").rglob("*.py"))
-    science += sorted((PLANNER / "param_specs").rglob("*.py"))
+    for folder in ("bag", "report", "study", "replanning", "param_specs"):
+        science += sorted((PLANNER / folder).rglob("*.py"))
     for path in science:
         text = path.read_text()
         assert not ROS_IMPORT.search(text), path
@@ -56,53 +57,32 @@ def test_the_two_solver_back_ends_import_nothing_of_each_other():
                                  path.read_text(), re.MULTILINE), path
 
 
-def _module_name(path: Path) -> str:
-    parts = list(path.relative_to(ROOT).with_suffix("").parts)
-    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
-
-
-def _imported_modules(path: Path, known: set[str]) -> set[str]:
-    """Product modules `path` imports anywhere (function bodies and TYPE_CHECKING included)."""
-    found = set()
-    for node in ast.walk(ast.parse(path.read_text())):
-        if isinstance(node, ast.Import):
-            names = [a.name for a in node.names]
-        elif isinstance(node, ast.ImportFrom) and node.module and not node.level:
-            names = [f"{node.module}.{a.name}" for a in node.names] + [node.module]
-        else:
-            continue
-        for name in names:
-            while name and name not in known:
-                name = name.rpartition(".")[0]
-            if name:
-                found.add(name)
-    return found
-
-
 def test_at_most_sixteen_modules_flat_in_the_planner_package():
     flat = sorted(p.name for p in PLANNER.glob("*.py"))
     assert len(flat) <= 16, flat
 
 
 def test_no_import_circle_among_product_modules():
-    files = {_module_name(p): p for p in product_files()}
-    graph = {m: _imported_modules(p, set(files)) - {m} for m, p in files.items()}
-    # An import of pkg.mod runs pkg/__init__ first; that edge is Python's, not ours.
-    graph = {m: {d for d in deps if not m.startswith(d + ".")} for m, deps in graph.items()}
-    done: set[str] = set()
+    circle = find_circle(module_graph())
+    assert not circle, "import circle: " + " -> ".join(circle or ())
 
-    def visit(module: str, stack: list[str]) -> None:
-        if module in stack:
-            raise AssertionError("import circle: " + " -> ".join(
-                stack[stack.index(module):] + [module]))
-        if module in done:
-            return
-        for dep in sorted(graph.get(module, ())):
-            visit(dep, [*stack, module])
-        done.add(module)
 
-    for module in sorted(graph):
-        visit(module, [])
+def test_no_folder_imports_a_folder_that_imports_it_back():
+    """Directly or through others (docs/_hooks/reference_layout.py draws the same graph on the
+    layout page, floor by floor)."""
+    graph = folder_graph()
+    assert {"uav_insar_planner/swarm.py", "uav_insar_planner/solver/ao/", "uav_insar_sim/vehicle/",
+            "uav_insar_planner/cli/__init__.py"} <= set(graph)  # the nodes it should have
+    assert "uav_insar_planner/solver/" in graph["uav_insar_planner/study/"]
+    circle = find_circle(graph)
+    assert not circle, "folder import circle: " + " -> ".join(circle or ())
+
+
+def test_a_circle_between_folders_is_found():
+    """The check itself: a circle through a third folder, and its first node repeated."""
+    graph = {"a/": {"b/"}, "b/": {"c/"}, "c/": {"a/"}, "d/": {"a/"}}
+    assert find_circle(graph) == ["a/", "b/", "c/", "a/"]
+    assert find_circle({"a/": {"b/"}, "b/": set()}) is None
 
 
 def test_one_argument_parser_class():

@@ -22,11 +22,11 @@ import process_group
 import pytest
 from conftest import REPO
 
-from uav_insar_planner.cli.extras import INSTALL_PLANNER, PLANNER_MODULES, SOLVER_MODULES
 from uav_insar_planner.demo.processes import executable, start_process
+from uav_insar_planner.extras import INSTALL_PLANNER, PLANNER_MODULES, SOLVER_MODULES
 from uav_insar_planner.param_specs.nodes import FIRST_SYSID
 from uav_insar_planner.params import params_from_mapping
-from uav_insar_planner.report.planner_messages import formation_points
+from uav_insar_planner.published import formation_points
 from uav_insar_planner.solver import solve
 
 pytestmark = pytest.mark.timeout(240)
@@ -59,7 +59,7 @@ def _setup_list(name: str) -> list[str]:
 
 
 def test_the_planner_extra_is_what_the_missing_line_names():
-    """setup.py's PLANNER and cli/extras.py's PLANNER_MODULES name the same libraries (each
+    """setup.py's PLANNER and extras.py's PLANNER_MODULES name the same libraries (each
     distribution here is imported under its own name)."""
     names = [req.split(">")[0].split("=")[0].split("[")[0] for req in _setup_list("PLANNER")]
     assert sorted(names) == sorted(PLANNER_MODULES)

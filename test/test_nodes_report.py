@@ -5,11 +5,11 @@ import threading
 import numpy as np
 import pytest
 
+from uav_insar_planner import published
 from uav_insar_planner.evaluate import evaluate, rate_tolerance_bps
 from uav_insar_planner.params import SPEC_BY_NAME, ParamSpec
 from uav_insar_planner.params_file import load_params
 from uav_insar_planner.plan import Plan
-from uav_insar_planner.report import planner_messages as report
 from uav_insar_planner.ros.solve_worker import SolveWorker
 from uav_insar_planner.solver.power import schedules
 
@@ -28,9 +28,9 @@ def plan_for(formation, scheme="proposed", feasible=None, blocking=()):
 
 def test_formation_points_and_power_rows():
     plan = plan_for(FORMATION)
-    assert report.formation_points(plan) == [(-40.0, 0.0, 60.0), (-35.0, 0.0, 58.0),
+    assert published.formation_points(plan) == [(-40.0, 0.0, 60.0), (-35.0, 0.0, 58.0),
                                              (-45.0, 0.0, 62.0)]
-    rows, cols, data = report.power_rows(plan)
+    rows, cols, data = published.power_rows(plan)
     assert (rows, cols) == (3, 4)
     assert data[cols * 2 + 1] == plan.p_com_w[2, 1]  # row-major: [k][n] at k * N + n
 
@@ -38,15 +38,15 @@ def test_formation_points_and_power_rows():
 def test_unflown_uav_keeps_nan_pose():
     formation = FORMATION.copy()
     formation[2] = np.nan
-    x, y, z = report.formation_points(plan_for(formation, "single-baseline"))[2]
+    x, y, z = published.formation_points(plan_for(formation, "single-baseline"))[2]
     assert math.isnan(x) and math.isnan(z) and y == 0.0
 
 
 def test_plan_status_ok_lists_the_figures():
     plan = plan_for(FORMATION, feasible=True)
-    status = report.plan_status(plan)
+    status = published.plan_status(plan)
     values = dict(status.values)
-    assert status.level == report.OK
+    assert status.level == published.OK
     assert float(values["sigma_h_m"]) == pytest.approx(plan.sigma_h_m, rel=1e-5)
     for key in ("sigma_h_bound_m", "b_perp_m.uav1", "b_perp_m.uav2", "h_amb_m.uav1",
                 "coherence.uav2", "solve_time_s", "iterations", "scheme", "x_m.uav0"):
@@ -56,25 +56,25 @@ def test_plan_status_ok_lists_the_figures():
 
 def test_infeasible_plan_is_an_error_naming_the_blocking_constraints():
     plan = plan_for(FORMATION, feasible=False, blocking=["C8", "C10"])
-    status = report.plan_status(plan)
-    assert status.level == report.ERROR
+    status = published.plan_status(plan)
+    assert status.level == published.ERROR
     assert "C8, C10" in status.message and "not published" in status.message
     assert dict(status.values)["blocking_constraints"] == "C8,C10"
-    assert report.failure_status("proposed", "boom").level == report.ERROR
+    assert published.failure_status("proposed", "boom").level == published.ERROR
 
 
 def test_uav_status_stale_ok_warn():
     rate_min = (10e6, 16.95e6, 1e6)
-    rep = report.UavReport()
-    assert report.uav_status(1, (-35.0, 58.0), rate_min, rep).level == report.STALE
+    rep = published.UavReport()
+    assert published.uav_status(1, (-35.0, 58.0), rate_min, rep).level == published.STALE
     rep.position = (-35.0, 12.0, 62.0)
     rep.record_rate(16.95e6 + 0.5 * rate_tolerance_bps(rate_min) * -1, rate_min[1])
-    ok = report.uav_status(1, (-35.0, 58.0), rate_min, rep)
-    assert ok.level == report.OK
+    ok = published.uav_status(1, (-35.0, 58.0), rate_min, rep)
+    assert ok.level == published.OK
     assert float(dict(ok.values)["position_error_m"]) == pytest.approx(4.0)
     rep.record_rate(16.0e6, rate_min[1])
-    warn = report.uav_status(1, (-35.0, 58.0), rate_min, rep)
-    assert warn.level == report.WARN and "missed" in warn.message
+    warn = published.uav_status(1, (-35.0, 58.0), rate_min, rep)
+    assert warn.level == published.WARN and "missed" in warn.message
     assert float(dict(warn.values)["rate_margin_bps"]) == pytest.approx(-0.95e6)
     assert dict(warn.values)["slots_reported"] == "2"
 

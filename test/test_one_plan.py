@@ -15,6 +15,7 @@ from std_srvs.srv import Trigger
 
 from uav_insar_planner import load_params, model, solve
 from uav_insar_planner.demo.processes import start_node, stop_node
+from uav_insar_planner.published import formation_points
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.plan_msgs import PlanId, encode
 from uav_insar_sim.vehicle.simulator import SimVehicle
@@ -141,7 +142,8 @@ def test_bad_plan_messages_are_dropped_by_an_agent_and_the_bridge(watcher, procs
         plan = solve(load_params(overrides={"num_slots": N}))
         sec, ns = w.node.get_clock().now().seconds_nanoseconds()
         good_id = PlanId(sec, ns, w.node.get_fully_qualified_name())
-        formation, power = encode(plan, good_id)
+        points = formation_points(plan)
+        formation, power = encode(points, plan, good_id)
         formation_pub = w.node.create_publisher(PoseArray, "/" + topics.FORMATION,
                                                 topics.LATCHED)
         power_pub = w.node.create_publisher(Float64MultiArray, "/" + topics.POWER,
@@ -160,16 +162,16 @@ def test_bad_plan_messages_are_dropped_by_an_agent_and_the_bridge(watcher, procs
             bridge_status(), "target_track_m").split()[::2] == [x0, z0], 20.0)
 
         bad = []
-        nan_mix, _ = encode(plan, good_id)
+        nan_mix, _ = encode(points, plan, good_id)
         nan_mix.poses[0].position.x = math.nan  # z stays finite
         bad.append((formation_pub, nan_mix))
-        huge, _ = encode(plan, good_id)
+        huge, _ = encode(points, plan, good_id)
         huge.poses[1].position.z = 1e39
         bad.append((formation_pub, huge))
-        _, negative = encode(plan, good_id)
+        _, negative = encode(points, plan, good_id)
         negative.data[3] = -1.0
         bad.append((power_pub, negative))
-        _, layout = encode(plan, good_id)
+        _, layout = encode(points, plan, good_id)
         layout.layout.dim = layout.layout.dim[:2]
         bad.append((power_pub, layout))
         for pub, msg in bad:  # one a second: each drop gets its own (rate-limited) line

@@ -12,7 +12,7 @@ import pytest
 
 from uav_insar_planner.params import default_params
 from uav_insar_planner.solver import solve
-from uav_insar_planner.sweep import gains, run_sweep
+from uav_insar_planner.study.sweep import gains, run_sweep
 
 SCHEMES = ["proposed", "single-baseline", "fixed-master", "static-power"]
 # the paper's C10, R_min exactly (rate_margin 0), as every claim below is the paper's

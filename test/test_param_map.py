@@ -30,7 +30,7 @@ from uav_insar_planner.study.executors import (
     SCHEDULER_WORKERS_WAIT_S,
     jobs_max,
 )
-from uav_insar_planner.sweep import SweepRow
+from uav_insar_planner.study.sweep import SweepRow
 
 CLI = [sys.executable, "-m", "uav_insar_planner.cli"]
 # 3 x 3 cells, two schemes; static-power is feasible at rate 17 Mbit/s and not at 18 with

@@ -19,7 +19,7 @@ from geometry_msgs.msg import PoseStamped
 from std_msgs.msg import Header
 
 from uav_insar_planner.demo.processes import stop_nodes
-from uav_insar_planner.report.planner_messages import bridge_status_name
+from uav_insar_planner.published import bridge_status_name
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.plan_msgs import decode_formation
 from uav_insar_planner.ros.start_msgs import decode_start

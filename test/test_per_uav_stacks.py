@@ -20,7 +20,7 @@ from std_srvs.srv import Trigger
 
 from uav_insar_planner.demo.processes import executable, start_process
 from uav_insar_planner.params import params_from_mapping
-from uav_insar_planner.report.planner_messages import formation_points
+from uav_insar_planner.published import formation_points
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.mavlink_bridge import POSE_PERIOD_S
 from uav_insar_planner.ros.start_msgs import decode_start

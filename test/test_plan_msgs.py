@@ -9,6 +9,7 @@ import pytest
 from std_msgs.msg import MultiArrayDimension
 
 from uav_insar_planner import load_params, solve
+from uav_insar_planner.published import formation_points
 from uav_insar_planner.ros.plan_gate import PlanPairing
 from uav_insar_planner.ros.plan_msgs import (
     DropLog,
@@ -33,7 +34,7 @@ def plans():
 def test_round_trip_carries_one_identity_on_both_messages(plans):
     plan = plans[0]
     plan_id = PlanId(1733086200, 123456789, "/swarm/planner")
-    formation, power = encode(plan, plan_id)
+    formation, power = encode(formation_points(plan), plan, plan_id)
     assert power.layout.dim[2].label == "plan /swarm/planner 1733086200.123456789"
     f, p = decode_formation(formation), decode_power(power)
     assert f.stamp == p.plan_id.stamp == (1733086200, 123456789)
@@ -43,7 +44,7 @@ def test_round_trip_carries_one_identity_on_both_messages(plans):
 
 
 def test_a_uav_not_flown_decodes_as_none(plans):
-    f = decode_formation(encode(plans[1], PlanId(1, 0, "/planner"))[0])
+    f = decode_formation(encode(formation_points(plans[1]), plans[1], PlanId(1, 0, "/planner"))[0])
     assert f.points[2] is None and all(f.points[:2])
 
 
@@ -61,7 +62,7 @@ def test_stamps_increase_even_when_the_clock_does_not():
     (1, "z", math.inf, "poses[1].position.z"),
 ])
 def test_bad_formation_names_the_field_and_value(plans, k, axis, value, field):
-    formation, _ = encode(plans[0], PlanId(1, 0, "/planner"))
+    formation, _ = encode(formation_points(plans[0]), plans[0], PlanId(1, 0, "/planner"))
     setattr(formation.poses[k].position, axis, value)
     with pytest.raises(PlanMessageError) as err:
         decode_formation(formation)
@@ -93,14 +94,14 @@ def _bad_power(power, case):
     ("two dims", "layout.dim"), ("short data", "data"), ("stride", "layout.dim strides"),
     ("label", "layout.dim[2].label")])
 def test_bad_power_names_the_field(plans, case, field):
-    _, power = encode(plans[0], PlanId(1, 0, "/planner"))
+    _, power = encode(formation_points(plans[0]), plans[0], PlanId(1, 0, "/planner"))
     with pytest.raises(PlanMessageError) as err:
         decode_power(_bad_power(power, case))
     assert str(err.value).startswith(f"formation/power: {field}: value ")
 
 
 def test_a_long_value_is_cut_short(plans):
-    _, power = encode(plans[0], PlanId(1, 0, "/planner"))
+    _, power = encode(formation_points(plans[0]), plans[0], PlanId(1, 0, "/planner"))
     power.layout.dim[2] = MultiArrayDimension(label="x" * 500, size=1, stride=1)
     with pytest.raises(PlanMessageError) as err:
         decode_power(power)
@@ -118,7 +119,7 @@ def test_drop_log_counts_every_drop_and_logs_at_most_one_line_a_second():
 
 
 def _pair(pairing, plan, plan_id, order="fp"):
-    formation, power = encode(plan, plan_id)
+    formation, power = encode(formation_points(plan), plan, plan_id)
     for which in order:
         if which == "f":
             pairing.add_formation(decode_formation(formation))

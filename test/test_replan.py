@@ -1,5 +1,6 @@
-"""Re-planning without ROS: the reduced problem (replan.py) against the independent checker,
-and the swarm monitor's state machine (swarm_health.py) on a clock of the test's own."""
+"""Re-planning without ROS: the reduced problem (replanning/plans.py) against the independent
+checker, and the re-plan triggers' state machine (replanning/triggers.py) on a clock of the
+test's own."""
 from __future__ import annotations
 
 import dataclasses
@@ -7,9 +8,10 @@ import dataclasses
 import numpy as np
 import pytest
 
-from uav_insar_planner import load_params, model, replan, solve
+from uav_insar_planner import load_params, model, solve
 from uav_insar_planner.evaluate import evaluate
-from uav_insar_planner.swarm_health import SATURATED_MISSES, SwarmMonitor
+from uav_insar_planner.replanning import plans
+from uav_insar_planner.replanning.triggers import SATURATED_MISSES, ReplanTriggers
 
 
 @pytest.fixture(scope="module")
@@ -31,8 +33,8 @@ def test_lost_slave_gives_a_feasible_single_baseline_plan_for_the_slots_left(
         table1, lost, survivor):
     p, plan = table1
     n0 = 30
-    energy = {k: replan.energy_left_j(p, plan.p_com_w, k, n0) for k in range(3)}
-    full, problem = replan.replan_without(p, plan.p_com_w, lost, (survivor,), n0, energy)
+    energy = {k: plans.energy_left_j(p, plan.p_com_w, k, n0) for k in range(3)}
+    full, problem = plans.replan_without(p, plan.p_com_w, lost, (survivor,), n0, energy)
     assert full.feasible and full.scheme == "single-baseline"
     assert full.active_uavs == [0, survivor]
     assert np.isnan(full.formation[lost]).all()
@@ -58,8 +60,8 @@ def test_lost_slave_gives_a_feasible_single_baseline_plan_for_the_slots_left(
 def test_a_survivor_short_of_energy_is_held_to_it(table1):
     p, plan = table1
     n0 = 40
-    energy = {0: replan.energy_left_j(p, plan.p_com_w, 0, n0), 1: 60.0, 2: 0.0}
-    full, problem = replan.replan_without(p, plan.p_com_w, 2, (1,), n0, energy)
+    energy = {0: plans.energy_left_j(p, plan.p_com_w, 0, n0), 1: 60.0, 2: 0.0}
+    full, problem = plans.replan_without(p, plan.p_com_w, 2, (1,), n0, energy)
     assert problem.params.energy_budget_j(1) == 60.0
     if full.feasible:
         assert full.p_com_w[1, n0:].sum() * p.slot_duration_s <= 60.0 * (1 + 1e-9)
@@ -79,12 +81,12 @@ def test_reduced_problem_refuses_the_master_a_past_slot_or_no_energy(table1):
                  (1, (2,), 10, {**energy, 2: 0.0}), (1, (), 10, energy),
                  (1, (1, 2), 10, energy)):
         with pytest.raises(ValueError, match=r"^(lost|first_slot|energy_left): value "):
-            replan.remaining_problem(p, *args)
+            plans.remaining_problem(p, *args)
 
 
 def test_the_shifted_station_is_exact(table1):
     p, _ = table1
-    problem = replan.remaining_problem(p, 2, (1,), 25, {0: 300.0, 1: 300.0})
+    problem = plans.remaining_problem(p, 2, (1,), 25, {0: 300.0, 1: 300.0})
     r = problem.params
     assert r.num_slots == p.num_slots - 25
     assert (r.y_track - r.ground_station[1]) == pytest.approx(p.y_track[25:]
@@ -94,14 +96,14 @@ def test_the_shifted_station_is_exact(table1):
 def test_power_replan_keeps_the_formation_and_the_energy_left(table1):
     p, plan = table1
     n0, left = 50, 40.0
-    new = replan.power_replan(p, plan, 1, n0, left, gain=10 ** -0.6)
+    new = plans.power_replan(p, plan, 1, n0, left, gain=10 ** -0.6)
     assert np.array_equal(new.formation, plan.formation, equal_nan=True)
     assert new.p_com_w[:, :n0] == pytest.approx(plan.p_com_w[:, :n0])
     assert new.p_com_w[[0, 2]] == pytest.approx(plan.p_com_w[[0, 2]])
     assert new.p_com_w[1, n0:].max() <= p.p_max_w
     assert new.p_com_w[1, n0:].sum() * p.slot_duration_s == pytest.approx(left)
     # Enough energy: exactly the model's need over the measured 6 dB loss (below P_max).
-    rich = replan.power_replan(p, plan, 2, n0, 500.0, gain=10 ** -0.6)
+    rich = plans.power_replan(p, plan, 2, n0, 500.0, gain=10 ** -0.6)
     assert rich.p_com_w[2, n0:] == pytest.approx(
         np.minimum(plan.p_com_w[2, n0:] * 10 ** 0.6, p.p_max_w))
 
@@ -111,17 +113,17 @@ def test_measured_gain_inverts_the_rate_model(table1):
     q = (plan.formation[1, 0], 10.0, plan.formation[1, 1])
     d = model.distance_to_station(*q, p.ground_station)
     rate = model.fdma_rate(2.0, d, p.comm_bandwidth_hz, p.beta_c * 0.25)
-    assert replan.measured_gain(p, 1, q, 2.0, float(rate)) == pytest.approx(0.25)
+    assert plans.measured_gain(p, 1, q, 2.0, float(rate)) == pytest.approx(0.25)
 
 
 def test_hold_plan_is_all_nan_and_no_power(table1):
     p, _ = table1
-    hold = replan.hold_plan(p, "why")
+    hold = plans.hold_plan(p, "why")
     assert np.isnan(hold.formation).all() and not hold.p_com_w.any()
     assert hold.active_uavs == [] and hold.p_com_w.shape == (3, p.num_slots)
 
 
-# --- the monitor -----------------------------------------------------------------------------
+# --- the triggers ----------------------------------------------------------------------------
 def heard(m, k, t, slot=None, left=500.0, power=1.0, rate=None):
     m.heard_pose(k, t, (0.0, 0.0, 50.0))
     if slot is not None:
@@ -131,7 +133,7 @@ def heard(m, k, t, slot=None, left=500.0, power=1.0, rate=None):
 
 def test_silence_past_the_timeout_is_lost_once_with_the_slot_reached(table1):
     p, plan = table1
-    m = SwarmMonitor(p)
+    m = ReplanTriggers(p)
     m.set_plan(plan.p_com_w)
     for k in range(3):
         heard(m, k, 0.0, slot=4)
@@ -152,7 +154,7 @@ def test_silence_past_the_timeout_is_lost_once_with_the_slot_reached(table1):
 
 def test_without_offload_reports_the_slot_comes_from_the_poses(table1):
     p, _ = table1
-    m = SwarmMonitor(p)
+    m = ReplanTriggers(p)
     assert m.next_slot() == 0
     step = p.speed * p.slot_duration_s
     m.heard_pose(0, 0.0, (0.0, -3.0, 50.0))  # on the run-up
@@ -163,7 +165,7 @@ def test_without_offload_reports_the_slot_comes_from_the_poses(table1):
 
 def test_never_heard_is_never_lost(table1):
     p, _ = table1
-    m = SwarmMonitor(p)
+    m = ReplanTriggers(p)
     assert m.check(1000.0, 5.0) == []
     assert m.describe(0, 1000.0) == "not heard yet"
     heard(m, 2, 1000.0)
@@ -172,7 +174,7 @@ def test_never_heard_is_never_lost(table1):
 
 def test_bridge_lost_report_is_lost_at_once(table1):
     p, _ = table1
-    m = SwarmMonitor(p)
+    m = ReplanTriggers(p)
     heard(m, 0, 0.0, slot=3)
     lost = m.bridge_lost(1, 0.5, "lost: no heartbeat for 5.0 s")
     assert lost.uav == 1 and lost.slot == 4 and lost.why.startswith("MAVLink bridge: ")
@@ -181,7 +183,7 @@ def test_bridge_lost_report_is_lost_at_once(table1):
 
 def test_energy_left_without_offload_reports_is_the_plans_schedule(table1):
     p, plan = table1
-    m = SwarmMonitor(p)
+    m = ReplanTriggers(p)
     m.set_plan(plan.p_com_w)
     assert m.energy_left_j(1, 20) == pytest.approx(
         p.e_max_j - plan.p_com_w[1, :20].sum() * p.slot_duration_s)
@@ -189,7 +191,7 @@ def test_energy_left_without_offload_reports_is_the_plans_schedule(table1):
 
 def test_three_saturated_misses_in_a_row_warn_once(table1):
     p, plan = table1
-    m = SwarmMonitor(p)
+    m = ReplanTriggers(p)
     m.set_plan(plan.p_com_w)
     low = p.rate_min_bps[1] * 0.5
     heard(m, 1, 0.0, slot=0, power=p.p_max_w, rate=low)
@@ -208,7 +210,7 @@ def test_three_saturated_misses_in_a_row_warn_once(table1):
 
 def test_short_of_energy_counts_as_saturated_and_met_rates_do_not(table1):
     p, plan = table1
-    m = SwarmMonitor(p)
+    m = ReplanTriggers(p)
     m.set_plan(plan.p_com_w)
     low = p.rate_min_bps[0] * 0.9
     for n in range(SATURATED_MISSES):  # well below P_max, but no energy left for the plan
@@ -222,7 +224,7 @@ def test_short_of_energy_counts_as_saturated_and_met_rates_do_not(table1):
 
 def test_a_new_plan_restarts_the_count(table1):
     p, plan = table1
-    m = SwarmMonitor(p)
+    m = ReplanTriggers(p)
     m.set_plan(plan.p_com_w)
     low = p.rate_min_bps[1] * 0.5
     for n in range(SATURATED_MISSES - 1):

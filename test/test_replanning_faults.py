@@ -11,9 +11,9 @@ from rclpy.parameter import Parameter
 
 from uav_insar_planner import load_params, solve
 from uav_insar_planner.demo.processes import stop_nodes
+from uav_insar_planner.replanning.triggers import SATURATED_MISSES
 from uav_insar_planner.ros.planner import PlannerNode
 from uav_insar_planner.ros.swarm_watch import SWARM_STATUS_NAME
-from uav_insar_planner.swarm_health import SATURATED_MISSES
 from uav_insar_sim.agent_node import AgentNode
 from uav_insar_sim.vehicle.simulator import SimVehicle
 
@@ -70,7 +70,7 @@ def test_bridge_reports_the_master_lost_and_commands_loiter_to_the_others(watche
 
 
 # Seeded deep fade on uav1 (6 dB log-normal shadowing over 40 m, seed 15): without ROS its
-# closed loop misses R_min at P_max from slot 7 on (replan.py's own Mission run shows it).
+# closed loop misses R_min at P_max from slot 7 on (replanning/plans.py's own Mission run shows it).
 N = 20
 FADE = {"shadowing_std_db": 6.0, "shadowing_corr_m": 40.0, "fading_seed": 15}
 

@@ -20,9 +20,10 @@ from conftest import REPO
 from diagnostic_msgs.msg import DiagnosticStatus
 from side_by_side import flight
 
-from uav_insar_planner import load_params, replan, solve
+from uav_insar_planner import load_params, solve
 from uav_insar_planner.demo.processes import stop_nodes
 from uav_insar_planner.evaluate import evaluate, rate_tolerance_bps
+from uav_insar_planner.replanning import plans
 from uav_insar_planner.ros.swarm_watch import SWARM_STATUS_NAME
 
 pytestmark = pytest.mark.timeout(120)
@@ -98,8 +99,8 @@ def test_killed_slave_is_replanned_out_and_the_survivors_finish(watcher, procs, 
     p_new = np.reshape(power.data, (3, N))
     assert (p_new[1] == 0).all()
     assert p_new[[0, 2], :n0] == pytest.approx(plan.p_com_w[[0, 2], :n0])
-    energy = {k: replan.energy_left_j(params, plan.p_com_w, k, n0) for k in range(3)}
-    problem = replan.remaining_problem(params, 1, (2,), n0, energy)
+    energy = {k: plans.energy_left_j(params, plan.p_com_w, k, n0) for k in range(3)}
+    problem = plans.remaining_problem(params, 1, (2,), n0, energy)
     rows = np.vstack([q[[0, 2]], [[np.nan, np.nan]]])
     tail = np.vstack([p_new[[0, 2], n0:], np.zeros((1, N - n0))])
     ev = evaluate(problem.params, rows, tail, "single-baseline")

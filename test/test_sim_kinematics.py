@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from uav_insar_sim.kinematics import (
+from uav_insar_sim.physics.kinematics import (
     PointMass,
     runup_and_cruise,
     runup_distance,

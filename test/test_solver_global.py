@@ -13,10 +13,10 @@ from uav_insar_planner.params import SCHEMES, default_params
 from uav_insar_planner.schemes import static_power_w
 from uav_insar_planner.solver import blocking, power, rays, solve
 from uav_insar_planner.solver.global_opt import infeasibility, slave_ranges
-from uav_insar_planner.solver.global_opt.band import bound_minimizer_band
 from uav_insar_planner.solver.global_opt.optimum import solve_global
 from uav_insar_planner.solver.power import schedules
 from uav_insar_planner.solver.start_grid import find_start
+from uav_insar_planner.study.band import bound_minimizer_band
 
 FIG3 = {"master_fixed_xz_m": [-54.0, 74.0], "p_com_max_db": 10.1}
 FIG4 = {"master_fixed_xz_m": [-41.0, 61.0], "p_com_max_db": 9.0}

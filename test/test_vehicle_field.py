@@ -15,7 +15,7 @@ from mavlink_fakes import MAV, FakePeer, wait_until
 from process_group import kill_group
 
 from uav_insar_planner.demo.processes import executable, free_udp_ports
-from uav_insar_sim.gauss_markov import GaussMarkov
+from uav_insar_sim.physics.gauss_markov import GaussMarkov
 from uav_insar_sim.vehicle.autopilot import KP
 from uav_insar_sim.vehicle.cli import main
 from uav_insar_sim.vehicle.estimate_error import EstimateError

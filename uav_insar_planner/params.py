@@ -93,7 +93,7 @@ class Params:
     objective: str
     solver: str
     #: Per-UAV budgets [J] in place of E_com^max in C11, for a re-plan in mid-mission
-    #: (replan.py); None: e_max_j for every UAV. Not a user parameter: `replace` drops it.
+    #: (replanning/plans.py); None: e_max_j for every UAV. Not a user parameter: `replace` drops it.
     energy_budget_uav_j: tuple[float, ...] | None = None  # one per UAV (num_uavs)
 
     def energy_budget_j(self, k: int) -> float:

@@ -12,9 +12,10 @@ DEFAULT_NUM_UAVS = 3  # Table I: one master, two slaves (the paper's dual baseli
 MIN_UAVS = 2  # one interferogram: the single-baseline benchmark
 MAX_UAVS = 6  # five interferograms
 MASTER = 0
-# One colour per UAV in every plot (matplotlib's tab10; ros/markers.py has the same as RGB):
-# Table I's U0 red, U1 blue, U2 green, then the slaves of larger swarms.
-UAV_COLORS = ("tab:red", "tab:blue", "tab:green", "tab:orange", "tab:purple", "tab:brown")
+# One colour per UAV in every plot and marker: matplotlib's tab10, reordered so Table I's U0 is
+# red, U1 blue, U2 green; the slaves of larger swarms take the rest, then it starts again.
+_PALETTE = ("#d62728", "#1f77b4", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2",
+            "#7f7f7f", "#bcbd22", "#17becf")
 
 
 def uavs(num_uavs: int) -> range:
@@ -40,6 +41,17 @@ def agent_name(k: int) -> str:
 def uav_names(num_uavs: int) -> tuple[str, ...]:
     """uav0..uav(N-1)."""
     return tuple(uav_name(k) for k in uavs(num_uavs))
+
+
+def uav_color(k: int) -> str:
+    """UAV `k`'s colour as `#rrggbb`, for any k >= 0 (distinct for k < 10)."""
+    return _PALETTE[k % len(_PALETTE)]
+
+
+def uav_rgb(k: int) -> tuple[float, float, float]:
+    """`uav_color(k)` as (red, green, blue) in 0..1, as a marker's ColorRGBA takes it."""
+    code = uav_color(k)
+    return (int(code[1:3], 16) / 255, int(code[3:5], 16) / 255, int(code[5:7], 16) / 255)
 
 
 def uav_index(name: str) -> int | None:

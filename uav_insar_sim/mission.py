@@ -26,14 +26,14 @@ import numpy as np
 from uav_insar_planner.mavlink.frames import Vec3
 from uav_insar_planner.params import Params
 from uav_insar_sim.fading import LinkFading
-from uav_insar_sim.kinematics import (
+from uav_insar_sim.offload import ClosedLoopOffload
+from uav_insar_sim.physics.kinematics import (
     PointMass,
     runup_and_cruise,
     runup_distance,
     slot_start,
     step_toward,
 )
-from uav_insar_sim.offload import ClosedLoopOffload
 from uav_insar_sim.slots import SlotSample, SlotSchedule
 from uav_insar_sim.wind import Wind
 

@@ -4,7 +4,7 @@ Wind velocity (track frame, m/s) at mission time t:
 
     w(t) = w_steady + u(t)
 
-with u a first-order Gauss-Markov process per axis (gauss_markov.py; the Dryden turbulence
+with u a first-order Gauss-Markov process per axis (physics/gauss_markov.py; the Dryden turbulence
 spectrum to first order), stationary std sigma_g and time constant tau_g. Draws come from a
 generator seeded by (seed, uav_id, 2), so a mission under wind is reproducible for a seed.
 
@@ -21,7 +21,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from uav_insar_sim.gauss_markov import GaussMarkov
+from uav_insar_sim.physics.gauss_markov import GaussMarkov
 
 
 class Wind:

@@ -12,6 +12,7 @@ from typing import Any
 
 from reference_commands import commands_page
 from reference_exit_codes import exit_codes_page
+from reference_layout import folder_imports
 from reference_parameters import parameters_page
 from reference_topics import recorded_topics, topics_page
 
@@ -24,6 +25,7 @@ PAGES: dict[str, Callable[[], str]] = {
 #: Hand-written page -> {its marker line: the builder of what replaces it}.
 INSERTS: dict[str, dict[str, Callable[[], str]]] = {
     "recording.md": {"<!-- generated: recorded topics -->": recorded_topics},
+    "layout.md": {"<!-- generated: folder imports -->": folder_imports},
 }
 
 

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from uav_insar_planner.report.planner_messages import PLAN_STATUS_NAME, uav_status_name
+from uav_insar_planner.published import PLAN_STATUS_NAME, uav_status_name
 from uav_insar_planner.swarm import MAX_UAVS, uav_index
 
 # uavK of any swarm (K < MAX_UAVS, checked by uav_index)

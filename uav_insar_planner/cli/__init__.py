@@ -2,7 +2,7 @@
 report missions.
 
 One module per verb, as ros2cli's: `HELP` (one line), `add_arguments(parser)` and
-`main(args) -> int`. A verb needs the `planner` extra (cli/extras.py) unless it says `LEAN =
+`main(args) -> int`. A verb needs the `planner` extra (extras.py) unless it says `LEAN =
 True`. A verb with `ROS_ARGS = True` also takes `--ros-args ...`, which the
 dispatcher takes out before argparse (parser.split_ros_args) and hands over as `args.ros_args`;
 the rclpy work of such a verb is in ros/tools/, imported only when it runs. The exit codes are
@@ -19,7 +19,6 @@ import sys
 from collections.abc import Sequence
 from types import ModuleType
 
-from uav_insar_planner.cli.extras import missing_line
 from uav_insar_planner.cli.parser import OneLineParser, one_line, split_ros_args
 from uav_insar_planner.exit_codes import (
     EXIT_BAD_INPUT,
@@ -28,6 +27,7 @@ from uav_insar_planner.exit_codes import (
     EXIT_OK,
     CommandFailed,
 )
+from uav_insar_planner.extras import missing_line
 from uav_insar_planner.params import ParamError
 from uav_insar_planner.solver import SolverFailure
 

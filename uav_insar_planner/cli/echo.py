@@ -28,7 +28,7 @@ from uav_insar_planner.params import shown
 from uav_insar_planner.ros.tools.msg_yaml import TRUNCATE_LENGTH
 
 HELP = "print a topic like `ros2 topic echo`"
-LEAN = True  # rclpy and yaml only: it runs on a UAV's lean install (cli/extras.py)
+LEAN = True  # rclpy and yaml only: it runs on a UAV's lean install (extras.py)
 ROS_ARGS = True  # the dispatcher hands what follows --ros-args to rcl, as args.ros_args
 
 

@@ -26,7 +26,7 @@ from uav_insar_planner.mission_file.qgc_plan import PX4_PASS_SEQ
 from uav_insar_planner.params import ParamError, shown
 
 HELP = "start every UAV's mission at one UTC instant (MISSION_START; PX4's common start)"
-LEAN = True  # pymavlink only: it runs on a lean install (cli/extras.py), a field laptop's
+LEAN = True  # pymavlink only: it runs on a lean install (extras.py), a field laptop's
 ITEM_MAX = 65535  # a mission sequence number is a uint16
 SYSID_MAX = 255
 

@@ -49,7 +49,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def main(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from uav_insar_planner.sweep import parse_sweep_name, run_sweep, with_value, write_csv
+    from uav_insar_planner.study.sweep import parse_sweep_name, run_sweep, with_value, write_csv
 
     params = scenario_params(args)
     parse_sweep_name(args.name)
@@ -83,7 +83,7 @@ def main(args: argparse.Namespace) -> int:
 
 
 def _print_rows(rows: list, args: argparse.Namespace, mc: int) -> None:
-    from uav_insar_planner.sweep import gains
+    from uav_insar_planner.study.sweep import gains
 
     extra = f" {'bound_opt':>10} {'band_lo':>9} {'band_hi':>9}" if args.band else ""
     extra += f" {'mc_sigma_h':>10} {'mc_amb_%':>8}" if mc else ""

@@ -27,7 +27,7 @@ def default_bag_path(now: float | None = None) -> Path:
 
 def start_recorder(path: Path, env: dict[str, str]) -> subprocess.Popen:
     """`uav-insar record path` in `env`; its output stays in its pipe (see stop_recorder)."""
-    return start_process([sys.executable, "-m", "uav_insar_planner.ros.tools.record", str(path)],
+    return start_process([sys.executable, "-m", "uav_insar_planner.cli", "record", str(path)],
                          env)
 
 

@@ -2,7 +2,7 @@
 
 `HoldOrder` is each vehicle's position-hold mode: ArduCopter LOITER (custom_mode 5), PX4
 AUTO.LOITER ("HOLD": main 4, sub 3). The bridge engages it when the planner publishes a
-formation with every pose NaN (the mission cannot continue, `replan.hold_plan`) and when the
+formation with every pose NaN (the mission cannot continue, `replanning.plans`) and when the
 ground station falls silent for `gcs_timeout_s` (`holding`); it then sends no setpoints.
 `ResumeOrder` is the mode the bridge flies in, GUIDED / OFFBOARD: `holding` engages it for a
 vehicle the ground-silence hold put in LOITER once a new plan gives it a target again.

@@ -6,7 +6,7 @@ from the ground station (`gcs_heard`) and its clock (`check`); it asks which mod
 for a vehicle (`order_due`) and whether its setpoints are stopped (`stopped`). Not
 thread-safe: the bridge holds its lock.
 
-- Mission stop: a formation with every pose NaN after one with targets (`replan.hold_plan`)
+- Mission stop: a formation with every pose NaN after one with targets (`replanning.plans`)
   engages the hold order (`hold.HoldOrder`: LOITER / AUTO.LOITER) for every vehicle; a later
   plan releases it for the UAVs it gives a target, which stay in their hold mode until the
   pilot or a GCS switches them back.

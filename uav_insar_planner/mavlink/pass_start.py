@@ -5,7 +5,7 @@ pass_start "capture": a bridge that sees every vehicle starts the pass itself on
 linked UAV with a target (whose arming did not fail) reports a fresh position within
 `capture_radius_m` of its start point; radius 0 starts at once.
 pass_start "planner" (a stack per UAV: no bridge sees the others): the planner sees every UAV
-captured and publishes one wall-clock start a little in the future (ros/pass_start.py);
+captured and publishes one wall-clock start a little in the future (ros/formation_start.py);
 `planner_start` turns it into the bridge's monotonic track clock, so every bridge starts at
 the same instant as far as the hosts' clocks agree (GNSS time / chrony: an offset dt puts a
 UAV v_y dt along track).

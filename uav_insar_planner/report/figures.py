@@ -18,12 +18,12 @@ import numpy as np  # noqa: E402
 from uav_insar_planner import model  # noqa: E402
 from uav_insar_planner.params import Params  # noqa: E402
 from uav_insar_planner.plan import Plan  # noqa: E402
-from uav_insar_planner.scene import swath_edges  # noqa: E402
+from uav_insar_planner.report.scene import swath_edges  # noqa: E402
 from uav_insar_planner.solver import rays  # noqa: E402
 from uav_insar_planner.solver.power import station_radius_sq  # noqa: E402
 from uav_insar_planner.study.grid import MapRow  # noqa: E402
-from uav_insar_planner.swarm import UAV_COLORS  # noqa: E402
-from uav_insar_planner.sweep import SweepRow  # noqa: E402
+from uav_insar_planner.study.sweep import SweepRow  # noqa: E402
+from uav_insar_planner.swarm import uav_color  # noqa: E402
 
 SCHEME_STYLE = {
     "proposed": ("tab:blue", "o", "Proposed"),
@@ -144,30 +144,29 @@ def plot_formation(p: Params, plan: Plan, path: str | Path) -> None:
     # equal axes: size the figure to the plane so the plot fills it
     fig, ax = plt.subplots(figsize=(10, max(3.5, 10 * zhi / (xhi - xlo) + 1.2)))
     xs, zs = np.linspace(xlo, xhi, 400), np.linspace(0, zhi, 300)
-    colors = UAV_COLORS
     for k in flown:
         if k > 0:
             mask = _slave_region(p, plan, k, xs, zs)
             if mask.any():
-                ax.contourf(xs, zs, mask.astype(float), levels=[0.5, 1.5], colors=[colors[k]],
+                ax.contourf(xs, zs, mask.astype(float), levels=[0.5, 1.5], colors=[uav_color(k)],
                             alpha=0.15)
-                ax.contour(xs, zs, mask.astype(float), levels=[0.5], colors=[colors[k]],
+                ax.contour(xs, zs, mask.astype(float), levels=[0.5], colors=[uav_color(k)],
                            linewidths=0.8)
         rho2 = station_radius_sq(p, k, plan.scheme)
         if np.isfinite(rho2) and rho2 > 0:
             ax.add_patch(plt.Circle((gx, gz), np.sqrt(rho2), fill=False, ls=":",
-                                    color=colors[k], lw=1))
+                                    color=uav_color(k), lw=1))
     z_line = np.linspace(0, zhi, 2)
-    ax.plot(model.master_x(z_line, p.x_t, p.theta0), z_line, "--", color=colors[0], lw=0.8,
+    ax.plot(model.master_x(z_line, p.x_t, p.theta0), z_line, "--", color=uav_color(0), lw=0.8,
             label=r"master line (C2, $\theta_0$)")
     for k in flown:
         x, z = plan.formation[k]
         th = p.theta0 if k == 0 else float(model.look_angle(x, z, p.x_t))
         edges = swath_edges(x, z, th, p.beamwidth)
         for edge in edges:
-            ax.plot([x, edge], [z, 0], color=colors[k], lw=0.6, alpha=0.6)
-        ax.plot(edges, [0, 0], color=colors[k], lw=4, alpha=0.35)
-        ax.plot([x], [z], "o", color=colors[k], ms=8,
+            ax.plot([x, edge], [z, 0], color=uav_color(k), lw=0.6, alpha=0.6)
+        ax.plot(edges, [0, 0], color=uav_color(k), lw=4, alpha=0.35)
+        ax.plot([x], [z], "o", color=uav_color(k), ms=8,
                 label=f"U{k} {'master' if k == 0 else 'slave'} ({x:.1f}, {z:.1f}) m")
     ax.plot([p.x_t], [0], "k*", ms=12, label=f"target line x_t = {p.x_t:g} m")
     ax.plot([gx], [gz], "ks", ms=8, label="ground station (x-z projection)")

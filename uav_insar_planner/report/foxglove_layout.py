@@ -29,7 +29,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from uav_insar_planner.report.planner_messages import (
+from uav_insar_planner.published import (
     HARDWARE_ID,
     PLAN_STATUS_NAME,
     POSITION_ERROR_KEY,

@@ -1,4 +1,4 @@
-"""A Plan as text for the terminal (`uav-insar solve`); planner_messages.py is what the
+"""A Plan as text for the terminal (`uav-insar solve`); published.py is what the
 planner publishes."""
 from __future__ import annotations
 

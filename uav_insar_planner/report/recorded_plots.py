@@ -20,8 +20,7 @@ import numpy as np  # noqa: E402
 
 from uav_insar_planner.params import Params  # noqa: E402
 from uav_insar_planner.report.recorded import MissionFigures  # noqa: E402
-from uav_insar_planner.swarm import UAV_COLORS as COLORS  # noqa: E402
-from uav_insar_planner.swarm import uav_name  # noqa: E402
+from uav_insar_planner.swarm import uav_color, uav_name  # noqa: E402
 
 FILES = ("report_rate.png", "report_power.png", "report_energy.png", "report_error.png",
          "report_formation.png")
@@ -54,7 +53,7 @@ def plot_report(f: MissionFigures, p: Params, out: Path) -> list[Path]:
     fig, axes = _panels(f, "Achieved versus required rate per slot")
     for k, ax in axes.items():
         slots = np.arange(len(f.rates[k]))
-        ax.plot(slots, f.rates[k] / 1e6, "o-", color=COLORS[k], ms=3, label="achieved")
+        ax.plot(slots, f.rates[k] / 1e6, "o-", color=uav_color(k), ms=3, label="achieved")
         ax.axhline(p.rate_min_bps[k] / 1e6, ls="--", color="k", lw=1, label="R_min")
         ax.set(title=uav_name(k), xlabel="slot n", ylabel="rate [Mbit/s]")
     _finish(axes)
@@ -64,7 +63,7 @@ def plot_report(f: MissionFigures, p: Params, out: Path) -> list[Path]:
     for k, ax in axes.items():
         ax.step(np.arange(f.num_slots), f.planned_power_w[k], "--", where="post", color="k",
                 lw=1, label="planned")
-        ax.step(np.arange(len(f.applied_w[k])), f.applied_w[k], where="post", color=COLORS[k],
+        ax.step(np.arange(len(f.applied_w[k])), f.applied_w[k], where="post", color=uav_color(k),
                 label="applied")
         ax.set(title=uav_name(k), xlabel="slot n", ylabel="P_com [W]")
     _finish(axes)
@@ -72,7 +71,7 @@ def plot_report(f: MissionFigures, p: Params, out: Path) -> list[Path]:
 
     fig, axes = _panels(f, "Energy used versus budget")
     for k, ax in axes.items():
-        ax.plot(np.arange(len(f.energy_j[k])), f.energy_j[k], color=COLORS[k], label="used")
+        ax.plot(np.arange(len(f.energy_j[k])), f.energy_j[k], color=uav_color(k), label="used")
         ax.axhline(f.budget_j[k], ls="--", color="k", lw=1, label="budget")
         ax.set(title=uav_name(k), xlabel="slot n", ylabel="energy [J]")
     _finish(axes)
@@ -81,8 +80,8 @@ def plot_report(f: MissionFigures, p: Params, out: Path) -> list[Path]:
     fig, axes = _panels(f, "Position error along the track")
     for k, ax in axes.items():
         t = f.tracks[k]
-        ax.plot(t.y, t.dx, color=COLORS[k], label="across-track x - x_k")
-        ax.plot(t.y, t.dz, ":", color=COLORS[k], label="height z - z_k")
+        ax.plot(t.y, t.dx, color=uav_color(k), label="across-track x - x_k")
+        ax.plot(t.y, t.dz, ":", color=uav_color(k), label="height z - z_k")
         ax.set(title=uav_name(k), xlabel="y (along-track) [m]", ylabel="error [m]")
     _finish(axes)
     written.append(_save(fig, out / FILES[3]))
@@ -91,9 +90,9 @@ def plot_report(f: MissionFigures, p: Params, out: Path) -> list[Path]:
     for k in f.uavs:
         x, _, z = f.targets[k]
         t = f.tracks[k]
-        ax.plot(x + t.dx, z + t.dz, ".", color=COLORS[k], ms=2, alpha=0.4,
+        ax.plot(x + t.dx, z + t.dz, ".", color=uav_color(k), ms=2, alpha=0.4,
                 label=f"U{k} flown")
-        ax.plot([x], [z], "o", mfc="none", color=COLORS[k], ms=10,
+        ax.plot([x], [z], "o", mfc="none", color=uav_color(k), ms=10,
                 label=f"U{k} planned ({x:.1f}, {z:.1f}) m")
     gx, _, gz = p.ground_station
     ax.plot([p.x_t], [0], "k*", ms=12, label=f"target line x_t = {p.x_t:g} m")

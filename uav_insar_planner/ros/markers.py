@@ -12,11 +12,11 @@ replaces the old one, even with fewer UAVs), then, per namespace, so that each c
   comm_disk       CYLINDER per UAV (id k): its C9-C11 disk of radius rho_k around g in the x-z
                   plane (axis along y, 0.2 m thick); none when rho_k is not finite
 
-UAV colours: U0 red, U1 blue, U2 green (as in `uav-insar plot-formation`), then orange,
-purple and brown for the slaves of larger swarms (swarm.MAX_UAVS = 6); geometry from
-scene.py. `formation/markers/flown` (MarkerArray, depth 10, at most every FLOWN_PERIOD_S): per
-UAV that reported a pose, `actual` SPHERE (id k) at its latest uav{K}/pose and `flown`
-LINE_STRIP (id k), the path flown, a point every TRAIL_STEP_M, at most TRAIL_POINTS.
+UAV colours: swarm.uav_rgb, as in every plot (`uav-insar plot-formation`): U0 red, U1 blue,
+U2 green, then the slaves of larger swarms; geometry from report/scene.py.
+`formation/markers/flown` (MarkerArray, depth 10, at most every FLOWN_PERIOD_S): per UAV that
+reported a pose, `actual` SPHERE (id k) at its latest uav{K}/pose and `flown` LINE_STRIP
+(id k), the path flown, a point every TRAIL_STEP_M, at most TRAIL_POINTS.
 """
 from __future__ import annotations
 
@@ -33,12 +33,10 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 from uav_insar_planner.params import Params
 from uav_insar_planner.plan import Plan
+from uav_insar_planner.report.scene import Scene, Vec3, scene
 from uav_insar_planner.ros import topics
-from uav_insar_planner.scene import Scene, Vec3, scene
+from uav_insar_planner.swarm import uav_rgb
 
-# matplotlib's tab10 red, blue, green, orange, purple, brown: one colour per UAV of swarm.py.
-UAV_RGB = ((0.84, 0.15, 0.16), (0.12, 0.47, 0.71), (0.17, 0.63, 0.17), (1.0, 0.50, 0.05),
-           (0.58, 0.40, 0.74), (0.55, 0.34, 0.29))
 FLOWN_PERIOD_S = 0.2
 TRAIL_STEP_M = 0.5
 TRAIL_POINTS = 5000
@@ -71,7 +69,7 @@ def plan_markers(s: Scene, stamp: Time) -> MarkerArray:
     out = [clear]
     y0, y1 = s.track_y
     for u in s.uavs:
-        rgb = UAV_RGB[u.k % len(UAV_RGB)]
+        rgb = uav_rgb(u.k)
         x, _, z = u.position
         out.append(_marker(stamp, "planned", u.k, Marker.SPHERE, _rgba(rgb), (1.0, 1.0, 1.0),
                            u.position))
@@ -119,7 +117,7 @@ class FlownTrail:
     def markers(self, stamp: Time) -> MarkerArray:
         out = []
         for k, position in sorted(self.latest.items()):
-            rgb = UAV_RGB[k % len(UAV_RGB)]
+            rgb = uav_rgb(k)
             out.append(_marker(stamp, "actual", k, Marker.SPHERE, _rgba(rgb, 0.8),
                                (0.8, 0.8, 0.8), position))
             path = _marker(stamp, "flown", k, Marker.LINE_STRIP, _rgba(rgb, 0.8),

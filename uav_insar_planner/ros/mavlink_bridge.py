@@ -51,11 +51,11 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PoseStamped
 from rclpy.node import Node
 
+from uav_insar_planner import published
 from uav_insar_planner.exit_codes import EXIT_BAD_INPUT, EXIT_CRASH
 from uav_insar_planner.mavlink.bridge import Bridge, VehicleStatus
 from uav_insar_planner.mavlink.config import from_parameters
 from uav_insar_planner.param_specs.nodes import BRIDGE_SPECS
-from uav_insar_planner.report import planner_messages as report
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.claims import DISCOVERY_WINDOW_S, UavClaims
 from uav_insar_planner.ros.gcs_link import GcsLink
@@ -237,7 +237,7 @@ class MavlinkBridgeNode(Node):
                   ("bad_signature", link.bad_signature), ("spoofed", link.spoofed),
                   ("bad_value", link.bad_value), ("unsendable", link.unsendable),
                   ("pass_plan", s.pass_plan), ("behind", s.behind)]
-        return DiagnosticStatus(level=level, name=report.bridge_status_name(s.uav),
+        return DiagnosticStatus(level=level, name=published.bridge_status_name(s.uav),
                                 message=text, hardware_id=f"mavlink sysid {s.sysid}",
                                 values=[KeyValue(key=k, value=fmt(v)) for k, v in values])
 

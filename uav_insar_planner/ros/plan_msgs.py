@@ -35,8 +35,8 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Point, Pose, PoseArray, Quaternion
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
+from uav_insar_planner import published
 from uav_insar_planner.plan import Plan
-from uav_insar_planner.report import planner_messages as report
 from uav_insar_planner.ros import topics
 from uav_insar_planner.swarm import MAX_UAVS, MIN_UAVS, uav_name
 
@@ -109,14 +109,16 @@ def next_stamp(now: tuple[int, int], last: tuple[int, int] | None) -> tuple[int,
     return (sec + 1, 0) if nanosec >= 1_000_000_000 else (sec, nanosec)
 
 
-def encode(plan: Plan, plan_id: PlanId) -> tuple[PoseArray, Float64MultiArray]:
-    """The two messages of `plan` under `plan_id` (see the module docstring)."""
+def encode(points: Sequence[tuple[float, float, float]], plan: Plan,
+           plan_id: PlanId) -> tuple[PoseArray, Float64MultiArray]:
+    """The two messages of `plan` under `plan_id` (see the module docstring); `points` are
+    its `published.formation_points`, which the planner also hands the pass start."""
     formation = PoseArray()
     formation.header.stamp = Time(sec=plan_id.sec, nanosec=plan_id.nanosec)
     formation.header.frame_id = topics.FRAME_ID
     formation.poses = [Pose(position=Point(x=x, y=y, z=z), orientation=Quaternion(w=1.0))
-                       for x, y, z in report.formation_points(plan)]
-    rows, cols, data = report.power_rows(plan)
+                       for x, y, z in points]
+    rows, cols, data = published.power_rows(plan)
     power = Float64MultiArray(data=data)
     power.layout.dim = [MultiArrayDimension(label="uav", size=rows, stride=rows * cols),
                         MultiArrayDimension(label="slot", size=cols, stride=cols),

@@ -20,8 +20,8 @@ import math
 from rclpy.node import Node
 from std_msgs.msg import String
 
+from uav_insar_planner import published
 from uav_insar_planner.plan import Plan
-from uav_insar_planner.report import planner_messages as report
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.plan_gate import publisher_names
 from uav_insar_planner.ros.plan_msgs import PlanId
@@ -57,7 +57,7 @@ class PlanWatch:
 
     def statuses(self, plan: Plan | None, plan_id: PlanId | None,
                  rate_min_bps: tuple[float, ...],
-                 reports: list[report.UavReport]) -> list[report.Status]:
+                 reports: list[published.UavReport]) -> list[published.Status]:
         """The publishers status, then one status per watched UAV (see the module docstring)."""
         out = [self._publishers_status()]
         own = plan_id.label if plan_id is not None else None
@@ -67,17 +67,17 @@ class PlanWatch:
         for k in watched:
             target = (tuple(float(v) for v in plan.formation[k]) if k in flown_by_plan
                       else (math.nan, math.nan))
-            status = report.uav_status(k, target, rate_min_bps, reports[k])
+            status = published.uav_status(k, target, rate_min_bps, reports[k])
             flown = self.flown.get(k)
             status.values += [("plan_flown", flown or ""), ("plan_published", own or "")]
             if flown and flown != own:
                 mine = f"this planner's is {own}" if own else "this planner has none"
-                status.level = max(status.level, report.WARN)
+                status.level = max(status.level, published.WARN)
                 status.message = f"flies {flown}, not this planner's ({mine}): {status.message}"
             out.append(status)
         return out
 
-    def _publishers_status(self) -> report.Status:
+    def _publishers_status(self) -> published.Status:
         others = self.other_publishers()
         same_name = bool(others) and set(others) == {self._me}
         if others != self._others:
@@ -90,10 +90,10 @@ class PlanWatch:
                 self._node.get_logger().info("this planner is the only publisher of formation")
         values = [("publishers", " ".join(sorted([self._me, *others])))]
         if others:
-            return report.Status(report.WARN if same_name else report.ERROR,
+            return published.Status(published.WARN if same_name else published.ERROR,
                                  PUBLISHERS_STATUS_NAME, _second_planner_text(others, self._me),
                                  values)
-        return report.Status(report.OK, PUBLISHERS_STATUS_NAME,
+        return published.Status(published.OK, PUBLISHERS_STATUS_NAME,
                              "this planner is the only publisher of formation", values)
 
 

@@ -46,8 +46,9 @@ from rclpy.parameter import Parameter
 from std_msgs.msg import Float64, Float64MultiArray
 from std_srvs.srv import Trigger
 
-from uav_insar_planner.cli.extras import SOLVER_MODULES, missing_line
+from uav_insar_planner import published
 from uav_insar_planner.exit_codes import EXIT_CRASH
+from uav_insar_planner.extras import SOLVER_MODULES, missing_line
 from uav_insar_planner.param_specs.nodes import PLANNER_SPECS
 from uav_insar_planner.params import (
     PARAM_SPECS,
@@ -57,8 +58,8 @@ from uav_insar_planner.params import (
     params_from_mapping,
 )
 from uav_insar_planner.plan import Plan
-from uav_insar_planner.report import planner_messages as report
 from uav_insar_planner.ros import plan_msgs, topics
+from uav_insar_planner.ros.formation_start import FormationStart
 from uav_insar_planner.ros.gcs_link import GcsHeartbeat
 from uav_insar_planner.ros.markers import PlannerMarkers
 from uav_insar_planner.ros.parameters import (
@@ -68,7 +69,6 @@ from uav_insar_planner.ros.parameters import (
     spec_values,
     unknown_overrides,
 )
-from uav_insar_planner.ros.pass_start import PassStart
 from uav_insar_planner.ros.plan_msgs import PlanId
 from uav_insar_planner.ros.plan_watch import PlanWatch
 from uav_insar_planner.ros.run import run_node
@@ -96,10 +96,10 @@ class PlannerNode(Node):
             return
         self._state_lock = threading.Lock()
         self._plan: Plan | None = None  # the last published (feasible) plan
-        self._plan_status: report.Status | None = None
+        self._plan_status: published.Status | None = None
         self._scenario: Params = params
         self._watched = 0  # UAVs 0.._watched - 1 have their per-UAV subscriptions
-        self._reports: list[report.UavReport] = []
+        self._reports: list[published.UavReport] = []
 
         self._formation_pub = self.create_publisher(PoseArray, topics.FORMATION,
                                                     topics.LATCHED)
@@ -117,8 +117,9 @@ class PlannerNode(Node):
         self.add_post_set_parameters_callback(self._after_set_parameters)
         self.create_timer(DIAGNOSTICS_PERIOD_S, self._on_diagnostics_timer)
         self._worker = SolveWorker(solve, self._on_solved)
-        self._swarm = SwarmWatch(self, params)
-        self._pass_start = PassStart(self, self._swarm.lost_uavs, self._swarm.declare_lost)
+        self._swarm = SwarmWatch(self, params, self._publish_replan, self._set_plan_status)
+        self._formation_start = FormationStart(self, self._swarm.lost_uavs,
+                                               self._swarm.declare_lost)
         self._watch_uavs(params.num_uavs)
         self._worker.request(params, "start")
 
@@ -134,15 +135,15 @@ class PlannerNode(Node):
                                      lambda msg, k=k: self._on_rate(k, msg), topics.RATE_DEPTH)
             self._plans.watch_uav(k)
             self._swarm.watch_uav(k)
-            self._pass_start.watch_uav(k)
+            self._formation_start.watch_uav(k)
         with self._state_lock:
             self._watched = max(self._watched, n)
-            self._reports += [report.UavReport()
+            self._reports += [published.UavReport()
                               for _ in range(self._watched - len(self._reports))]
 
-    def _fresh_reports(self) -> list[report.UavReport]:
+    def _fresh_reports(self) -> list[published.UavReport]:
         """What was heard since the plan: nothing yet (call with the state lock held)."""
-        return [report.UavReport() for _ in range(self._watched)]
+        return [published.UavReport() for _ in range(self._watched)]
 
     def stop(self) -> None:
         """Stop the solve worker (call before destroy_node)."""
@@ -194,10 +195,10 @@ class PlannerNode(Node):
         if not rclpy.ok(context=self.context):
             return
         if plan is None:
-            status = report.failure_status(params.scheme, error or "unknown error")
+            status = published.failure_status(params.scheme, error or "unknown error")
             self.get_logger().error(status.message)
         else:
-            status = report.plan_status(plan)
+            status = published.plan_status(plan)
             # rclpy ties a severity to each call site: one call per severity.
             if plan.feasible:
                 self.get_logger().info(f"{reason}: {status.message}")
@@ -217,7 +218,7 @@ class PlannerNode(Node):
         self._publish_diagnostics()
 
     # --- the swarm watch's re-plans (swarm_watch.py) -------------------------------------
-    def publish_replan(self, plan: Plan, status: report.Status) -> None:
+    def _publish_replan(self, plan: Plan, status: published.Status) -> None:
         """Adopt and publish a re-plan (a reduced or power re-plan, or the hold plan)."""
         with self._state_lock:
             self._plan_status = status
@@ -226,7 +227,7 @@ class PlannerNode(Node):
         self._publish_plan(plan)
         self._publish_diagnostics()
 
-    def set_plan_status(self, status: report.Status) -> None:
+    def _set_plan_status(self, status: published.Status) -> None:
         """Report a re-plan that could not be published."""
         with self._state_lock:
             self._plan_status = status
@@ -241,11 +242,12 @@ class PlannerNode(Node):
                 self.get_clock().now().seconds_nanoseconds(), last),
                 self.get_fully_qualified_name())
             plan_id, scenario = self._plan_id, self._scenario
-        msg, power = plan_msgs.encode(plan, plan_id)
+        points = published.formation_points(plan)
+        msg, power = plan_msgs.encode(points, plan, plan_id)
         self._formation_pub.publish(msg)
         self._power_pub.publish(power)
         self._markers.publish_plan(scenario, plan)
-        self._pass_start.on_plan(plan_id, report.formation_points(plan), scenario.speed,
+        self._formation_start.on_plan(plan_id, points, scenario.speed,
                                  scenario.speed * scenario.slot_duration_s * scenario.num_slots)
 
     def _on_diagnostics_timer(self) -> None:
@@ -259,7 +261,7 @@ class PlannerNode(Node):
         with self._state_lock:
             failure = self._worker.failure or self._swarm.failure
             if failure is not None:  # no more plans will come: say so
-                self._plan_status = report.failure_status(
+                self._plan_status = published.failure_status(
                     self._scenario.scheme, "solve worker died: " + failure)
             statuses = [self._plan_status] if self._plan_status else []
             statuses.append(self._swarm.status())
@@ -271,7 +273,7 @@ class PlannerNode(Node):
         msg = DiagnosticArray()
         msg.header.stamp = self.get_clock().now().to_msg()
         msg.status = [
-            DiagnosticStatus(level=getattr(DiagnosticStatus, report.LEVEL_NAMES[s.level]),
+            DiagnosticStatus(level=getattr(DiagnosticStatus, published.LEVEL_NAMES[s.level]),
                              name=s.name, message=s.message, hardware_id=s.hardware_id,
                              values=[KeyValue(key=key, value=v) for key, v in s.values])
             for s in statuses]
@@ -296,7 +298,7 @@ class PlannerNode(Node):
 
 def main(args: list[str] | None = None) -> int:
     """Run the planner until Ctrl-C / SIGTERM; exit code 2 when the parameters are invalid, 1
-    on an install without the solvers (cli/extras.py)."""
+    on an install without the solvers (extras.py)."""
     if line := missing_line(SOLVER_MODULES):
         print(f"[ERROR] [planner]: {line}", file=sys.stderr, flush=True)
         return EXIT_CRASH

@@ -8,7 +8,7 @@ side of it.
                    distance from the start line it resumes at: "<label> at <metres> m"
                    (the UAVs hold there until the instant, then fly on at v_y)
 
-The planner publishes it (ros/pass_start.py); a re-plan during the pass (same y_start)
+The planner publishes it (ros/formation_start.py); a re-plan during the pass (same y_start)
 publishes the same instant again under the new plan's label. Validated where it enters
 (`decode_start`): a label that is no plan identity, nanoseconds >= 1e9, or an instant more than
 PLAUSIBLE_S away from this host's clock (an unset clock, 1970) is dropped, counted and logged

@@ -12,7 +12,7 @@ from pathlib import Path
 
 from uav_insar_planner.params import Params
 from uav_insar_planner.study.executors import Runner, run_serial
-from uav_insar_planner.sweep import (
+from uav_insar_planner.study.sweep import (
     SweepRow,
     csv_fields,
     parse_sweep_name,

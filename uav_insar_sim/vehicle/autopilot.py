@@ -37,7 +37,7 @@ import numpy as np
 from uav_insar_planner.mavlink.autopilots import AUTOPILOTS, copter_mode_name, px4_mode_name
 from uav_insar_planner.mavlink.link import MAV
 from uav_insar_planner.mavlink.setpoints import POSITION_BITS, VELOCITY_BITS
-from uav_insar_sim.kinematics import PointMass, step_toward
+from uav_insar_sim.physics.kinematics import PointMass, step_toward
 
 KP = 1.5  # 1/s, position error -> velocity
 ARDUPILOT_FRAMES = frozenset((MAV.MAV_FRAME_LOCAL_NED, MAV.MAV_FRAME_LOCAL_OFFSET_NED,

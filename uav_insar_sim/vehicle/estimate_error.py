@@ -2,7 +2,7 @@
 
 A real copter's reported position wanders about where it is by decimetres with a correlation
 time of seconds (GNSS multipath and atmosphere, smoothed by the EKF): not white noise at the
-telemetry rate. Here it is a Gauss-Markov process per NED axis (gauss_markov.py) of std
+telemetry rate. Here it is a Gauss-Markov process per NED axis (physics/gauss_markov.py) of std
 `std_m` and time constant `tau_s`, advanced with every physics tick; its generator is seeded
 by (seed, sysid, 4), so each vehicle of a seeded run wanders its own reproducible way.
 
@@ -19,7 +19,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from uav_insar_sim.gauss_markov import GaussMarkov
+from uav_insar_sim.physics.gauss_markov import GaussMarkov
 
 MAX_STD_M = 100.0
 DEFAULT_TAU_S = 2.0

@@ -25,7 +25,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from std_msgs.msg import Float64, Float64MultiArray, String
 
-from uav_insar_planner.report.planner_messages import PLAN_STATUS_NAME
+from uav_insar_planner.published import PLAN_STATUS_NAME
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.plan_msgs import PlanMessageError, decode_formation, decode_power
 from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, uavs

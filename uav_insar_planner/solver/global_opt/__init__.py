@@ -2,6 +2,7 @@
 
 `optimum.solve_global` searches the ray model of solver/rays.py with the branch and bound of
 `branch_bound`, whose inner problem (the slaves' ranges for given angles) `slave_ranges` solves
-exactly; `infeasibility` explains an infeasible scenario; `band` gives sigma_h's spread over the
-minimisers of Proposition 1's bound. It imports nothing from the AO back end (solver/ao/).
+exactly; `infeasibility` explains an infeasible scenario. It imports nothing from the AO back
+end (solver/ao/); study/band.py, a study over `solve_global`, gives the spread over the bound's
+minimisers.
 """

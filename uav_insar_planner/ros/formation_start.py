@@ -1,4 +1,5 @@
-"""The planner's one pass start for bridges that each fly one UAV (`formation/start`).
+"""The planner's one start of the pass for the whole formation (`formation/start`), for
+bridges that each fly one UAV (their side: mavlink/pass_start.py's `planner_start`).
 
 No per-UAV bridge sees the other vehicles, so none can tell when the formation is complete.
 The planner can: it watches uav{K}/mavlink/pose of every UAV the current plan flies and the
@@ -44,7 +45,7 @@ from geometry_msgs.msg import PoseStamped
 from rclpy.node import Node
 from std_msgs.msg import Header
 
-from uav_insar_planner.report import planner_messages as report
+from uav_insar_planner import published
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.plan_msgs import PlanId
 from uav_insar_planner.ros.start_msgs import encode_start
@@ -119,7 +120,7 @@ def all_captured(starts: dict[int, Point], poses: dict[int, tuple[float, Point]]
     return bool(starts) and not not_captured(starts, poses, now, radius_m)
 
 
-class PassStart:
+class FormationStart:
     """See the module docstring. `lost()` is the set of UAVs the swarm watch declared lost;
     `node` has the parameters capture_radius_m and start_delay_s."""
 
@@ -219,7 +220,7 @@ class PassStart:
     def _on_diagnostics(self, msg: DiagnosticArray) -> None:
         now = time.monotonic()
         for s in msg.status:
-            k = report.bridge_status_uav(s.name)
+            k = published.bridge_status_uav(s.name)
             if k is None:
                 continue
             values = {kv.key: kv.value for kv in s.values}

@@ -1,5 +1,6 @@
-"""What the planner knows of the swarm in flight: who is heard, who is lost, whose closed loop
-saturates. Plain Python on a clock the caller passes (no ROS; `swarm_watch` feeds it).
+"""What calls for a re-plan (`ReplanTriggers`): what the planner knows of the swarm in flight,
+who is heard, who is lost, whose closed loop saturates. Plain Python on a clock the caller
+passes (no ROS; ros/swarm_watch.py feeds it).
 
 Lost: a UAV heard at least once (any of uavK/pose, uavK/achieved_rate, uavK/offload) that
 then stays silent for more than `timeout_s`, or that the MAVLink bridge reports lost on
@@ -30,7 +31,7 @@ import numpy as np
 
 from uav_insar_planner.evaluate import rate_tolerance_bps
 from uav_insar_planner.params import Params
-from uav_insar_planner.replan import measured_gain
+from uav_insar_planner.replanning.plans import measured_gain
 
 SATURATED_MISSES = 3
 SATURATION_RTOL = 1e-3
@@ -76,7 +77,7 @@ class UavState:
     back: bool = False  # heard again after it was declared lost
 
 
-class SwarmMonitor:
+class ReplanTriggers:
     """The state machine of the module doc for the scenario `params` (SI)."""
 
     def __init__(self, params: Params, num_uavs: int | None = None):

@@ -96,7 +96,7 @@ def solve_point(p: Params, value: float, scheme: str, objective: str | None,
     plan = solve(p, scheme=scheme, objective=objective, solver=solver)
     bound_opt = lo = hi = float("nan")
     if band and plan.feasible:
-        from uav_insar_planner.solver.global_opt.band import bound_minimizer_band
+        from uav_insar_planner.study.band import bound_minimizer_band
 
         bound_opt = solve(p, scheme=scheme, objective="bound",
                           solver="global").sigma_h_bound_m
