@@ -13,6 +13,7 @@ from typing import Any
 from reference_commands import commands_page
 from reference_exit_codes import exit_codes_page
 from reference_parameters import parameters_page
+from reference_solvers import backends_table
 from reference_topics import recorded_topics, topics_page
 
 PAGES: dict[str, Callable[[], str]] = {
@@ -24,6 +25,7 @@ PAGES: dict[str, Callable[[], str]] = {
 #: Hand-written page -> {its marker line: the builder of what replaces it}.
 INSERTS: dict[str, dict[str, Callable[[], str]]] = {
     "recording.md": {"<!-- generated: recorded topics -->": recorded_topics},
+    "science/solvers.md": {"<!-- generated: solver back ends -->": backends_table},
 }
 
 
