@@ -6,11 +6,11 @@ local solve (local_refine) meet here and nowhere else in each other's insides.
 Contract. `sc` is the problem object (solver/problem.py) of one scenario, scheme and objective.
 Lengths are metres (r0 the master's slant range, r a slave's, both from the target point
 (x_t, 0)), angles radians (theta a slave's look angle, the ray it sits on). Every function
-broadcasts over numpy arrays and never raises on nan or inf: where a quantity does not exist
-the result is nan (or an empty interval, lo > top), and the callers mask it.
+broadcasts over numpy arrays; where a quantity does not exist the result is nan or inf (or an
+empty interval, lo > top), which the callers mask.
 
 - `slave_weight(sc, r0, theta, r)`: w / r0^2, with w = b_perp^2 / sigma_Phi^2 slave k's weight in
-  the objective (problem.weight), b_perp = r |sin(theta - theta_0)|. Non-decreasing in r for
+  the objective (rays.weight), b_perp = r |sin(theta - theta_0)|. Non-decreasing in r for
   every objective (slave_ranges.py's docstring proves it), so each slave wants the top of its
   feasible range. nan at r0 = 0.
 - `objective_from_normalised(sc, wn)`: the objective lambda r0 sin(theta_0) / (2 pi sqrt(w))
