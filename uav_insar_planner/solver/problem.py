@@ -228,7 +228,7 @@ def cartesian_bounds(pr: Problem) -> list[tuple[float, float]]:
 Positions = dict[int, tuple[np.ndarray, np.ndarray]]  # UAV k -> (x_k, z_k), broadcast alike
 
 
-def pair_terms(pr: Problem, q: Positions):
+def pair_terms(pr: Problem, q: Positions) -> tuple[np.ndarray, dict[int, tuple]]:
     """r_0 and, per slave, (b_perp,k, gamma_SNR,k, gamma_Rg,k, theta_k) (eqs. 3, 7-11)."""
     p = pr.p
     x0, z0 = q[MASTER]
