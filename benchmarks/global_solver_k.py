@@ -3,7 +3,7 @@
 Scenario: Table I (config/params.yaml) with the swarm grown or shrunk to K + 1 UAVs; UAVs
 beyond Table I's three get U2's rate requirement (1 Mbit/s), so they are interchangeable with
 U2 (the search orders their angles). The UAV count comes from the length of the per-UAV rate
-list (rays.make_scenario), the convention Params.num_uavs follows.
+list (problem.make_problem), the convention Params.num_uavs follows.
 
 Prints, in one run: per K the median solve time of solve_global (proposed scheme, exact
 objective) over --repeats runs, its ratio to K = 2 and to K - 1, the boxes searched, sigma_h,

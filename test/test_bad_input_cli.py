@@ -163,7 +163,7 @@ def test_a_solver_exception_is_one_line_not_a_traceback(capsys, monkeypatch) -> 
     def broken(params, scheme, objective):
         raise ZeroDivisionError("float division by zero")
 
-    monkeypatch.setattr(solver, "_backend", lambda name: broken)
+    monkeypatch.setattr(solver, "backend", lambda name: broken)
     with pytest.raises(solver.SolverFailure, match="solver global failed on scheme proposed"):
         solver.solve(load_params())
     code, out, err = run(capsys, "solve")

@@ -157,3 +157,23 @@ def test_recording_md_lists_every_topic_of_the_registry_as_a_demo_bag_names_it()
                    for shown in [reference_topics.shown_name(s)])
     with pytest.raises(ValueError, match="recording.md: the line"):
         reference.on_page_markdown(source.replace(marker, ""), page, None, None)
+
+
+def test_solvers_md_tables_every_declared_back_end():
+    """The back-end table of science/solvers.md is generated (reference.INSERTS) from
+    param_specs.BACKENDS: each back end once, with its objectives and certificate."""
+    from types import SimpleNamespace
+
+    from uav_insar_planner.param_specs.science import BACKENDS
+
+    source = (REPO / "docs" / "science" / "solvers.md").read_text()
+    ((marker, build),) = reference.INSERTS["science/solvers.md"].items()
+    assert source.count(marker) == 1
+    page = SimpleNamespace(file=SimpleNamespace(src_uri="science/solvers.md"))
+    table = build()
+    assert table.rstrip("\n") in reference.on_page_markdown(source, page, None, None)
+    rows = [line for line in table.splitlines() if line.startswith("| `")][1:]  # no header
+    assert [row.split("|")[1].strip() for row in rows] == [f"`{b.name}`" for b in BACKENDS]
+    multilook = [row.split("|")[1].strip() for row in rows if "`multilook`" in row]
+    assert multilook == ["`global`"]
+    assert [row.split("|")[3].strip() for row in rows] == ["yes", "no", "no"]

@@ -13,9 +13,9 @@ import pytest
 from uav_insar_planner import model
 from uav_insar_planner.evaluate import evaluate
 from uav_insar_planner.params import ParamError, default_params
-from uav_insar_planner.solver import rays
 from uav_insar_planner.solver.global_opt import branch_bound
 from uav_insar_planner.solver.global_opt.optimum import solve_global
+from uav_insar_planner.solver.problem import make_problem
 
 RHO = 1.25
 FIVE = {"num_uavs": 5, "rate_min_mbps": [10, 16.95, 1, 1, 1]}
@@ -43,10 +43,10 @@ def test_a_ratio_outside_one_to_ten_is_refused_naming_field_and_range(value):
 
 def test_slaves_on_different_rungs_are_not_interchangeable():
     p = default_params().replace(**FIVE)
-    same = branch_bound.interchangeable_pairs(rays.make_scenario(p, "proposed", "exact"))
+    same = branch_bound.interchangeable_pairs(make_problem(p, "proposed", "exact"))
     assert same == [(1, 2), (2, 3)]  # U2..U4 share their station disk (1 Mbit/s each)
     q = p.replace(h_amb_ratio=RHO)
-    assert branch_bound.interchangeable_pairs(rays.make_scenario(q, "proposed", "exact")) == []
+    assert branch_bound.interchangeable_pairs(make_problem(q, "proposed", "exact")) == []
 
 
 def test_the_global_plan_keeps_every_rung_and_is_certified():

@@ -57,6 +57,46 @@ def test_the_two_solver_back_ends_import_nothing_of_each_other():
                                  path.read_text(), re.MULTILINE), path
 
 
+def _private(name: str) -> bool:
+    return name.startswith("_") and not (name.startswith("__") and name.endswith("__"))
+
+
+def test_no_product_file_reaches_into_another_modules_private_names():
+    """Modules meet at public names with a documented contract (e.g. the global back end's
+    kernel, solver/global_opt/kernel.py), never at a sibling's `_name`: neither imported
+    (`from m import _f`) nor reached through the module (`m._f`)."""
+    offenders = []
+    for path in product_files():
+        tree = ast.parse(path.read_text())
+        modules = set()
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                modules |= {a.asname or a.name.split(".")[0] for a in node.names
+                            if a.name.startswith("uav_insar")}
+            elif (isinstance(node, ast.ImportFrom) and node.module
+                  and node.module.startswith("uav_insar")):
+                modules |= {a.asname or a.name for a in node.names}
+                offenders += [f"{path.relative_to(ROOT)}:{node.lineno}: {node.module}.{a.name}"
+                              for a in node.names if _private(a.name)]
+        offenders += [f"{path.relative_to(ROOT)}:{node.lineno}: {node.value.id}.{node.attr}"
+                      for node in ast.walk(tree) if isinstance(node, ast.Attribute)
+                      and _private(node.attr) and isinstance(node.value, ast.Name)
+                      and node.value.id in modules]
+    assert not offenders, offenders
+
+
+def test_no_product_line_branches_on_a_solver_back_ends_name():
+    """Each back end is declared once (param_specs.BACKENDS) and the dispatcher, the objective
+    rule and the docs read the declaration: no code compares a value with a back end's name."""
+    from uav_insar_planner.param_specs.science import SOLVERS
+
+    offenders = [f"{path.relative_to(ROOT)}:{node.lineno}" for path in product_files()
+                 for node in ast.walk(ast.parse(path.read_text())) if isinstance(node, ast.Compare)
+                 and any(isinstance(c, ast.Constant) and c.value in SOLVERS
+                         for c in [node.left, *node.comparators])]
+    assert not offenders, offenders
+
+
 def test_at_most_sixteen_modules_flat_in_the_planner_package():
     flat = sorted(p.name for p in PLANNER.glob("*.py"))
     assert len(flat) <= 16, flat

@@ -118,13 +118,13 @@ def test_no_feasible_formation_near_the_optimum_beats_the_certified_lower_bound(
 @pytest.mark.parametrize("looks", [1, 4, 64])
 def test_multilook_weight_increases_with_slave_range(looks):
     # the property the exact inner solve and the box bounds rely on (slave_ranges.py)
-    from uav_insar_planner.solver import rays
-    from uav_insar_planner.solver.global_opt import slave_ranges as sr
+    from uav_insar_planner.solver.global_opt.kernel import slave_weight
+    from uav_insar_planner.solver.problem import make_problem
 
     p = default_params().replace(looks=looks, coherence_other=0.3)
-    sc = rays.make_scenario(p, "proposed", "multilook")
+    sc = make_problem(p, "proposed", "multilook")
     r = np.linspace(1.0, 2000.0, 4000)
     for r0 in (20.0, 60.0, 130.0):
         for t in (0.3, 0.66, 0.79, 0.84):
-            w = sr._slave_weight(sc, r0, t, r)
+            w = slave_weight(sc, r0, t, r)
             assert np.all(np.diff(w) > 0)

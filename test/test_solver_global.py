@@ -12,9 +12,11 @@ from uav_insar_planner.evaluate import evaluate
 from uav_insar_planner.params import SCHEMES, default_params
 from uav_insar_planner.schemes import static_power_w
 from uav_insar_planner.solver import blocking, power, rays, solve
-from uav_insar_planner.solver.global_opt import infeasibility, slave_ranges
+from uav_insar_planner.solver.global_opt import infeasibility
+from uav_insar_planner.solver.global_opt.kernel import slave_weight
 from uav_insar_planner.solver.global_opt.optimum import solve_global
 from uav_insar_planner.solver.power import schedules
+from uav_insar_planner.solver.problem import c7_interval, make_problem
 from uav_insar_planner.solver.start_grid import find_start
 from uav_insar_planner.study.band import bound_minimizer_band
 
@@ -40,8 +42,8 @@ def sweep_points():
 
 def test_c7_interval_and_ray_model():
     p = default_params()
-    sc = rays.make_scenario(p, "proposed", "exact", frozenset({"C3"}))
-    a, b = rays.c7_interval(sc)
+    sc = make_problem(p, "proposed", "exact", frozenset({"C3"}))
+    a, b = c7_interval(sc)
     th = np.linspace(-1.5, 1.5, 30001)
     ok = rays.coherence_rg(sc, th) >= p.coherence_rg_min - 1e-12
     assert th[ok].min() == pytest.approx(a, abs=2e-4) and th[ok].max() <= b + 1e-4
@@ -55,11 +57,11 @@ def test_c7_interval_and_ray_model():
 
 def test_weight_increases_with_slave_range():
     p = default_params()
-    sc = rays.make_scenario(p, "proposed", "exact")
+    sc = make_problem(p, "proposed", "exact")
     r = np.linspace(5.0, 400.0, 2000)
     for r0 in (60.0, 90.0, 130.0):
         for t in (0.66, 0.75, 0.84):
-            w = slave_ranges._slave_weight(sc, r0, t, r)
+            w = slave_weight(sc, r0, t, r)
             assert np.all(np.diff(w) > 0)
 
 

@@ -17,9 +17,9 @@ from scipy.optimize import minimize
 from uav_insar_planner import model
 from uav_insar_planner.params import SCHEMES, default_params
 from uav_insar_planner.schemes import static_power_w
-from uav_insar_planner.solver import rays
 from uav_insar_planner.solver.global_opt import branch_bound, slave_sets
 from uav_insar_planner.solver.global_opt.optimum import solve_global
+from uav_insar_planner.solver.problem import make_problem
 
 TOL = 1e-6        # relative, as the independent checker (evaluate.FEAS_TOL)
 POS_TOL = 1e-6    # metres, C1 and C4
@@ -170,7 +170,7 @@ def test_two_slaves_unchanged_by_the_general_search():
 
 def test_interchangeable_slaves_are_searched_in_angle_order():
     p = with_slaves(default_params(), 4)
-    sc = rays.make_scenario(p, "proposed", "exact")
+    sc = make_problem(p, "proposed", "exact")
     assert branch_bound.interchangeable_pairs(sc) == [(1, 2), (2, 3)]  # U2, U3, U4 alike
     boxes = np.array([[60.0, 70.0, 0.7, 0.8, 0.75, 0.85, 0.6, 0.7, 0.65, 0.9]])
     cut = branch_bound._order(boxes, branch_bound.interchangeable_pairs(sc))
@@ -184,7 +184,7 @@ def test_box_bound_holds_at_random_feasible_points():
     """The matching bound of a box is below the objective of every feasible point in it."""
     rng = np.random.default_rng(5)
     p = with_slaves(default_params(), 4)
-    sc = rays.make_scenario(p, "proposed", "exact")
+    sc = make_problem(p, "proposed", "exact")
     res = solve_global(p, "proposed", "exact")
     r0 = math.hypot(res.formation[0, 0] - p.x_t, res.formation[0, 1])
     th = np.array([model.look_angle(*res.formation[k], p.x_t) for k in sc.slaves])

@@ -94,9 +94,12 @@ def position_constraints(p: Params, formation: np.ndarray, uavs: Sequence[int]
     return c
 
 
-def evaluate(p: Params, formation: np.ndarray, p_com: np.ndarray, scheme: str) -> Evaluation:
+def evaluate(p: Params, formation: np.ndarray, p_com: np.ndarray, scheme: str,
+             objective: str = "exact") -> Evaluation:
     """Metrics and C1..C11 for `formation` ((num_uavs, 2) rows (x_k, z_k), NaN rows for UAVs the
-    scheme does not fly) and `p_com` ((num_uavs, N) watts)."""
+    scheme does not fly) and `p_com` ((num_uavs, N) watts). `objective` multilook adds the
+    multilook figures (metrics["multilook"]: exact phase std per pair, fused sigma_h) from
+    this check's coherences and h_amb, never the back end's."""
     q = np.asarray(formation, dtype=float)
     power = np.asarray(p_com, dtype=float)
     uavs = active_uavs(scheme, p.num_uavs)
@@ -158,6 +161,10 @@ def evaluate(p: Params, formation: np.ndarray, p_com: np.ndarray, scheme: str) -
         "min_rate_mbps": {uav_name(k): float(rates[k].min() / 1e6) for k in uavs},
         "energy_j": {uav_name(k): float(power[k].sum() * p.slot_duration_s) for k in uavs},
     }
+    if objective == "multilook":
+        from uav_insar_planner.multilook import plan_metrics  # scipy: not in a lean install
+
+        metrics["multilook"] = plan_metrics(metrics["pairs"], p.looks)
     return Evaluation(sigma_h, bound, metrics, c)
 
 

@@ -17,6 +17,8 @@ from typing import Any
 from uav_insar_planner.param_specs import ParamSpec
 from uav_insar_planner.param_specs.nodes import NODE_SPECS, SUITE_PARAMETER_NAMES, nodes_taking
 from uav_insar_planner.param_specs.science import (
+    BACKEND_BY_NAME,
+    BACKENDS,
     LENGTH_MAX_M,
     MULTILOOK_MAX_LOOKS,
     OBJECTIVES,
@@ -265,16 +267,15 @@ def per_uav_problems(clean: Mapping[str, Any], bad: set[str]) -> list[str]:
 
 
 def objective_problems(objective: Any, solver: Any) -> list[str]:
-    """The objective's cross-field rule: `multilook` runs on the global solver only (its looks
-    bound is the one of `looks`)."""
-    if objective == "multilook" and solver == "paper-ao":
-        return ["objective: value 'multilook' is not allowed with solver 'paper-ao'; expected "
-                "exact or bound (paper-ao minimises Proposition 1's bound), or solver global"]
-    if objective == "multilook" and solver == "evolution":
-        return ["objective: value 'multilook' is not allowed with solver 'evolution'; expected "
-                "exact or bound (its baseline searches the Cramer-Rao objectives), or solver "
-                "global"]
-    return []
+    """The objective's cross-field rule: each back end takes the objectives its declaration
+    (`BACKENDS`) names; e.g. `multilook` runs on the global solver only."""
+    backend = BACKEND_BY_NAME.get(solver)
+    if backend is None or objective not in OBJECTIVES or objective in backend.objectives:
+        return []
+    others = [b.name for b in BACKENDS if objective in b.objectives]
+    return [f"objective: value {objective!r} is not allowed with solver {solver!r}; expected "
+            f"{' or '.join(backend.objectives)} ({backend.why}), or solver "
+            + " or ".join(others)]
 
 
 def params_from_mapping(values: Mapping[str, Any]) -> Params:

@@ -14,6 +14,7 @@ from reference_commands import commands_page
 from reference_exit_codes import exit_codes_page
 from reference_layout import folder_imports
 from reference_parameters import parameters_page
+from reference_solvers import backends_table
 from reference_topics import recorded_topics, topics_page
 
 PAGES: dict[str, Callable[[], str]] = {
@@ -26,6 +27,7 @@ PAGES: dict[str, Callable[[], str]] = {
 INSERTS: dict[str, dict[str, Callable[[], str]]] = {
     "recording.md": {"<!-- generated: recorded topics -->": recorded_topics},
     "layout.md": {"<!-- generated: folder imports -->": folder_imports},
+    "science/solvers.md": {"<!-- generated: solver back ends -->": backends_table},
 }
 
 

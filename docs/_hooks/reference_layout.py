@@ -2,12 +2,12 @@
 (pure: no package is imported; test/test_layout.py checks the same graphs).
 
 A folder is a package directory of `uav_insar_planner` or `uav_insar_sim`; the modules flat
-at its top are one folder. The two packages' own flat modules are nodes of their own: the
-package's top holds modules of several floors (`swarm.py` below `param_specs/`, `params.py`
-above it), so one node for all of them would draw a circle that no import makes. A package's `__init__.py` (its front door: `solve`, the `uav-insar`
-dispatcher) and `__main__.py` (its `python -m` entry) are nodes of their own, above their
-folder: they import its modules to serve them. An import of `pkg.mod` runs `pkg/__init__.py`
-first; that edge is Python's, not ours, and is left out.
+in it are one node. The two packages' own flat modules are nodes of their own: the top holds
+modules of several floors (`swarm.py` below `param_specs/`, `params.py` above it), and one
+node for all of them would tie those floors into a circle. A package's `__init__.py` (its
+front door: `solve`, the `uav-insar` dispatcher) and `__main__.py` (its `python -m` entry)
+are nodes of their own, above their folder: they import its modules to serve them. An import
+of `pkg.mod` runs `pkg/__init__.py` first; that edge is Python's, not ours, and is left out.
 """
 from __future__ import annotations
 

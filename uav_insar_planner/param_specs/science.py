@@ -7,6 +7,7 @@ become SI here, once: each spec names its conversion (`to_si`).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 from uav_insar_planner.param_specs import ParamSpec
 from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, MAX_UAVS, MIN_UAVS
@@ -18,7 +19,35 @@ OBJECTIVES = ("exact", "bound", "multilook")
 # 4 n_L normals (montecarlo.py; cli/montecarlo.py bounds samples x looks per pair).
 MULTILOOK_MAX_LOOKS = 1000
 _LOOKS_WHY = "beyond any UAV SAR product; the multilook objective and the Monte-Carlo cost O(n_L)"
-SOLVERS = ("global", "paper-ao", "evolution")
+
+
+@dataclass(frozen=True)
+class Backend:
+    """One solver back end, declared once: the `solver` parameter's choices, the dispatcher
+    (`solver.solve`), the objective rule (`params.objective_problems`) and the documentation's
+    table of back ends all read `BACKENDS`. `entry` is "module:function" of its
+    solve(params, scheme, objective) -> SolverResult, imported on first use (a lean install
+    lacks scipy and CVXPY); `why` says why the other objectives are not offered."""
+
+    name: str
+    entry: str
+    objectives: tuple[str, ...]
+    certified: bool
+    summary: str
+    why: str = ""
+
+
+BACKENDS = (
+    Backend("global", "uav_insar_planner.solver.global_opt.optimum:solve_global", OBJECTIVES,
+            True, "certified"),
+    Backend("paper-ao", "uav_insar_planner.solver.ao.algorithm2:solve_ao", ("exact", "bound"),
+            False, "Algorithm 2", "paper-ao minimises Proposition 1's bound"),
+    Backend("evolution", "uav_insar_planner.solver.evolution.algorithm:solve_evolution",
+            ("exact", "bound"), False, "differential evolution, no certificate",
+            "its baseline searches the Cramer-Rao objectives"),
+)
+SOLVERS = tuple(b.name for b in BACKENDS)
+BACKEND_BY_NAME = {b.name: b for b in BACKENDS}
 
 
 # A spec's `to_si`: from the unit of its name to SI.
@@ -136,7 +165,7 @@ PARAM_SPECS: tuple[ParamSpec, ...] = (
     ParamSpec("scheme", str, "proposed", "which scheme to solve", choices=SCHEMES),
     ParamSpec("objective", str, "exact", "exact: minimise sigma_h; bound: Proposition 1; "
               "multilook: sigma_h with the exact multilook phase std", choices=OBJECTIVES),
-    ParamSpec("solver", str, "global", "global (certified), paper-ao (Algorithm 2) or "
-              "evolution (differential evolution, no certificate)", choices=SOLVERS),
+    ParamSpec("solver", str, "global", ", ".join(f"{b.name} ({b.summary})" for b in BACKENDS[:-1])
+              + f" or {BACKENDS[-1].name} ({BACKENDS[-1].summary})", choices=SOLVERS),
 )
 SPEC_BY_NAME: dict[str, ParamSpec] = {s.name: s for s in PARAM_SPECS}

@@ -21,6 +21,7 @@ from uav_insar_planner.plan import Plan  # noqa: E402
 from uav_insar_planner.report.scene import swath_edges  # noqa: E402
 from uav_insar_planner.solver import rays  # noqa: E402
 from uav_insar_planner.solver.power import station_radius_sq  # noqa: E402
+from uav_insar_planner.solver.problem import make_problem  # noqa: E402
 from uav_insar_planner.study.grid import MapRow  # noqa: E402
 from uav_insar_planner.study.sweep import SweepRow  # noqa: E402
 from uav_insar_planner.swarm import uav_color  # noqa: E402
@@ -121,7 +122,7 @@ def _slave_region(p: Params, plan: Plan, k: int, xs: np.ndarray, zs: np.ndarray)
     range inside the ray's C1/C5/C6/C8/C9-C11 limits and outside the master's C4 hole.
     """
     x, z = np.meshgrid(xs, zs)
-    sc = rays.make_scenario(p, plan.scheme, plan.objective)
+    sc = make_problem(p, plan.scheme, plan.objective)
     r0 = float(model.slant_range(plan.formation[0, 0], plan.formation[0, 1], p.x_t))
     r = model.slant_range(x, z, p.x_t)
     th = model.look_angle(x, z, p.x_t)

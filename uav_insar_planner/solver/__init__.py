@@ -1,18 +1,23 @@
 """solve(params) -> Plan: run a back end, then check its answer independently.
 
-Back ends: `global` (solver/global_opt/, certified optimum of the exact, bound or multilook
-objective), `paper-ao` (solver/ao/, Algorithm 2 of the paper with SCA on CVXPY + Clarabel) and
-`evolution` (solver/evolution/, seeded differential evolution, no certificate). They never
-import each other; what they need (the station disk in power.py, the start grid, the deletion
-filter in blocking.py, SolverResult) lives here in solver/.
+Back ends, each declared once in `param_specs.BACKENDS` (name, objectives, certified or not,
+where its solve function is): `global` (solver/global_opt/, certified optimum of the exact,
+bound or multilook objective), `paper-ao` (solver/ao/, Algorithm 2 of the paper with SCA on
+CVXPY + Clarabel) and `evolution` (solver/evolution/, seeded differential evolution, no
+certificate). They never import each other; what they need (the statement of (P) in
+problem.py, the station disk in power.py, the start grid, the deletion filter in blocking.py,
+SolverResult) lives here in solver/.
 """
 from __future__ import annotations
 
+import importlib
 import time
+from collections.abc import Callable
 
 import numpy as np
 
 from uav_insar_planner.evaluate import evaluate
+from uav_insar_planner.param_specs.science import BACKEND_BY_NAME
 from uav_insar_planner.params import (
     OBJECTIVES,
     SCHEMES,
@@ -22,6 +27,7 @@ from uav_insar_planner.params import (
     objective_problems,
 )
 from uav_insar_planner.plan import Plan
+from uav_insar_planner.solver.result import SolverResult
 
 
 class SolverFailure(RuntimeError):
@@ -29,18 +35,10 @@ class SolverFailure(RuntimeError):
     end, the scheme and the exception instead of a traceback (the cause is to be fixed)."""
 
 
-def _backend(name: str):
-    if name == "global":
-        from uav_insar_planner.solver.global_opt.optimum import solve_global
-
-        return solve_global
-    if name == "evolution":
-        from uav_insar_planner.solver.evolution.algorithm import solve_evolution
-
-        return solve_evolution
-    from uav_insar_planner.solver.ao.algorithm2 import solve_ao
-
-    return solve_ao
+def backend(name: str) -> Callable[[Params, str, str], SolverResult]:
+    """The solve function of the back end declared as `name` in BACKENDS, imported now."""
+    module, _, function = BACKEND_BY_NAME[name].entry.partition(":")
+    return getattr(importlib.import_module(module), function)
 
 
 def solve(params: Params, scheme: str | None = None, objective: str | None = None,
@@ -61,12 +59,12 @@ def solve(params: Params, scheme: str | None = None, objective: str | None = Non
                               + ", ".join(allowed)])
     if problems := objective_problems(objective, solver):
         raise ParamError(problems)
-    backend = _backend(solver)  # a lean install's ModuleNotFoundError is no solver bug
+    run = backend(solver)  # a lean install's ModuleNotFoundError is no solver bug
     start = time.perf_counter()
     try:
-        result = backend(params, scheme, objective)
+        result = run(params, scheme, objective)
         elapsed = time.perf_counter() - start
-        ev = evaluate(params, result.formation, result.p_com, scheme) if np.isfinite(
+        ev = evaluate(params, result.formation, result.p_com, scheme, objective) if np.isfinite(
             result.formation[0, 0]) else None
     except Exception as exc:  # any bug becomes one clear line, not a traceback
         text = " ".join(str(exc).split())[:120]
@@ -80,12 +78,6 @@ def solve(params: Params, scheme: str | None = None, objective: str | None = Non
         blocking = ev.violated
         message = (message + "; " if message else "") + "independent check failed: " + ", ".join(
             f"{n} (slack {ev.constraints[n].slack:.3g})" for n in ev.violated)
-    metrics = ev.metrics if ev else {}
-    if objective == "multilook" and ev is not None:
-        from uav_insar_planner.multilook import plan_metrics
-
-        # The multilook figures from the checker's coherences and h_amb, not the back end's.
-        metrics = metrics | {"multilook": plan_metrics(ev.metrics["pairs"], params.looks)}
     return Plan(
         feasible=feasible,
         scheme=scheme,
@@ -98,7 +90,7 @@ def solve(params: Params, scheme: str | None = None, objective: str | None = Non
         iterations=result.iterations,
         solve_time_s=elapsed,
         constraints=ev.constraints if ev else {},
-        metrics=metrics,
+        metrics=ev.metrics if ev else {},
         blocking_constraints=[] if feasible else blocking,
         lower_bound_m=result.lower_bound,
         optimality_gap=result.gap,

@@ -6,7 +6,7 @@ set. We build the start from the constraints of (P) themselves (exact model, no 
 
 - the master lies on its C2 line, x_0 = x_t - z_0 tan(theta_0), z_0 on a uniform grid of
   `Z_GRID` altitudes over the part of [z_min, z_max] that C5, C6 and the station disk leave to
-  the master alone (rays.master_interval; benchmark 2: the single point q0_fixed);
+  the master alone (problem.master_interval; benchmark 2: the single point q0_fixed);
 - each slave lies on a look-angle ray from the target, q_k = (x_t - r sin(theta), r cos(theta)),
   theta on a uniform grid of `THETA_GRID` angles over [theta_min, theta_max] (C3). On a ray every
   other constraint is an interval of r in closed form: C1, C5 (r >= S_min cos(theta)/Theta_3dB),
@@ -35,9 +35,9 @@ import numpy as np
 from uav_insar_planner import model
 from uav_insar_planner.params import Params
 from uav_insar_planner.schemes import slave_uavs
-from uav_insar_planner.solver import rays
 from uav_insar_planner.solver.blocking import ALL_FAMILIES
 from uav_insar_planner.solver.power import station_radius_sq
+from uav_insar_planner.solver.problem import c7_interval, make_problem
 from uav_insar_planner.swarm import MASTER
 
 Z_GRID = 801
@@ -72,10 +72,10 @@ def _master_grid(p: Params, scheme: str, fam: frozenset[str]) -> tuple[np.ndarra
         z_lo, z_hi = ((p.z_min, p.z_max) if "C1" in fam
                       else (max(p.z_max * 1e-3, 1e-3), 10.0 * p.z_max))
         # Only the altitudes C1, C5, C6 and the station disk leave to the master alone (in
-        # closed form, rays.master_interval): a grid over all of [z_min, z_max] = [1, 1e6]
+        # closed form, problem.master_interval): a grid over all of [z_min, z_max] = [1, 1e6]
         # would step 1250 m and miss Table I's feasible 47-93 m.
-        sc = rays.make_scenario(p, scheme, "bound", ALL_FAMILIES - fam)
-        r_lo, r_hi = rays.master_interval(sc)
+        sc = make_problem(p, scheme, "bound", ALL_FAMILIES - fam)
+        r_lo, r_hi = sc.r0_lo, sc.r0_hi
         c0 = math.cos(p.theta0)
         if r_lo <= r_hi and max(z_lo, r_lo * c0) < min(z_hi, r_hi * c0):
             z_lo, z_hi = max(z_lo, r_lo * c0), min(z_hi, r_hi * c0)
@@ -102,7 +102,7 @@ def _slave_pieces(p: Params, k: int, scheme: str, fam: frozenset[str], q0: np.nd
     if "C7" in fam:
         # C7 is an interval of look angles in closed form (Proposition 2): a narrow band
         # (B_Rg/f_0 = 3e-3) can fall between two points of a grid over all of C3
-        c7_lo, c7_hi = rays.c7_interval(rays.make_scenario(p, scheme, "bound"))
+        c7_lo, c7_hi = c7_interval(make_problem(p, scheme, "bound"))
         if max(span[0], c7_lo) < min(span[1], c7_hi):
             span = (max(span[0], c7_lo), min(span[1], c7_hi))
     thetas = np.linspace(*span, THETA_GRID)

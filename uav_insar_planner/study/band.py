@@ -16,6 +16,7 @@ from uav_insar_planner.evaluate import evaluate
 from uav_insar_planner.params import Params
 from uav_insar_planner.solver import rays
 from uav_insar_planner.solver.global_opt.optimum import solve_global
+from uav_insar_planner.solver.problem import Problem, make_problem
 from uav_insar_planner.solver.result import SolverResult
 
 
@@ -38,7 +39,7 @@ def bound_minimizer_band(p: Params, scheme: str, samples: int = 160) -> tuple[fl
     res = solve_global(p, scheme, "bound")
     if not res.feasible:
         return math.nan, math.nan
-    sc = rays.make_scenario(p, scheme, "exact")
+    sc = make_problem(p, scheme, "exact")
     n = len(sc.slaves)
     sigma_phi_a = sc.sigma_phi_bound
     # sum_k b_perp,k^2 <= (lambda r0 sin(theta_0))^2 sum_k h_amb,k^min^-2 (per-slave rungs)
@@ -67,7 +68,7 @@ def _exact_sigma(p: Params, res: SolverResult, scheme: str) -> float:
     return evaluate(p, res.formation, res.p_com, scheme).sigma_h
 
 
-def _c8_tight_sigma(sc: rays.Scenario, k: int, r0, th):
+def _c8_tight_sigma(sc: Problem, k: int, r0, th):
     """Per slave on its C8-tight curve: (feasible mask, range, 1/sigma_h,k^2)."""
     b = rays.baseline_limit(sc, r0, k)
     with np.errstate(divide="ignore"):
@@ -79,7 +80,7 @@ def _c8_tight_sigma(sc: rays.Scenario, k: int, r0, th):
     return ok, r, w
 
 
-def _band_on_grid(sc: rays.Scenario, r0s, th):
+def _band_on_grid(sc: Problem, r0s, th):
     r0 = r0s[:, None]
     ok1, ra, w1 = _c8_tight_sigma(sc, 1, r0, th[None, :])
     if len(sc.slaves) == 1:
@@ -100,7 +101,7 @@ def _band_on_grid(sc: rays.Scenario, r0s, th):
 
 
 
-def _band_sampled(sc: rays.Scenario, draws: int, seed: int = 0,
+def _band_sampled(sc: Problem, draws: int, seed: int = 0,
                   chunk: int = 50_000) -> tuple[float, float]:
     """The band's range over `draws` uniform random (r0, theta_1..K), each slave on its
     C8-tight curve; C4 between every two slaves (the master's disk is in each slave's

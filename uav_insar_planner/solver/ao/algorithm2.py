@@ -30,12 +30,12 @@ import numpy as np
 
 from uav_insar_planner import model
 from uav_insar_planner.params import Params
-from uav_insar_planner.schemes import slave_uavs
 from uav_insar_planner.solver import blocking
 from uav_insar_planner.solver.ao.closed_forms import formation_bound
 from uav_insar_planner.solver.ao.master import MasterProblem
 from uav_insar_planner.solver.ao.slave import SlaveProblem
 from uav_insar_planner.solver.power import schedules
+from uav_insar_planner.solver.problem import make_problem
 from uav_insar_planner.solver.result import SolverResult
 from uav_insar_planner.solver.start_grid import find_start
 
@@ -56,7 +56,8 @@ def solve_ao(p: Params, scheme: str, objective: str) -> SolverResult:
 
     C8 is per slave, h_amb,k >= h_amb^min rho^(k-1) with rho = `h_amb_ratio` (model.h_amb_min_of;
     rho = 1 is the paper's common limit); the start grid meets every slave's own rung."""
-    slaves = list(slave_uavs(scheme, p.num_uavs))
+    pr = make_problem(p, scheme, objective)
+    slaves = list(pr.slaves)
     note = ("objective 'exact' requested: paper-ao minimises Proposition 1's bound, as the paper "
             "does; " if objective == "exact" else "")
     if p.h_amb_ratio != 1.0:
@@ -73,8 +74,8 @@ def solve_ao(p: Params, scheme: str, objective: str) -> SolverResult:
     formation = start.formation.copy()
     # Powers of a UAV whose sub-problem never moved it: the cheapest schedule at its position.
     p_com = schedules(p, formation, scheme)
-    master = MasterProblem(p, scheme, slaves)
-    slave_problems = {k: SlaveProblem(p, scheme, k, [0] + [j for j in slaves if j != k])
+    master = MasterProblem(pr)
+    slave_problems = {k: SlaveProblem(pr, k, [0] + [j for j in slaves if j != k])
                       for k in slaves}
     inner: dict[str, list[int]] = {"P.0": []} | {f"P.{k}": [] for k in slaves}
     halves: dict[int, str] = {}
@@ -83,10 +84,10 @@ def solve_ao(p: Params, scheme: str, objective: str) -> SolverResult:
     status = "step limit"
     outer = 0
     for outer in range(1, MAX_OUTER + 1):
-        if scheme != "fixed-master" or outer == 1:
+        if not pr.fixed_master or outer == 1:
             q0, power, steps, _ = master.run(formation)
             inner["P.0"].append(steps)
-            if scheme != "fixed-master":  # benchmark 2 keeps q0_fixed exactly
+            if not pr.fixed_master:  # benchmark 2 keeps q0_fixed exactly
                 formation[0] = q0
             if power is not None:
                 p_com[0] = power

@@ -15,6 +15,7 @@ import numpy as np
 
 from uav_insar_planner import model
 from uav_insar_planner.params import Params
+from uav_insar_planner.solver.problem import c7_sines
 
 
 def b_perp_on_c2(p: Params, qk: np.ndarray) -> float:
@@ -39,11 +40,10 @@ def c7_slopes(p: Params) -> tuple[float | None, float | None]:
     A side whose arcsin argument leaves (0, 1) puts no restriction on 0 <= theta_k < pi/2
     (every look angle on that side meets C7) and gets None.
     """
-    bp = p.radar_bandwidth_hz / p.center_frequency_hz
-    h = model.coherence_baseline_inverse(p.coherence_rg_min, bp)
-    s0 = math.sin(p.theta0)
-    arg_a = (2.0 - h) / h * s0
-    arg_b = h / (2.0 - h) * s0
+    sines = c7_sines(p)
+    if sines is None:  # C7 holds nowhere: the start grid finds no start, no AO runs
+        return None, None
+    arg_a, arg_b = sines
     alpha_a = math.tan(math.asin(arg_a)) if 0.0 < arg_a < 1.0 else None
     alpha_b = math.tan(math.asin(arg_b)) if 0.0 < arg_b < 1.0 else None
     return alpha_a, alpha_b

@@ -24,7 +24,6 @@ import cvxpy as cp
 import numpy as np
 
 from uav_insar_planner import model
-from uav_insar_planner.params import Params
 from uav_insar_planner.solver.ao.closed_forms import (
     b_perp_on_c2,
     formation_bound,
@@ -32,13 +31,15 @@ from uav_insar_planner.solver.ao.closed_forms import (
 )
 from uav_insar_planner.solver.ao.comm_constraints import comm_constraints
 from uav_insar_planner.solver.ao.convex import MAX_INNER, solve_convex
+from uav_insar_planner.solver.problem import Problem
 
 
 class MasterProblem:
-    """(P.0~) for the slaves in `slaves` (1 or 2 of them), rebuilt only by Parameter updates."""
+    """(P.0~) for the problem's slaves, rebuilt only by Parameter updates."""
 
-    def __init__(self, p: Params, scheme: str, slaves: list[int]):
-        self.p, self.slaves = p, slaves
+    def __init__(self, pr: Problem):
+        p = pr.p
+        self.p, self.slaves = p, list(pr.slaves)
         self.q = cp.Variable(2, name="q0")
         x0, z0 = self.q[0], self.q[1]
         cos0 = math.cos(p.theta0)
@@ -46,8 +47,8 @@ class MasterProblem:
         self.scale = cp.Parameter(nonneg=True, name="K_over_sqrt_bperp_sq")
         self.r0_max = cp.Parameter(nonneg=True, name="r0_max")
         self.r0_min = cp.Parameter(nonneg=True, name="r0_min_c8")
-        self.c4_lin = {k: cp.Parameter(2, name=f"c4_lin_{k}") for k in slaves}
-        self.c4_const = {k: cp.Parameter(name=f"c4_const_{k}") for k in slaves}
+        self.c4_lin = {k: cp.Parameter(2, name=f"c4_lin_{k}") for k in self.slaves}
+        self.c4_const = {k: cp.Parameter(name=f"c4_const_{k}") for k in self.slaves}
         self.pin = cp.Parameter(2, name="q0_fixed")
         cons = [z0 >= p.z_min, z0 <= p.z_max,                                          # C1
                 x0 == p.x_t - math.tan(p.theta0) * z0,                                 # C2
@@ -55,10 +56,10 @@ class MasterProblem:
                 r0 <= self.r0_max,                                                     # C6
                 r0 >= self.r0_min]                                                     # C8
         cons += [self.c4_lin[k] @ self.q + self.c4_const[k] >= p.d_min**2              # C4~
-                 for k in slaves]
-        if scheme == "fixed-master":
+                 for k in self.slaves]
+        if pr.fixed_master:
             cons.append(self.q == self.pin)
-        self.power, comm = comm_constraints(p, 0, self.q, scheme)
+        self.power, comm = comm_constraints(p, 0, self.q, pr.scheme)
         self.problem = cp.Problem(cp.Minimize(self.scale * r0), cons + comm)
 
     def _set(self, q0_ref: np.ndarray, formation: np.ndarray) -> None:

@@ -26,24 +26,24 @@ import cvxpy as cp
 import numpy as np
 
 from uav_insar_planner import model
-from uav_insar_planner.params import Params
 from uav_insar_planner.solver.ao.closed_forms import b_perp_on_c2, c7_slopes
 from uav_insar_planner.solver.ao.comm_constraints import comm_constraints
 from uav_insar_planner.solver.ao.convex import MAX_INNER, solve_convex
+from uav_insar_planner.solver.problem import Problem
 
 
 class SlaveProblem:
     """(P.k.a~) and (P.k.b~) for slave k, sharing one set of Parameters."""
 
-    def __init__(self, p: Params, scheme: str, k: int, others: list[int]):
-        self.p, self.k, self.others = p, k, others
+    def __init__(self, pr: Problem, k: int, others: list[int]):
+        self.p, self.k, self.others = pr.p, k, others
         self.c4_lin = {i: cp.Parameter(2, name=f"c4_lin_{k}{i}") for i in others}
         self.c4_const = {i: cp.Parameter(name=f"c4_const_{k}{i}") for i in others}
         self.c5_grad = cp.Parameter(2, name=f"c5_grad_{k}")
         self.c5_const = cp.Parameter(name=f"c5_const_{k}")
         self.r_max = cp.Parameter(nonneg=True, name=f"r_max_{k}")
         self.b_max = cp.Parameter(nonneg=True, name=f"b_max_{k}")
-        self.halves = {h: self._build(scheme, h) for h in ("a", "b")}
+        self.halves = {h: self._build(pr.scheme, h) for h in ("a", "b")}
 
     def _build(self, scheme: str, half: str):
         p = self.p

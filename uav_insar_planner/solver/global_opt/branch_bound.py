@@ -32,7 +32,7 @@ import numpy as np
 
 from uav_insar_planner import model
 from uav_insar_planner.solver.global_opt import local_refine, slave_sets
-from uav_insar_planner.solver.rays import Scenario
+from uav_insar_planner.solver.problem import Problem
 
 R0A, R0B = 0, 1
 
@@ -52,7 +52,7 @@ class SearchResult:
     refined: bool = False
 
 
-def interchangeable_pairs(sc: Scenario) -> list[tuple[int, int]]:
+def interchangeable_pairs(sc: Problem) -> list[tuple[int, int]]:
     """(i, j), i < j positions in sc.slaves, consecutive members of a group of slaves with
     equal station disks and equal C8 rungs: ordering each such pair orders the whole group.
     (Slaves on different rungs are not interchangeable: swapping them breaks C8.)"""
@@ -97,7 +97,7 @@ def _order(boxes: np.ndarray, pairs: list[tuple[int, int]]) -> np.ndarray:
 R0_WEIGHT_FEW, R0_WEIGHT_MANY = 2.0, 8.0
 
 
-def _split_dim(sc: Scenario, b: np.ndarray) -> np.ndarray:
+def _split_dim(sc: Problem, b: np.ndarray) -> np.ndarray:
     """Which coordinate to halve (0: r0, j + 1: slave j's angle): the one whose width most
     loosens the bound. The objective's relative sensitivity is about 1/|tan(theta - theta_0)|
     per radian of a slave angle (b_perp), plus the coherence terms; the bound's per relative
@@ -114,7 +114,7 @@ def _split_dim(sc: Scenario, b: np.ndarray) -> np.ndarray:
     return np.argmax(np.stack(scores), axis=0)
 
 
-def _split(sc: Scenario, b: np.ndarray) -> np.ndarray:
+def _split(sc: Problem, b: np.ndarray) -> np.ndarray:
     lo_col = 2 * _split_dim(sc, b)
     hi_col = lo_col + 1
     rows = np.arange(len(b))
@@ -132,7 +132,7 @@ ROUND_FILL = 4
 ROUND_SPLITS = 4
 
 
-def _a_slave_is_blocked(sc: Scenario) -> bool:
+def _a_slave_is_blocked(sc: Problem) -> bool:
     """Is some slave alone (the others dropped, a relaxation) provably without a feasible
     position? Near a feasibility edge this 2-D proof is far cheaper than the full one, which
     would keep splitting the other slaves' angles."""
@@ -143,7 +143,7 @@ def _a_slave_is_blocked(sc: Scenario) -> bool:
     return False
 
 
-def _incumbent(sc: Scenario, boxes: np.ndarray):
+def _incumbent(sc: Problem, boxes: np.ndarray):
     """Objective and point at each box's angle centre and smallest r0 (the objective grows
     with r0 for fixed slaves, so the optimum r0 is usually the smallest feasible one)."""
     r0 = boxes[:, R0A]
@@ -184,7 +184,7 @@ class _LocalSearch:
     rounds: int = 0
     last: tuple | None = None
 
-    def improve(self, sc: Scenario, f: float, pt, close_below: float, boxes, lb):
+    def improve(self, sc: Problem, f: float, pt, close_below: float, boxes, lb):
         self.rounds += 1
         if self.refines < MAX_REFINES and f < close_below:
             f, pt, _ = local_refine.refine(sc, pt, f)
@@ -204,7 +204,7 @@ def _coarse_splits(k_count: int) -> int:
     return 7 if k_count == 1 else 10 if k_count == 2 else 12
 
 
-def search(sc: Scenario, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: int = 4096,
+def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: int = 4096,
            stop_when_feasible: bool = False, refine: bool = False) -> SearchResult:
     """Best-first (in batches) branch and bound; see the module docstring. refine: take
     markedly better incumbents (up to MAX_REFINES) to their local optimum (local_refine),
@@ -258,7 +258,7 @@ def search(sc: Scenario, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch:
                         refined=best_pt is not None and best_pt is local.last)
 
 
-def polish(sc: Scenario, point, steps, iterations: int = 80):
+def polish(sc: Problem, point, steps, iterations: int = 80):
     """Compass search from `point` on (r0, theta_1, ..., theta_K) with the inner ranges of
     slave_sets.ranges_for: all 3^d stencil points at once, move to the best, halve the step
     when none improves. It only ever returns feasible points no worse than `point` (the
@@ -285,7 +285,7 @@ def polish(sc: Scenario, point, steps, iterations: int = 80):
     return best
 
 
-def point_value(sc: Scenario, point) -> float:
+def point_value(sc: Problem, point) -> float:
     """The objective of the search point (r0, angles, ranges) as its inner ranges give it."""
     f, _ = slave_sets.ranges_for(sc, np.array([point[0]]), np.array([point[1]]))
     return float(f[0])

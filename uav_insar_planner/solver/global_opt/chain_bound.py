@@ -41,7 +41,8 @@ import itertools
 import numpy as np
 
 from uav_insar_planner.solver.global_opt import slave_ranges
-from uav_insar_planner.solver.rays import Scenario
+from uav_insar_planner.solver.global_opt.kernel import lower_crossing
+from uav_insar_planner.solver.problem import Problem
 
 COMPAT_SLACK = 1e-9
 TOP, HOLE = -1, -2  # root kinds of a forest: at the slave's top, at the master hole's lower end
@@ -51,7 +52,7 @@ TOP, HOLE = -1, -2  # root kinds of a forest: at the slave's top, at the master 
 FOREST_MAX_K = 4
 
 
-def chain_weight_bound(sc: Scenario, r0a, pieces: np.ndarray) -> np.ndarray:
+def chain_weight_bound(sc: Problem, r0a, pieces: np.ndarray) -> np.ndarray:
     """max (R) for each box: pieces is (K, 9, n), per slave (lo, up, smax, g_rg, theta_a,
     theta_b, h1, h2, C8 cap); -inf where (R) is infeasible."""
     order = np.argsort(pieces[:, 4] + pieces[:, 5], axis=0, kind="stable")
@@ -95,9 +96,9 @@ def _propagate(cand: np.ndarray, up: np.ndarray, c: np.ndarray, d2: float) -> No
     for j in range(k_count):
         cand[j, j] = up[j]
         for i in range(j + 1, k_count):                  # rightwards from j
-            cand[i, j] = slave_ranges._lower_crossing(cand[i - 1, j], c[i - 1], d2)
+            cand[i, j] = lower_crossing(cand[i - 1, j], c[i - 1], d2)
         for i in range(j - 1, -1, -1):                   # leftwards from j
-            cand[i, j] = slave_ranges._lower_crossing(cand[i + 1, j], c[i], d2)
+            cand[i, j] = lower_crossing(cand[i + 1, j], c[i], d2)
 
 
 # --- every pair kept: rooted forests of "who is pressed by whom" -------------------------------
@@ -126,7 +127,7 @@ def _forests(k_count: int, hole: bool = True):
     return tuple(paths), np.array(table)
 
 
-def forest_weight_bound(sc: Scenario, r0a, pieces: np.ndarray) -> np.ndarray:
+def forest_weight_bound(sc: Problem, r0a, pieces: np.ndarray) -> np.ndarray:
     """See _forest_totals. Boxes where the master's hole excludes nothing for any slave need
     only the forests without HOLE roots (125 instead of 432 for four slaves)."""
     hole = np.isfinite(pieces[:, 6]).any(axis=0)
@@ -138,7 +139,7 @@ def forest_weight_bound(sc: Scenario, r0a, pieces: np.ndarray) -> np.ndarray:
     return out
 
 
-def forest_ranges(sc: Scenario, r0a, pieces: np.ndarray) -> np.ndarray:
+def forest_ranges(sc: Problem, r0a, pieces: np.ndarray) -> np.ndarray:
     """The ranges (n, K) of the best forest for point boxes (theta_a = theta_b, r0 fixed),
     where the relaxation is the inner problem itself apart from the master's hole and
     rounding, which the caller checks; nan where no forest fits."""
@@ -148,7 +149,7 @@ def forest_ranges(sc: Scenario, r0a, pieces: np.ndarray) -> np.ndarray:
     return np.where(np.isfinite(total.max(axis=0))[:, None], ranges, np.nan)
 
 
-def _forest_totals(sc: Scenario, r0a, pieces: np.ndarray, with_hole: bool = True):
+def _forest_totals(sc: Problem, r0a, pieces: np.ndarray, with_hole: bool = True):
     """max of the relaxation that keeps C4 between every pair of slaves (with each pair's
     largest angle difference in the box): the argument of the module docstring, fixing one
     slave at a time, ends with every slave at its top or at the lower crossing of an
@@ -166,7 +167,7 @@ def _forest_totals(sc: Scenario, r0a, pieces: np.ndarray, with_hole: bool = True
         for p, (kind, *path) in enumerate(paths):
             v = up[path[0]] if kind == TOP else h1[path[0]]
             for a, b in zip(path[:-1], path[1:], strict=True):
-                v = slave_ranges._lower_crossing(v, c[a, b], d2)
+                v = lower_crossing(v, c[a, b], d2)
             val[p] = v
         last = np.array([path[-1] for path in paths])
         ok = ((val >= lo[last]) & (val <= up[last])

@@ -14,15 +14,16 @@ from itertools import combinations
 import numpy as np
 
 from uav_insar_planner.params import Params
-from uav_insar_planner.solver import blocking, rays
+from uav_insar_planner.solver import blocking
 from uav_insar_planner.solver.global_opt import branch_bound
+from uav_insar_planner.solver.problem import make_problem
 from uav_insar_planner.solver.start_grid import find_start
 
 
 def feasible_without(p: Params, scheme: str, off: frozenset[str],
                      max_nodes: int = 50_000) -> bool:
     """True when a feasible point of (P) minus the families `off` is found."""
-    sc = rays.make_scenario(p, scheme, "bound", off)
+    sc = make_problem(p, scheme, "bound", off)
     res = branch_bound.search(sc, max_nodes=max_nodes, stop_when_feasible=True)
     return res.point is not None
 
@@ -44,7 +45,7 @@ def feasible_families(p: Params, scheme: str, on: frozenset[str],
     """Is (P) with only the families `on` (plus C2) feasible? The branch and bound decides
     most cases in milliseconds, both ways; when its node budget runs out undecided (few
     families left make its box huge), the closed-form start grid decides."""
-    sc = rays.make_scenario(p, scheme, "bound", frozenset(blocking.FAMILIES) - on)
+    sc = make_problem(p, scheme, "bound", frozenset(blocking.FAMILIES) - on)
     with np.errstate(all="ignore"):
         res = branch_bound.search(sc, max_nodes=max_nodes, stop_when_feasible=True)
     if res.point is not None:

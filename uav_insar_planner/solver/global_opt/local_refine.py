@@ -3,14 +3,10 @@
 The branch and bound's incumbents are box centres (or, for K >= 3 slaves, greedy placements),
 within the gap of the optimum but not at it. The optimum is a vertex of the constraints: a
 slave at theta_max, on the C8 line, at the edge of its station disk or d_min from a neighbour.
-SLSQP over v = (r0, theta_1..theta_K, r_1..r_K), with every constraint family written as its
-own smooth inequality, lands on such a vertex in a few iterations:
-
-- C1: z_k = r_k cos(theta_k) in [z_min, z_max];  C5: r_k >= S_min cos(theta_k) / Theta;
-- C6: r_k <= model.slave_range_max(r0);  C8: r_k |sin(theta_k - theta_0)| <= b_max(r0);
-- C9-C11: |q_k - g|^2 <= disk_r2[k] (power.station_radius_sq);
-- C4: |q_i - q_j|^2 >= d_min^2 for every pair, the master included;
-- C2, C3, C7 and the master's own limits: the bounds of r0 and theta (rays.make_scenario).
+SLSQP over the ray coordinates v = (r0, theta_1..theta_K, r_1..r_K) of solver/problem.py,
+with every constraint family written as its own smooth inequality (problem.ray_slacks: C1,
+C4, C5, C6, C8 and C9-C11's station disk; C2, C3, C7 and the master's own limits are the
+variables' bounds), lands on such a vertex in a few iterations.
 
 The result is only a candidate: `refine` re-checks it against the ray model and returns it
 only when feasible there and better, so the certificate never depends on SLSQP.
@@ -22,10 +18,10 @@ import math
 import numpy as np
 from scipy.optimize import minimize
 
-from uav_insar_planner import model
 from uav_insar_planner.solver import rays
-from uav_insar_planner.solver.global_opt import slave_ranges, slave_sets
-from uav_insar_planner.solver.rays import Scenario
+from uav_insar_planner.solver.global_opt import slave_sets
+from uav_insar_planner.solver.global_opt.kernel import objective_from_normalised, slave_weight
+from uav_insar_planner.solver.problem import Problem, ray_slacks
 
 # C4 may fall short by this fraction of d_min^2 in the re-check (a nanometre at d_min = 1.5 m,
 # far inside the independent checker's micrometre).
@@ -37,45 +33,22 @@ RANGE_SLACK = 1e-10
 FD_STEP = 1e-7
 
 
-def _split(sc: Scenario, v: np.ndarray):
+def _split(sc: Problem, v: np.ndarray):
     k_count = len(sc.slaves)
     return v[:, 0], v[:, 1:1 + k_count], v[:, 1 + k_count:]
 
 
-def _constraints(sc: Scenario, v: np.ndarray) -> np.ndarray:
-    """g(v) >= 0 for each row of v (m, 1 + 2K): (m, n_constraints), each scaled to metres."""
-    p = sc.p
+def _constraints(sc: Problem, v: np.ndarray) -> np.ndarray:
+    """g(v) >= 0 for each row of v (m, 1 + 2K): (m, n_constraints), each scaled to metres:
+    r_k >= 0, then (P)'s constraints in ray coordinates (problem.ray_slacks)."""
     r0, th, r = _split(sc, v)
-    x, z = -r * np.sin(th), r * np.cos(th)                    # relative to the target
-    pts = np.concatenate([np.stack([-r0 * sc.sin0, r0 * math.cos(sc.th0)], axis=1)[:, None],
-                          np.stack([x, z], axis=2)], axis=1)  # (m, 1 + K, 2), master first
-    out = [r]
-    if sc.on("C1"):
-        out += [z - p.z_min, p.z_max - z]
-    if sc.on("C5"):
-        out.append(r - p.swath_min * np.cos(th) / p.beamwidth)
-    if sc.on("C6"):
-        out.append(model.slave_range_max(p, r0)[:, None] - r)
-    if sc.on("C8"):
-        # per slave: its own C8 rung (h_amb_ratio's ladder)
-        b_max = np.stack([model.baseline_max(p, r0, k) for k in sc.slaves], axis=1)
-        out.append(b_max - r * np.abs(np.sin(th - sc.th0)))
-    gx, gz = p.ground_station[0] - p.x_t, p.ground_station[2]
-    for j, k in enumerate(sc.slaves):
-        if math.isfinite(sc.disk_r2[k]):
-            d2 = (x[:, j] - gx) ** 2 + (z[:, j] - gz) ** 2
-            out.append(((sc.disk_r2[k] - d2) / max(math.sqrt(abs(sc.disk_r2[k])), 1.0))[:, None])
-    if sc.on("C4"):
-        i, j = np.triu_indices(pts.shape[1], 1)
-        gap2 = np.sum((pts[:, i] - pts[:, j]) ** 2, axis=2) - p.d_min**2
-        out.append(gap2 / max(p.d_min, 1e-3))
-    return np.concatenate(out, axis=1)
+    return np.concatenate([r] + [g for _, g in ray_slacks(sc, r0, th, r)], axis=1)
 
 
-def _objective(sc: Scenario, v: np.ndarray) -> np.ndarray:
+def _objective(sc: Problem, v: np.ndarray) -> np.ndarray:
     r0, th, r = _split(sc, v)
-    w = np.sum(slave_ranges._slave_weight(sc, r0[:, None], th, r), axis=1, keepdims=True)
-    return slave_ranges._from_normalised(sc, w)  # (m, 1): one "constraint" row per point
+    w = np.sum(slave_weight(sc, r0[:, None], th, r), axis=1, keepdims=True)
+    return objective_from_normalised(sc, w)  # (m, 1): one "constraint" row per point
 
 
 def _with_jacobian(fun, v: np.ndarray):
@@ -86,7 +59,7 @@ def _with_jacobian(fun, v: np.ndarray):
     return vals[0], ((vals[1:] - vals[0]) / h[:, None]).T
 
 
-def refine(sc: Scenario, point, value: float):
+def refine(sc: Problem, point, value: float):
     """(value, point, landed): the SLSQP optimum from `point` when the ray model confirms it
     feasible and it is better, else the input unchanged; landed: SLSQP ended at a point the
     ray model accepts (no better one means `point` was already its local optimum).
@@ -128,7 +101,7 @@ def refine(sc: Scenario, point, value: float):
     return value, point, cand is not None
 
 
-def from_box(sc: Scenario, box: np.ndarray):
+def from_box(sc: Problem, box: np.ndarray):
     """(value, point) of SLSQP started at the box's centre with every slave at the top of its
     ray (C4 ignored), or (inf, None) when it ends at no point the ray model accepts."""
     r0 = np.array([0.5 * (box[0] + box[1])])
@@ -142,7 +115,7 @@ def from_box(sc: Scenario, box: np.ndarray):
     return (value, point) if landed and math.isfinite(value) else (math.inf, None)
 
 
-def _checked(sc: Scenario, v: np.ndarray):
+def _checked(sc: Problem, v: np.ndarray):
     """The ray model's verdict on an SLSQP point: (value, point), the ranges cut to the
     ray's limits, or from the inner solve at its angles when that is better; None when
     neither is feasible."""
@@ -165,8 +138,8 @@ def _checked(sc: Scenario, v: np.ndarray):
         i, j = np.triu_indices(k_count + 1, 1)
         if np.any(np.sum((q[i] - q[j]) ** 2, axis=1) < sc.p.d_min**2 * (1.0 - C4_SLACK)):
             return best
-    w = np.sum(slave_ranges._slave_weight(sc, r0, th, r))
-    f_direct = float(slave_ranges._from_normalised(sc, w)) if w > 0 else math.inf
+    w = np.sum(slave_weight(sc, r0, th, r))
+    f_direct = float(objective_from_normalised(sc, w)) if w > 0 else math.inf
     if best is None or f_direct < best[0]:
         best = (f_direct, (r0, tuple(map(float, th)), tuple(map(float, r))))
     return best

@@ -19,6 +19,7 @@ from uav_insar_planner import model
 from uav_insar_planner.params import Params
 from uav_insar_planner.solver import power, rays
 from uav_insar_planner.solver.global_opt import branch_bound, infeasibility, local_refine
+from uav_insar_planner.solver.problem import Problem, make_problem
 from uav_insar_planner.solver.result import SolverResult
 from uav_insar_planner.swarm import MASTER
 
@@ -40,13 +41,13 @@ def master_on_c2(p: Params) -> bool:
     return abs(x0 - float(model.master_x(z0, p.x_t, p.theta0))) <= 1e-6
 
 
-def formation_of(sc: rays.Scenario, point) -> np.ndarray:
+def formation_of(sc: Problem, point) -> np.ndarray:
     """(num_uavs, 2) formation from the search point
     (r0, slave angles, slave ranges), one angle and range per slave of sc.slaves; NaN row for
     a UAV not flown."""
     r0, thetas, ranges = point
     q = np.full((sc.p.num_uavs, 2), np.nan)
-    if sc.scheme == "fixed-master":
+    if sc.fixed_master:
         q[MASTER] = sc.p.master_fixed
     else:
         q[MASTER] = rays.position(sc, r0, sc.th0)
@@ -63,7 +64,7 @@ def solve_global(p: Params, scheme: str, objective: str) -> SolverResult:
         return _nan_result(p, 0, blocking=["C2"], lower_bound=math.inf,
                            certificate="q0_fixed violates C2", message="q0_fixed is off the "
                            "master's look-angle line x0 = x_t - z0 tan(theta_0)")
-    sc = rays.make_scenario(p, scheme, objective)
+    sc = make_problem(p, scheme, objective)
     # Two slaves or fewer: the exact inner solve already makes the incumbents good.
     res = branch_bound.search(sc, rel_gap=REL_GAP, refine=len(sc.slaves) > 2)
     if res.point is None:

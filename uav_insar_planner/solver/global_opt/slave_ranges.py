@@ -29,36 +29,16 @@ import numpy as np
 
 from uav_insar_planner import model
 from uav_insar_planner.solver import rays
-from uav_insar_planner.solver.rays import Scenario
+from uav_insar_planner.solver.global_opt.kernel import (
+    lower_crossing,
+    objective_from_normalised,
+    range_components,
+    slave_weight,
+)
+from uav_insar_planner.solver.problem import HALF_PI, Problem, angle_between, disk_at_psi
 
 
-def _slave_weight(sc: Scenario, r0, theta, r, g_rg=None):
-    """w / r0^2, the weight normalised by the master range (see _from_normalised): formed from
-    b_perp / r0 so that centimetre ranges do not underflow b_perp^2 into denormals (which
-    once made a formation at r0 = 1e-161 look optimal). nan at r0 = 0. g_rg: gamma_Rg(theta)
-    when the caller has it."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        b = r / r0 * np.abs(np.sin(theta - sc.th0))
-    g_rg = rays.coherence_rg(sc, theta) if g_rg is None else g_rg
-    return rays.weight(sc, b, g_rg, rays.snr_factor(sc, r0, r))
-
-
-def _components(sc: Scenario, k: int, r0, theta):
-    """Slave k's feasible ranges on the ray as two intervals (below / above the master hole);
-    an interval is empty when lo > top."""
-    lo, up = rays.ray_limits(sc, k, r0, theta)
-    h1, h2 = rays.master_hole(sc, r0, theta)
-    return ((lo, np.minimum(up, h1)), (np.maximum(lo, h2), up))
-
-
-def _lower_crossing(t, c, d2):
-    """y_lo(t): the smaller r_2 with (t, r_2) on the boundary of E; nan if the line misses E."""
-    disc = d2 - t * t * (1.0 - c * c)
-    with np.errstate(invalid="ignore"):
-        return np.where(disc > 0.0, t * c - np.sqrt(disc), np.nan)
-
-
-def best_ranges(sc: Scenario, r0, th1, th2=None):
+def best_ranges(sc: Problem, r0, th1, th2=None):
     """Exact optimum of the slave ranges for fixed (r0, theta_1[, theta_2]). With one slave
     (sc.slaves == (k,)) theta_1 is that slave's angle.
 
@@ -67,16 +47,16 @@ def best_ranges(sc: Scenario, r0, th1, th2=None):
     """
     r0 = np.asarray(r0, dtype=float)
     th1 = np.asarray(th1, dtype=float)
-    comps1 = _components(sc, sc.slaves[0], r0, th1)
+    comps1 = range_components(sc, sc.slaves[0], r0, th1)
     if len(sc.slaves) == 1:
         lo_b, top_b = comps1[1]
         lo_a, top_a = comps1[0]
         r1 = np.where(lo_b <= top_b, top_b, np.where(lo_a <= top_a, top_a, np.nan))
-        w = _slave_weight(sc, r0, th1, r1)
-        f = np.where(np.isfinite(r1) & (w > 0) & (r0 > 0), _from_normalised(sc, w), np.inf)
+        w = slave_weight(sc, r0, th1, r1)
+        f = np.where(np.isfinite(r1) & (w > 0) & (r0 > 0), objective_from_normalised(sc, w), np.inf)
         return f, r1, np.full_like(r1, np.nan)
     th2 = np.asarray(th2, dtype=float)
-    comps2 = _components(sc, sc.slaves[1], r0, th2)
+    comps2 = range_components(sc, sc.slaves[1], r0, th2)
     c = np.cos(th1 - th2)
     d2 = sc.p.d_min**2 if sc.on("C4") else 0.0
     best_w = np.full(np.broadcast(r0, th1, th2).shape, -np.inf)
@@ -92,8 +72,8 @@ def best_ranges(sc: Scenario, r0, th1, th2=None):
 
     g1, g2 = rays.coherence_rg(sc, th1), rays.coherence_rg(sc, th2)
     with np.errstate(invalid="ignore"):
-        tops1 = [(lo, t, _slave_weight(sc, r0, th1, t, g1)) for lo, t in comps1]
-        tops2 = [(lo, t, _slave_weight(sc, r0, th2, t, g2)) for lo, t in comps2]
+        tops1 = [(lo, t, slave_weight(sc, r0, th1, t, g1)) for lo, t in comps1]
+        tops2 = [(lo, t, slave_weight(sc, r0, th2, t, g2)) for lo, t in comps2]
         for lo1, t1, w1 in tops1:
             for lo2, t2, w2 in tops2:
                 valid = (lo1 <= t1) & (lo2 <= t2)
@@ -102,13 +82,13 @@ def best_ranges(sc: Scenario, r0, th1, th2=None):
                 crowded = valid & ~clear
                 if not crowded.any():
                     continue
-                y = _lower_crossing(t1, c, d2)
+                y = lower_crossing(t1, c, d2)
                 ok = crowded & (y >= lo2)
-                consider(ok, w1 + _slave_weight(sc, r0, th2, np.where(ok, y, t2), g2), t1, y)
-                x = _lower_crossing(t2, c, d2)
+                consider(ok, w1 + slave_weight(sc, r0, th2, np.where(ok, y, t2), g2), t1, y)
+                x = lower_crossing(t2, c, d2)
                 ok = crowded & (x >= lo1)
-                consider(ok, _slave_weight(sc, r0, th1, np.where(ok, x, t1), g1) + w2, x, t2)
-    f = np.where((best_w > 0) & (r0 > 0), _from_normalised(sc, best_w), np.inf)
+                consider(ok, slave_weight(sc, r0, th1, np.where(ok, x, t1), g1) + w2, x, t2)
+    f = np.where((best_w > 0) & (r0 > 0), objective_from_normalised(sc, best_w), np.inf)
     return f, best_r1, best_r2
 
 
@@ -122,13 +102,13 @@ def _abs_sin_range(dlo, dhi):
     """(min, max) of |sin(delta)| over [dlo, dhi] with |delta| < pi."""
     s_lo, s_hi = np.abs(np.sin(dlo)), np.abs(np.sin(dhi))
     smin = np.where((dlo <= 0.0) & (dhi >= 0.0), 0.0, np.minimum(s_lo, s_hi))
-    peak = ((dlo <= rays.HALF_PI) & (dhi >= rays.HALF_PI)) | (
-        (dlo <= -rays.HALF_PI) & (dhi >= -rays.HALF_PI))
+    peak = ((dlo <= HALF_PI) & (dhi >= HALF_PI)) | (
+        (dlo <= -HALF_PI) & (dhi >= -HALF_PI))
     smax = np.where(peak, 1.0, np.maximum(s_lo, s_hi))
     return smin, smax
 
 
-def slave_box(sc: Scenario, k: int, r0a, r0b, ta, tb):
+def slave_box(sc: Problem, k: int, r0a, r0b, ta, tb):
     """Bounds for slave k over the box r0 in [r0a, r0b], theta in [ta, tb]: a lower bound on
     its range's lower limit, an upper bound on its upper limit, and the pieces of the weight
     bound (see weight_bound). Each limit is monotone in r0 and in |theta|, |theta - theta_0| or
@@ -136,10 +116,10 @@ def slave_box(sc: Scenario, k: int, r0a, r0b, ta, tb):
     p = sc.p
     abs_lo = np.where((ta <= 0) & (tb >= 0), 0.0, np.minimum(np.abs(ta), np.abs(tb)))
     abs_hi = np.maximum(np.abs(ta), np.abs(tb))
-    dist = rays.angle_between(_nearest(sc.station_angle, ta, tb), sc.station_angle)
+    dist = angle_between(_nearest(sc.station_angle, ta, tb), sc.station_angle)
     lo, up = np.zeros_like(ta), np.full_like(ta, math.inf)
     if sc.disk_r2[k] != math.inf:
-        ra, rb = rays._disk_at_psi(sc, sc.disk_r2[k], dist)
+        ra, rb = disk_at_psi(sc, sc.disk_r2[k], dist)
         lo, up = np.maximum(lo, ra), np.minimum(up, rb)
     if sc.on("C1"):
         lo = np.maximum(lo, p.z_min / np.cos(abs_lo))
@@ -156,7 +136,7 @@ def slave_box(sc: Scenario, k: int, r0a, r0b, ta, tb):
     return lo, up, smax, g_rg
 
 
-def _below_master_hole(sc: Scenario, r0a, r0b, ta, tb, lo, up):
+def _below_master_hole(sc: Problem, r0a, r0b, ta, tb, lo, up):
     """The range limit `up` lowered past the master's C4 hole where the hole covers it for every
     point of the box (-inf: the slave cannot be there at all); see master_hole_box."""
     h1, h2 = _master_hole_box(sc, r0a, r0b, ta, tb)
@@ -166,7 +146,7 @@ def _below_master_hole(sc: Scenario, r0a, r0b, ta, tb, lo, up):
     return np.where(covered, np.where(h1 >= lo, h1, -np.inf), up)
 
 
-def master_hole_box(sc: Scenario, r0a, r0b, ta, tb):
+def master_hole_box(sc: Problem, r0a, r0b, ta, tb):
     """(H1, H2): ranges in (H1, H2) are closer than d_min to the master (C4) at every point of
     the box; (inf, -inf) when no range is, or C4 is off.
 
@@ -183,14 +163,14 @@ def master_hole_box(sc: Scenario, r0a, r0b, ta, tb):
     return h1, h2
 
 
-def _master_hole_box(sc: Scenario, r0a, r0b, ta, tb):
+def _master_hole_box(sc: Problem, r0a, r0b, ta, tb):
     """master_hole_box, with (None, None) when no box has a hole (most, at small d_min)."""
     if not sc.on("C4"):
         return None, None
     ta, tb = np.asarray(ta, dtype=float), np.asarray(tb, dtype=float)
     dhi = np.maximum(np.abs(ta - sc.th0), np.abs(tb - sc.th0))
-    disc = sc.p.d_min**2 - (r0b * np.sin(np.minimum(dhi, rays.HALF_PI))) ** 2
-    exists = (disc > 0.0) & (dhi < rays.HALF_PI)
+    disc = sc.p.d_min**2 - (r0b * np.sin(np.minimum(dhi, HALF_PI))) ** 2
+    exists = (disc > 0.0) & (dhi < HALF_PI)
     if not exists.any():
         return None, None
     dlo = np.where((ta <= sc.th0) & (tb >= sc.th0), 0.0,
@@ -200,13 +180,13 @@ def _master_hole_box(sc: Scenario, r0a, r0b, ta, tb):
             np.where(exists, r0a * np.cos(dhi) + root, -np.inf))
 
 
-def c8_cap(sc: Scenario, k: int) -> float:
+def c8_cap(sc: Problem, k: int) -> float:
     """Slave k's C8 cap on b_perp / r0, lambda sin(theta_0) / h_amb,k^min (its own rung of
     h_amb_ratio's ladder, free of r0); +inf when C8 is off."""
     return float(model.baseline_max(sc.p, 1.0, k)) if sc.on("C8") else math.inf
 
 
-def weight_bound(sc: Scenario, r0a, rho, smax, g_rg, cap):
+def weight_bound(sc: Problem, r0a, rho, smax, g_rg, cap):
     """Upper bound on w / r0^2 for any point of the box whose slave range is at most rho.
 
     b_perp / r0 <= min(r smax / r0a, cap), cap = lambda sin(theta_0) / h_amb,k^min the slave's
@@ -226,7 +206,7 @@ def weight_bound(sc: Scenario, r0a, rho, smax, g_rg, cap):
     return np.where(np.isnan(w), np.inf, w)
 
 
-def pair_weight_bound(sc: Scenario, r0a, one, two, w_one, w_two,
+def pair_weight_bound(sc: Problem, r0a, one, two, w_one, w_two,
                       caps: tuple[float, float]):
     """Upper bound on w_i / r0^2 + w_j / r0^2 over a box for two slaves kept d_min apart (C4),
     -inf where the pair provably has no feasible point. `one` and `two` are
@@ -248,15 +228,10 @@ def pair_weight_bound(sc: Scenario, r0a, one, two, w_one, w_two,
     d2 = sc.p.d_min**2
     with np.errstate(invalid="ignore"):
         inside = up1 * up1 + up2 * up2 - 2.0 * c * up1 * up2 < d2
-        y = _lower_crossing(up1, c, d2)
-        x = _lower_crossing(up2, c, d2)
+        y = lower_crossing(up1, c, d2)
+        x = lower_crossing(up2, c, d2)
         wa = np.where(y >= lo2, w_one + weight_bound(sc, r0a, np.maximum(y, 0.0), s2, g2, caps[1]),
                       -np.inf)
         wb = np.where(x >= lo1, weight_bound(sc, r0a, np.maximum(x, 0.0), s1, g1, caps[0]) + w_two,
                       -np.inf)
     return np.where(inside, np.maximum(wa, wb), w_top)
-
-
-def _from_normalised(sc: Scenario, wn):
-    """The objective lambda r0 sin(theta_0) / (2 pi sqrt(w)) written with wn = w / r0^2."""
-    return rays.objective_from_weights(sc, 1.0, np.maximum(wn, 0.0))

@@ -23,7 +23,13 @@ from __future__ import annotations
 import numpy as np
 
 from uav_insar_planner.solver.global_opt import chain_bound, slave_ranges
-from uav_insar_planner.solver.rays import Scenario
+from uav_insar_planner.solver.global_opt.kernel import (
+    lower_crossing,
+    objective_from_normalised,
+    range_components,
+    slave_weight,
+)
+from uav_insar_planner.solver.problem import Problem
 
 
 def angle_cols(j: int) -> tuple[int, int]:
@@ -31,7 +37,7 @@ def angle_cols(j: int) -> tuple[int, int]:
     return 2 + 2 * j, 3 + 2 * j
 
 
-def box_lower_bound(sc: Scenario, boxes: np.ndarray, close_at: float = np.inf) -> np.ndarray:
+def box_lower_bound(sc: Problem, boxes: np.ndarray, close_at: float = np.inf) -> np.ndarray:
     """Lower bound on the objective over every feasible point of each box (+inf: the box
     provably holds none); see the module docstring. close_at: bounds at or above it close the
     box anyway, so the costlier forest bound is spent only on boxes below it."""
@@ -57,15 +63,15 @@ def box_lower_bound(sc: Scenario, boxes: np.ndarray, close_at: float = np.inf) -
         if len(single) <= chain_bound.FOREST_MAX_K:
             # the forest keeps every pair and the master's hole: never looser than the chain
             with np.errstate(divide="ignore"):
-                open_ = ok & (slave_ranges._from_normalised(sc, np.maximum(w, 0.0)) < close_at)
+                open_ = ok & (objective_from_normalised(sc, np.maximum(w, 0.0)) < close_at)
             if open_.any():
                 w[open_] = np.minimum(w[open_], chain_bound.forest_weight_bound(
                     sc, r0a[open_], stacked[:, :, open_]))
     w = np.where(ok, w, -np.inf)
-    return np.where(w > -np.inf, slave_ranges._from_normalised(sc, w), np.inf)
+    return np.where(w > -np.inf, objective_from_normalised(sc, w), np.inf)
 
 
-def ranges_for(sc: Scenario, r0, thetas: np.ndarray):
+def ranges_for(sc: Problem, r0, thetas: np.ndarray):
     """(objective, ranges) for master ranges r0 (n,) and slave look angles thetas (n, K):
     the exact optimum for K <= 2, greedy_ranges' feasible point for K >= 3; objective +inf and
     ranges nan where none is found."""
@@ -85,7 +91,7 @@ def ranges_for(sc: Scenario, r0, thetas: np.ndarray):
     return f, ranges
 
 
-def _forest_point(sc: Scenario, r0, thetas: np.ndarray):
+def _forest_point(sc: Problem, r0, thetas: np.ndarray):
     """The best forest of chain_bound at fixed angles (the inner optimum up to the master's
     hole), kept where it passes the feasibility check of `_objective_if_feasible`."""
     r0 = np.asarray(r0, dtype=float)
@@ -98,14 +104,14 @@ def _forest_point(sc: Scenario, r0, thetas: np.ndarray):
     return _objective_if_feasible(sc, r0, thetas, ranges)
 
 
-def _objective_if_feasible(sc: Scenario, r0, thetas: np.ndarray, ranges: np.ndarray):
+def _objective_if_feasible(sc: Problem, r0, thetas: np.ndarray, ranges: np.ndarray):
     """(objective, ranges) with +inf / nan rows where the ranges break a ray limit, the
     master's hole or C4 between slaves."""
     d2 = sc.p.d_min**2 if sc.on("C4") else 0.0
     ok = np.all(np.isfinite(ranges), axis=1) & (r0 > 0)
     with np.errstate(invalid="ignore"):
         for j, k in enumerate(sc.slaves):
-            (lo_a, top_a), (lo_b, top_b) = slave_ranges._components(sc, k, r0, thetas[:, j])
+            (lo_a, top_a), (lo_b, top_b) = range_components(sc, k, r0, thetas[:, j])
             r = ranges[:, j]
             ok &= ((r >= lo_a) & (r <= top_a)) | ((r >= lo_b) & (r <= top_b))
             for i in range(j):
@@ -115,12 +121,12 @@ def _objective_if_feasible(sc: Scenario, r0, thetas: np.ndarray, ranges: np.ndar
     ranges = np.where(ok[:, None], ranges, np.nan)
     w = np.zeros(len(ranges))
     for j in range(ranges.shape[1]):
-        w = w + slave_ranges._slave_weight(sc, r0, thetas[:, j], ranges[:, j])
-    f = np.where(ok & (w > 0), slave_ranges._from_normalised(sc, np.where(ok, w, 0.0)), np.inf)
+        w = w + slave_weight(sc, r0, thetas[:, j], ranges[:, j])
+    f = np.where(ok & (w > 0), objective_from_normalised(sc, np.where(ok, w, 0.0)), np.inf)
     return f, ranges
 
 
-def greedy_ranges(sc: Scenario, r0, thetas: np.ndarray, order) -> tuple[np.ndarray,
+def greedy_ranges(sc: Problem, r0, thetas: np.ndarray, order) -> tuple[np.ndarray,
                                                                          np.ndarray]:
     """A feasible assignment of the slaves' ranges, placing them in `order` (module
     docstring); (objective, ranges (n, K)), +inf / nan where it fails."""
@@ -131,7 +137,7 @@ def greedy_ranges(sc: Scenario, r0, thetas: np.ndarray, order) -> tuple[np.ndarr
     ok = r0 > 0
     placed: list[int] = []
     for j in order:
-        (lo_a, top_a), (lo_b, top_b) = slave_ranges._components(sc, sc.slaves[j], r0,
+        (lo_a, top_a), (lo_b, top_b) = range_components(sc, sc.slaves[j], r0,
                                                                 thetas[:, j])
         r = np.where(lo_b <= top_b, top_b, top_a)
         hole_top = np.where(lo_b <= top_b, lo_b, np.inf)  # above it lies the upper component
@@ -144,7 +150,7 @@ def greedy_ranges(sc: Scenario, r0, thetas: np.ndarray, order) -> tuple[np.ndarr
                     clash = ri * ri + r * r - 2.0 * c * ri * r < d2
                 if clash.any():
                     moved = True
-                    r = np.where(clash, slave_ranges._lower_crossing(ri, c, d2), r)
+                    r = np.where(clash, lower_crossing(ri, c, d2), r)
             r = np.where((r < hole_top) & (r > top_a), top_a, r)
             if not moved:
                 break
@@ -160,6 +166,6 @@ def greedy_ranges(sc: Scenario, r0, thetas: np.ndarray, order) -> tuple[np.ndarr
     ranges[~ok] = np.nan
     w = np.zeros(n)
     for j in range(k_count):
-        w = w + slave_ranges._slave_weight(sc, r0, thetas[:, j], ranges[:, j])
-    f = np.where(ok & (w > 0), slave_ranges._from_normalised(sc, np.where(ok, w, 0.0)), np.inf)
+        w = w + slave_weight(sc, r0, thetas[:, j], ranges[:, j])
+    f = np.where(ok & (w > 0), objective_from_normalised(sc, np.where(ok, w, 0.0)), np.inf)
     return f, ranges
