@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+from uav_insar_planner.mavlink.autopilots import AUTOPILOTS
 from uav_insar_planner.plan import SAFE_SEPARATION_M
 from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, MAX_UAVS, MIN_UAVS, uavs
 
@@ -179,7 +180,6 @@ FIRST_PORT, PORT_STEP = 14552, 10
 def vehicle_connection(k: int) -> str:
     """The bridge's default connection to vehicle k (`uav-insar-vehicle --listen` of it)."""
     return f"udpout:127.0.0.1:{FIRST_PORT + PORT_STEP * k}"
-AUTOPILOTS = ("ardupilot", "px4")  # the flavours mavlink/autopilots.py knows the modes of
 PASS_STARTS = ("auto", "capture", "planner")  # who starts the bridge's pass
 POSITION_SOURCES = ("agent", "autopilot")  # where an agent takes its UAV's position from
 

@@ -41,7 +41,7 @@ class BridgeConfig:
     - min_separation_m: the bridge warns when two planned UAVs are closer (0: no check); see
       DEFAULT_MIN_SEPARATION_M for the figure.
     - signing_key_file: MAVLink 2 signing on every link with this key (`signing`); "" off.
-    - gcs_timeout_s: hold when the ground station is silent this long (`holding`); 0 off,
+    - gcs_timeout_s: hold when the ground station is silent this long (`holds`); 0 off,
       else at least GCS_TIMEOUT_MIN_S.
     - uav_id: -1 flies UAV k = 0.. of `target_sysids` each (N entries for N UAVs);
       0..MAX_UAVS-1 flies that UAV alone (one sysid, one connection: a stack per UAV).
