@@ -7,7 +7,7 @@ import time
 import pytest
 from mavlink_fakes import MAV, wait_until
 
-from uav_insar_planner.mavlink.autopilots import profile
+from uav_insar_planner.autopilots.profiles import profile
 from uav_insar_planner.mavlink.bridge import Bridge, BridgeConfig
 from uav_insar_planner.mavlink.mode_orders import ATTEMPTS, hold_order
 from uav_insar_planner.mavlink.supervision import WatchedVehicle

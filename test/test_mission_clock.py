@@ -9,7 +9,7 @@ import math
 import pytest
 
 from uav_insar_planner import load_params
-from uav_insar_planner.mavlink.autopilots import profile
+from uav_insar_planner.autopilots.profiles import profile
 from uav_insar_planner.mavlink.catch_up import CATCH_UP_MPS, CatchUp, governed
 from uav_insar_planner.mavlink.frames import TrackFrame
 from uav_insar_planner.mavlink.holds import Holding

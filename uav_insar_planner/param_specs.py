@@ -12,7 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from uav_insar_planner.mavlink.autopilots import AUTOPILOTS
+from uav_insar_planner.autopilots.profiles import AUTOPILOTS
 from uav_insar_planner.plan import SAFE_SEPARATION_M
 from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, MAX_UAVS, MIN_UAVS, uavs
 

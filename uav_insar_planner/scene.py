@@ -20,7 +20,7 @@ from uav_insar_planner.params import Params
 from uav_insar_planner.plan import Plan
 from uav_insar_planner.solver.power import station_radius_sq
 
-Vec3 = tuple[float, float, float]
+Vec3 = tuple[float, float, float]  # a point or vector, (x, y, z) or (N, E, D); the one alias
 
 
 @dataclass(frozen=True)

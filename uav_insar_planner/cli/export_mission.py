@@ -26,12 +26,12 @@ from pathlib import Path
 
 import numpy as np
 
+from uav_insar_planner.autopilots.profiles import AUTOPILOTS, profile
 from uav_insar_planner.cli.checks import check_output_folder, utc_instant
 from uav_insar_planner.cli.montecarlo import FORMATION_HELP, parse_formation
 from uav_insar_planner.cli.scenario import add_scenario_arguments, scenario_params
 from uav_insar_planner.evaluate import position_constraints
 from uav_insar_planner.exit_codes import EXIT_INFEASIBLE, EXIT_OK
-from uav_insar_planner.mavlink.autopilots import AUTOPILOTS, profile
 from uav_insar_planner.mission_file.folder import folder_problems, replace_files
 from uav_insar_planner.mission_file.geodesy import POLE_MARGIN_DEG
 from uav_insar_planner.mission_file.qgc_plan import (

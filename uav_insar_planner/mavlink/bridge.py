@@ -8,7 +8,7 @@ Contract (each point's detail is in the module named):
   (`trajectory`), started by the capture gate or the planner's instant (`pass_clock`).
   Where the autopilot ignores setpoints outside its flight mode (ArduPilot: GUIDED) none go
   to a vehicle not in it (nor during its takeoff); else (PX4) the stream never stops: OFFBOARD
-  needs it before and on return (`autopilots`). `uav_id` >= 0: one vehicle, UAV `uav_id`.
+  needs it before and on return (`autopilots.profiles`). `uav_id` >= 0: one vehicle, UAV `uav_id`.
 - Our HEARTBEAT at 1 Hz as (source_sysid, 191); vehicles found, lost and their `phase`
   (`supervision`); LOCAL_POSITION_NED requested at 10 Hz and read back.
 - Optional arm_and_takeoff (`sequencer`), each COMMAND_ACK and PreArm reason an event.
@@ -38,7 +38,7 @@ from dataclasses import replace
 
 from uav_insar_planner.mavlink.config import BridgeConfig
 from uav_insar_planner.mavlink.flight_state import FlightState
-from uav_insar_planner.mavlink.frames import TrackFrame, Vec3
+from uav_insar_planner.mavlink.frames import TrackFrame
 from uav_insar_planner.mavlink.guard import DropLog
 from uav_insar_planner.mavlink.io_thread import IoThread
 from uav_insar_planner.mavlink.link import MAV, Link, LinkStats, Source, open_links
@@ -51,6 +51,7 @@ from uav_insar_planner.mavlink.setpoints import (
     setpoint_message,
 )
 from uav_insar_planner.mavlink.supervision import WatchedVehicle, is_vehicle_heartbeat
+from uav_insar_planner.scene import Vec3
 from uav_insar_planner.swarm import MAX_UAVS
 
 __all__ = ["Bridge", "BridgeConfig", "BridgeEvent", "VehicleStatus"]

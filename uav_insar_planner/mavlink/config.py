@@ -6,7 +6,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from uav_insar_planner.mavlink.frames import Vec3
 from uav_insar_planner.mavlink.link import parse_address
 from uav_insar_planner.param_specs import (
     BRIDGE_SPECS,
@@ -19,6 +18,7 @@ from uav_insar_planner.param_specs import (
 )
 from uav_insar_planner.params import check_value, shown
 from uav_insar_planner.plan import SAFE_SEPARATION_M as DEFAULT_MIN_SEPARATION_M
+from uav_insar_planner.scene import Vec3
 from uav_insar_planner.swarm import MAX_UAVS
 
 _DEFAULTS = {spec.name: spec.default for spec in BRIDGE_SPECS}

@@ -5,7 +5,7 @@ No I/O and not thread-safe: the bridge (`bridge.Bridge`) feeds it what it hears 
 commands it asks for, under its lock. Each point's detail is in the module named:
 - The pass (`trajectory`), started by the capture gate or the planner's instant
   (`pass_clock`); the setpoint target of each vehicle (`target_to_send`), none where the
-  autopilot ignores them (`autopilots.AutopilotProfile.setpoints_in_flight_only`), a held
+  autopilot ignores them (`autopilots.profiles`: `setpoints_in_flight_only`), a held
   vehicle or one catching up gently (`catch_up`).
 - Holds (`holds`): the planner's mission stop (every pose NaN) and the ground station's
   silence; a held vehicle at most `holds.REJOIN_S` of the pass behind its target rejoins when
@@ -21,10 +21,10 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 
-from uav_insar_planner.mavlink.autopilots import profile
+from uav_insar_planner.autopilots.profiles import profile
 from uav_insar_planner.mavlink.catch_up import CATCH_UP_FROM_M, CatchUp, governed
 from uav_insar_planner.mavlink.config import BridgeConfig
-from uav_insar_planner.mavlink.frames import TrackFrame, Vec3
+from uav_insar_planner.mavlink.frames import TrackFrame
 from uav_insar_planner.mavlink.holds import REJOIN_S, Holding
 from uav_insar_planner.mavlink.mode_orders import ModeOrder
 from uav_insar_planner.mavlink.pass_clock import (
@@ -37,6 +37,7 @@ from uav_insar_planner.mavlink.report import VehicleStatus, vehicle_status
 from uav_insar_planner.mavlink.sequencer import ArmingSequence
 from uav_insar_planner.mavlink.supervision import WatchedVehicle
 from uav_insar_planner.mavlink.trajectory import PassTrajectory, clean_formation, separation
+from uav_insar_planner.scene import Vec3
 
 Emit = Callable[[int, str, str], None]  # (uav or -1 for the swarm, level, text)
 SendCommand = Callable[[WatchedVehicle, int, Sequence[float], int], None]

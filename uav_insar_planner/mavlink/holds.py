@@ -30,10 +30,10 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 
-from uav_insar_planner.mavlink.autopilots import AutopilotProfile
-from uav_insar_planner.mavlink.frames import Vec3
+from uav_insar_planner.autopilots.profiles import AutopilotProfile
 from uav_insar_planner.mavlink.mode_orders import ModeOrder, hold_order, resume_order
 from uav_insar_planner.mavlink.supervision import WatchedVehicle
+from uav_insar_planner.scene import Vec3
 from uav_insar_planner.swarm import uav_name
 
 Emit = Callable[[int, str, str], None]  # (uav or -1 for the swarm, level, text)

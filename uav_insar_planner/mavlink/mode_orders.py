@@ -1,6 +1,6 @@
 """Mode orders: MAV_CMD_DO_SET_MODE into one mode, for the UAVs an order is engaged for.
 
-The modes are the autopilot profile's (`autopilots.AutopilotProfile`). `hold_order` is each
+The modes are the autopilot profile's (`autopilots.profiles.AutopilotProfile`). `hold_order` is each
 vehicle's position hold (`hold`: ArduCopter LOITER, PX4 AUTO.LOITER). The bridge engages it
 when the planner publishes a formation with every pose NaN (the mission cannot continue,
 `replan.hold_plan`) and when the ground station falls silent for `gcs_timeout_s` (`holds`); it
@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
-from uav_insar_planner.mavlink.autopilots import AutopilotProfile, Mode
+from uav_insar_planner.autopilots.profiles import AutopilotProfile, Mode
 from uav_insar_planner.mavlink.link import MAV
 from uav_insar_planner.mavlink.supervision import WatchedVehicle
 

@@ -1,7 +1,7 @@
 """The optional readiness-and-arming sequence of one vehicle, the way an operator flies it.
 
-The steps are the autopilot profile's (`autopilots.AutopilotProfile.arming_steps`). ArduPilot:
-wait for position -> GUIDED (confirmed from the heartbeat) -> arm -> NAV_TAKEOFF to the
+The steps are the autopilot profile's (`autopilots.profiles.AutopilotProfile.arming_steps`).
+ArduPilot: wait for position -> GUIDED (confirmed from the heartbeat) -> arm -> NAV_TAKEOFF to the
 formation altitude -> wait for the climb; the bridge holds the setpoints back until the
 sequence is done. PX4: wait for position -> stream setpoints > 1 s -> OFFBOARD (confirmed) ->
 arm (the offboard setpoint is the takeoff).
@@ -30,7 +30,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
-from uav_insar_planner.mavlink.autopilots import AutopilotProfile
+from uav_insar_planner.autopilots.profiles import AutopilotProfile
 from uav_insar_planner.mavlink.link import MAV
 from uav_insar_planner.mavlink.supervision import WatchedVehicle
 

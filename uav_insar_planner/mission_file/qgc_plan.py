@@ -42,7 +42,7 @@ import math
 from dataclasses import dataclass
 from datetime import datetime, timedelta
 
-from uav_insar_planner.mavlink.autopilots import profile
+from uav_insar_planner.autopilots.profiles import profile
 from uav_insar_planner.mavlink.frames import TrackFrame
 from uav_insar_planner.mission_file.geodesy import ned_to_latlon
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from uav_insar_planner.mavlink.autopilots import (
+from uav_insar_planner.autopilots.profiles import (
     COPTER_MODES,
     AutopilotProfile,
     copter_mode_name,
