@@ -21,7 +21,7 @@ In-process (a background thread; what tests and an agent node use):
 In-process the boot phase defaults to 0 s (`boot_s`), on the command line to 3 s; a vehicle
 started `airborne` never boots. The MAVLink side, like the real autopilots (flight logic:
 `autopilot.Autopilot`, telemetry: `telemetry`, parameters: `parameters`, commands:
-`commands`):
+`commands`, what differs per flavour: `profiles`; the loop's thread: `mavlink.io_thread`):
 - Sent as (sysid, compid 1): HEARTBEAT (MAV_TYPE_QUADROTOR; ArduCopter mode numbers or PX4
   main << 16 | sub << 24), SYS_STATUS, GPS_RAW_INT, ATTITUDE, LOCAL_POSITION_NED,
   GLOBAL_POSITION_INT, HOME_POSITION, EXTENDED_SYS_STATE, BATTERY_STATUS at the
