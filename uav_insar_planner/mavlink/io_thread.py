@@ -8,13 +8,14 @@ STOP_WAIT_S for the loop and closes. Used as a context manager it runs inside th
 from __future__ import annotations
 
 import threading
+from abc import ABC, abstractmethod
 from typing import TypeVar
 
 STOP_WAIT_S = 5.0
 _Self = TypeVar("_Self", bound="IoThread")
 
 
-class IoThread:
+class IoThread(ABC):
     """See the module doc; `thread_name` names the thread (in tracebacks and `ps -T`)."""
 
     def __init__(self, thread_name: str):
@@ -30,11 +31,13 @@ class IoThread:
     def thread_alive(self) -> bool:
         return self._thread is not None and self._thread.is_alive()
 
+    @abstractmethod
     def run(self) -> None:
-        raise NotImplementedError
+        """The loop (see the module doc)."""
 
+    @abstractmethod
     def close(self) -> None:
-        raise NotImplementedError
+        """Free what the loop used."""
 
     def start(self) -> None:
         """Start the loop's thread (idempotent)."""
