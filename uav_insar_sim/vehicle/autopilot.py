@@ -75,7 +75,6 @@ class Autopilot:
         if not (0.0 <= boot_s < 3600.0):
             raise ValueError(f"boot_s: value {boot_s!r:.24} is not allowed; expected "
                              "0 <= s < 3600")
-        self.autopilot = autopilot
         self.max_speed, self.max_accel = float(max_speed), float(max_accel)
         self.offboard_timeout_s = float(offboard_timeout_s)
         self.takeoff_alt_m = PX4_DEFAULT_TAKEOFF_M
