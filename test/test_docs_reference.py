@@ -161,7 +161,7 @@ def test_recording_md_lists_every_topic_of_the_registry_as_a_demo_bag_names_it()
 
 def test_solvers_md_tables_every_declared_back_end():
     """The back-end table of science/solvers.md is generated (reference.INSERTS) from
-    param_specs.BACKENDS: each back end once, with its objectives and certificate."""
+    param_specs.science.BACKENDS: each back end once, with its objectives and certificate."""
     from types import SimpleNamespace
 
     from uav_insar_planner.param_specs.science import BACKENDS

@@ -1,4 +1,4 @@
-"""The bridge core's ground-station hold (mavlink/holding.py) through real MAVLink bytes on
+"""The bridge core's ground-station hold (mavlink/holds.py) through real MAVLink bytes on
 loopback UDP to simulated vehicles (no ROS): the test plays the ground station by calling
 `Bridge.gcs_heard` as the ROS side does for each gcs/heartbeat, and falls silent. The bridge
 runs its own clock here (pass_start capture): a new plan resumes the pass where it holds."""
@@ -12,7 +12,7 @@ from mavlink_fakes import MAV, wait_until
 from pymavlink import mavutil
 
 from uav_insar_planner.mavlink.bridge import Bridge, BridgeConfig
-from uav_insar_planner.mavlink.holding import GcsWatch
+from uav_insar_planner.mavlink.holds import GcsWatch
 from uav_insar_planner.param_specs.nodes import GCS_HEARTBEAT_PERIOD_S
 from uav_insar_sim.vehicle.simulator import SimVehicle
 

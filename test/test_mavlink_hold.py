@@ -1,5 +1,5 @@
-"""The bridge's hold order (mavlink/hold.py): a formation with every pose NaN after one with
-targets sends every vehicle into its hold mode, through real MAVLink bytes on loopback UDP to
+"""The bridge's hold order (mavlink/mode_orders.py): a formation with every pose NaN after one
+with targets sends every vehicle into its hold mode, through real MAVLink bytes on loopback UDP to
 SITL-style vehicles (no ROS)."""
 import math
 import time
@@ -7,8 +7,9 @@ import time
 import pytest
 from mavlink_fakes import MAV, wait_until
 
+from uav_insar_planner.autopilots.profiles import profile
 from uav_insar_planner.mavlink.bridge import Bridge, BridgeConfig
-from uav_insar_planner.mavlink.hold import ATTEMPTS, HoldOrder
+from uav_insar_planner.mavlink.mode_orders import ATTEMPTS, hold_order
 from uav_insar_planner.mavlink.supervision import WatchedVehicle
 from uav_insar_sim.vehicle.simulator import SimVehicle
 
@@ -57,7 +58,7 @@ def test_all_nan_formation_puts_every_vehicle_in_its_hold_mode(autopilot, flying
 
 
 def test_hold_order_is_resent_a_few_times_then_given_up():
-    order = HoldOrder("ardupilot")
+    order = hold_order(profile("ardupilot"))
     v = WatchedVehicle(0, 2, link=None, linked=True, custom_mode=4)
     assert not order.due(v, 0.0)  # not engaged
     order.engage([v.uav])
@@ -81,4 +82,5 @@ def test_hold_order_is_resent_a_few_times_then_given_up():
     order.release()
     v.linked = True
     assert not order.due(v, 100.0)
-    assert HoldOrder("px4").params == (float(MAV.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED), 4.0, 3.0)
+    custom = float(MAV.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED)
+    assert hold_order(profile("px4")).params == (custom, 4.0, 3.0)

@@ -215,6 +215,6 @@ def test_a_formation_beyond_float32_is_dropped_at_entry(watcher):
     finally:
         out = finish(bridge)
         vehicle.stop()
-    dropped = [line for line in out.splitlines() if "message dropped" in line]
+    dropped = [line for line in out.splitlines() if "dropped plan message" in line]
     assert len(dropped) == 1 and "poses[0].position.x: value 1e+39" in dropped[0], out
     assert "thread died" not in out, out

@@ -5,7 +5,7 @@ import pytest
 from mavlink_fakes import MAV, FakePeer, wait_until
 from process_group import kill_group
 
-from uav_insar_planner.mavlink.autopilots import px4_custom_mode
+from uav_insar_planner.autopilots.profiles import px4_custom_mode
 from uav_insar_sim.vehicle.cli import main
 from uav_insar_sim.vehicle.simulator import SimVehicle
 

@@ -9,10 +9,11 @@ import math
 import pytest
 
 from uav_insar_planner import load_params
+from uav_insar_planner.autopilots.profiles import profile
 from uav_insar_planner.mavlink.catch_up import CATCH_UP_MPS, CatchUp, governed
 from uav_insar_planner.mavlink.frames import TrackFrame
-from uav_insar_planner.mavlink.holding import Holding
-from uav_insar_planner.mavlink.pass_start import lags, planner_start, resume_where_held
+from uav_insar_planner.mavlink.holds import Holding
+from uav_insar_planner.mavlink.pass_clock import lags, planner_start, resume_where_held
 from uav_insar_planner.mavlink.supervision import WatchedVehicle
 from uav_insar_planner.mavlink.trajectory import RAMP_MPS2, PassTrajectory
 from uav_insar_planner.ros.formation_start import ON_TRACK_M, POSE_FRESH_S, on_track
@@ -97,7 +98,7 @@ def test_a_held_uav_rejoins_when_near_its_target_and_says_so_when_too_far_behind
     pass_.t_start, pass_.ramp = 0.0, False  # a pass running for 10 s
     near, far = _vehicle(0, 19.0), _vehicle(1, 15.0)  # target at y = 20 at t = 10
     events: list[str] = []
-    holding = Holding("ardupilot", 1.0, [0, 1], lambda k, level, text: events.append(text))
+    holding = Holding(profile("ardupilot"), 1.0, [0, 1], lambda k, level, text: events.append(text))
     holding.gcs_heard("gcs/heartbeat", 0.0, heartbeat=True)
     holding.check(5.0)  # silent: both held
     assert holding.stopped(near) and holding.stopped(far) and holding.gcs.silent
@@ -149,7 +150,7 @@ def test_slots_flown_off_the_planned_speed_are_found():
 
 def test_a_start_heard_too_late_holds_the_uav_rather_than_sprint():
     events: list[str] = []
-    holding = Holding("ardupilot", 0.0, [0, 1], lambda k, level, text: events.append(text))
+    holding = Holding(profile("ardupilot"), 0.0, [0, 1], lambda k, level, text: events.append(text))
     on_time, late = _vehicle(0, 19.0), _vehicle(1, 0.0)
     holding.fall_back([on_time, late], {0: 1.0, 1: 9.0}, 2.0, "a new pass start")
     assert not holding.stopped(on_time) and holding.stopped(late)

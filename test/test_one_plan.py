@@ -189,18 +189,21 @@ def test_bad_plan_messages_are_dropped_by_an_agent_and_the_bridge(watcher, procs
         bridge_out = bridge.stdout.read()
         vehicle.stop()
     assert agent_code == 0
-    dropped = [line for line in agent_out.splitlines() if "message dropped" in line]
-    assert [f"({n} dropped so far)" in line for n, line in enumerate(dropped, 1)] == [True] * 4
+    dropped = [line for line in agent_out.splitlines() if "dropped plan message" in line]
+    # each its own line: the first without a count, the next ones with the count so far
+    assert [line.endswith(f"{n} in all)") for n, line in enumerate(dropped[1:], 2)] == \
+        [True] * 3 and len(dropped) == 4, agent_out
     for text, line in zip(["formation: poses[0].position.x: value nan",
                            "formation: poses[1].position.z: value 1e+39",
                            "formation/power: data[3]: value -1.0",
                            "formation/power: layout.dim: value ['uav', 'slot']"],
                           dropped, strict=True):
-        assert f"uav0: {text} is not allowed" in line, line
+        assert f"uav0: dropped plan message: {text} is not allowed" in line, line
     assert agent_out.count("uav0: flying plan") == 1, agent_out
-    bridge_dropped = [line for line in bridge_out.splitlines() if "message dropped" in line]
-    assert [f"({n} dropped so far)" in line for n, line in enumerate(bridge_dropped, 1)] == \
-        [True] * 4, bridge_out
+    bridge_dropped = [line for line in bridge_out.splitlines()
+                      if "dropped plan message" in line]
+    assert [line.endswith(f"{n} in all)") for n, line in enumerate(bridge_dropped[1:], 2)] == \
+        [True] * 3 and len(bridge_dropped) == 4, bridge_out
     assert bridge_out.count("formation received") == 1, bridge_out
 
 

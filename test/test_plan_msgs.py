@@ -9,10 +9,11 @@ import pytest
 from std_msgs.msg import MultiArrayDimension
 
 from uav_insar_planner import load_params, solve
+from uav_insar_planner.mavlink.guard import DropLog
 from uav_insar_planner.published import formation_points
 from uav_insar_planner.ros.plan_gate import PlanPairing
 from uav_insar_planner.ros.plan_msgs import (
-    DropLog,
+    DROP_LOG_PERIOD_S,
     PlanId,
     PlanMessageError,
     decode_formation,
@@ -108,14 +109,16 @@ def test_a_long_value_is_cut_short(plans):
     assert len(str(err.value)) < 150 and "..." in str(err.value)
 
 
-def test_drop_log_counts_every_drop_and_logs_at_most_one_line_a_second():
-    lines, clock = [], [0.0]
-    log = DropLog(lines.append, lambda: clock[0])
+def test_a_bad_plan_message_logs_at_most_one_line_a_second():
+    clock = [0.0]
+    log = DropLog(DROP_LOG_PERIOD_S, clock=lambda: clock[0])
+    lines = []
     for t in (0.0, 0.2, 0.4, 1.5):
         clock[0] = t
-        log.drop(ValueError("bad"))
-    assert log.count == 4 and len(lines) == 2
-    assert "4 dropped so far; 2 more not shown" in lines[1]
+        lines.append(log.drop("plan message", "bad"))
+    shown = [line for line in lines if line is not None]
+    assert log.total == 4 and len(shown) == 2
+    assert shown[1] == "dropped plan message: bad (3 since the last report, 4 in all)"
 
 
 def _pair(pairing, plan, plan_id, order="fp"):

@@ -11,7 +11,7 @@ import pytest
 from std_msgs.msg import Header
 
 from uav_insar_planner.mavlink.config import IN_CODE_DEFAULTS, BridgeConfig, from_parameters
-from uav_insar_planner.mavlink.pass_start import planner_start
+from uav_insar_planner.mavlink.pass_clock import planner_start
 from uav_insar_planner.mavlink.trajectory import RAMP_MPS2, PassTrajectory, ramp_up
 from uav_insar_planner.param_specs.nodes import BRIDGE_SPECS
 from uav_insar_planner.ros.claims import Claim, refusal

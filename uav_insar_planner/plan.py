@@ -15,6 +15,8 @@ from uav_insar_planner.swarm import uav_name
 # Two UAVs planned closer than this may touch once each flies with its own position error:
 # standard GNSS (single frequency, SBAS) is good to about 1.5-3 m horizontally (95 %), RTK to
 # 0.02-0.05 m. Table I's d_min = 1.5 m therefore needs RTK; 2 m is the warning threshold.
+Vec3 = tuple[float, float, float]  # a point or vector, (x, y, z) or (N, E, D); the one alias
+
 SAFE_SEPARATION_M = 2.0
 
 

@@ -23,8 +23,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from uav_insar_planner.mavlink.frames import Vec3
 from uav_insar_planner.params import Params
+from uav_insar_planner.plan import Vec3
 from uav_insar_sim.fading import LinkFading
 from uav_insar_sim.offload import ClosedLoopOffload
 from uav_insar_sim.physics.kinematics import (

@@ -32,9 +32,9 @@ import math
 from collections import deque
 from collections.abc import Sequence
 
-from uav_insar_planner.mavlink.frames import Vec3
 from uav_insar_planner.mavlink.trajectory import RAMP_MPS2, ramp_up
 from uav_insar_planner.params import Params
+from uav_insar_planner.plan import Vec3
 from uav_insar_sim.fading import LinkFading
 from uav_insar_sim.offload import ClosedLoopOffload
 from uav_insar_sim.slots import SlotSample, SlotSchedule

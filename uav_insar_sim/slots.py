@@ -22,8 +22,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from uav_insar_planner import model
-from uav_insar_planner.mavlink.frames import Vec3
 from uav_insar_planner.params import Params
+from uav_insar_planner.plan import Vec3
 from uav_insar_planner.schemes import planned_rate_bps
 from uav_insar_sim.fading import LinkFading
 from uav_insar_sim.offload import ClosedLoopOffload

@@ -1,4 +1,4 @@
-"""The table of solver back ends on science/solvers.md, from `param_specs.BACKENDS`."""
+"""The table of solver back ends on science/solvers.md, from `param_specs.science.BACKENDS`."""
 from __future__ import annotations
 
 import reference_md as md
@@ -8,7 +8,7 @@ from uav_insar_planner.param_specs.science import BACKENDS
 
 def backends_table() -> str:
     """The back ends as declared (its `<!-- generated: solver back ends -->` line)."""
-    lines = ["Each back end is declared once, in `param_specs.BACKENDS`: the `solver` "
+    lines = ["Each back end is declared once, in `param_specs.science.BACKENDS`: the `solver` "
              "parameter's choices, the dispatcher (`solver.solve`), the rule of which objective "
              "runs where (`params.objective_problems`) and this table read it.", ""]
     lines += md.table(("`solver`", "Objectives", "Certified", "What it is", "Solve function"), (

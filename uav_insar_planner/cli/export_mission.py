@@ -26,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
+from uav_insar_planner.autopilots.profiles import AUTOPILOTS, profile
 from uav_insar_planner.cli.checks import check_output_folder, utc_instant
 from uav_insar_planner.cli.montecarlo import FORMATION_HELP, parse_formation
 from uav_insar_planner.cli.scenario import add_scenario_arguments, scenario_params
@@ -36,7 +37,6 @@ from uav_insar_planner.mission_file.geodesy import POLE_MARGIN_DEG
 from uav_insar_planner.mission_file.qgc_plan import (
     ALTITUDE_FRAMES,
     ENDS,
-    FIRMWARE_TYPES,
     PX4_PASS_SEQ,
     RUN_UP_S,
     START_LEAD_MIN_S,
@@ -72,7 +72,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         "NAV_DELAY's time, its UAVs hold until `uav-insar start-missions`")
     parser.add_argument("--end", choices=ENDS, default="hold",
                         help="after the pass: hold at its end (default) or return to launch")
-    parser.add_argument("--autopilot", choices=tuple(FIRMWARE_TYPES), default="ardupilot",
+    parser.add_argument("--autopilot", choices=AUTOPILOTS, default="ardupilot",
                         help="the plan's firmwareType (default ardupilot); px4: each UAV holds "
                         f"at its start until MISSION_START with first item {PX4_PASS_SEQ} "
                         "(`uav-insar start-missions`)")
@@ -186,11 +186,11 @@ def main(args: argparse.Namespace) -> int:
              else None)
     if args.formation is not None and args.scheme:
         raise ParamError(["--scheme: not allowed with --formation (the formation is given)"])
-    px4 = args.autopilot == "px4"
-    if px4 and start is not None:
-        raise ParamError(["--start-utc: not allowed with --autopilot px4 (PX4 ignores "
-                          "NAV_DELAY's UTC time; give the instant to `uav-insar start-missions "
-                          "--at`)"])
+    holds = not profile(args.autopilot).mission_waits_for_utc  # until MISSION_START
+    if holds and start is not None:
+        raise ParamError([f"--start-utc: not allowed with --autopilot {args.autopilot} (it "
+                          "ignores NAV_DELAY's UTC time; give the instant to `uav-insar "
+                          "start-missions --at`)"])
     if start is not None:
         check_start(args.start_utc, start, now)
     given = parse_formation(args.formation) if args.formation is not None else None
@@ -206,7 +206,7 @@ def main(args: argparse.Namespace) -> int:
         return EXIT_INFEASIBLE
     flown = {k: (float(formation[k, 0]), float(formation[k, 1])) for k in uavs(len(formation))
              if np.all(np.isfinite(formation[k]))}
-    if start is None and not px4:
+    if start is None and not holds:
         start = default_start(now, flown, run_up)
     flight = Pass(params.speed, params.num_slots * params.slot_duration_s * params.speed,
                   run_up, bearing)
@@ -228,7 +228,8 @@ def main(args: argparse.Namespace) -> int:
     heights = (f"heights AMSL (z + {home.alt_m:g} m)" if args.altitude_frame == "amsl" else
                "heights above each UAV's home: arm every UAV at the home's altitude")
     when = ("each UAV holds at its start until `uav-insar start-missions --at HH:MM:SS "
-            "CONNECTION...` starts them together (PX4 ignores NAV_DELAY's UTC time)" if px4
+            "CONNECTION...` starts them together (the autopilot ignores NAV_DELAY's UTC time)"
+            if holds
             else f"passes start at {start:%Y-%m-%dT%H:%M:%SZ} (UTC)")
     print(f"{when}; {flight.length_m:g} m at {flight.speed_mps:g} m/s after a {run_up:g} m "
           f"run-up; bearing {bearing:g} deg; {heights}")

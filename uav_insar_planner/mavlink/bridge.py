@@ -1,17 +1,19 @@
 """The swarm bridge: formation in the track frame -> SET_POSITION_TARGET_LOCAL_NED per UAV.
 
+This module is the I/O loop; the formation and hold state it serves is `flight_state`'s.
 Contract (each point's detail is in the module named):
 - One MAVLink link per distinct connection string; several UAVs may share one (a router),
   each addressed by its sysid and the component its heartbeat came from (`link`).
 - Setpoints in MAV_FRAME_LOCAL_NED at `setpoint_rate_hz` (`setpoints`) along the pass
-  (`trajectory`), started by the capture gate or the planner's instant (`pass_start`).
-  ArduPilot: none to a vehicle not in GUIDED (nor during its takeoff); PX4: the stream never
-  stops (OFFBOARD needs it before and on return). `uav_id` >= 0: one vehicle, UAV `uav_id`.
+  (`trajectory`), started by the capture gate or the planner's instant (`pass_clock`).
+  Where the autopilot ignores setpoints outside its flight mode (ArduPilot: GUIDED) none go
+  to a vehicle not in it (nor during its takeoff); else (PX4) the stream never stops: OFFBOARD
+  needs it before and on return (`autopilots.profiles`). `uav_id` >= 0: one vehicle, UAV `uav_id`.
 - Our HEARTBEAT at 1 Hz as (source_sysid, 191); vehicles found, lost and their `phase`
   (`supervision`); LOCAL_POSITION_NED requested at 10 Hz and read back.
 - Optional arm_and_takeoff (`sequencer`), each COMMAND_ACK and PreArm reason an event.
-- Holds (`holding`): the planner's mission stop (every pose NaN) and the ground station's
-  silence for `gcs_timeout_s`; a held vehicle at most `holding.REJOIN_S` of the pass behind
+- Holds (`holds`): the planner's mission stop (every pose NaN) and the ground station's
+  silence for `gcs_timeout_s`; a held vehicle at most `holds.REJOIN_S` of the pass behind
   its target rejoins when the ground is heard again or a new start or plan comes, one
   farther behind keeps holding and is reported `behind` (the planner resumes the swarm from
   where it holds or replans without it; under pass_start "capture" a new plan resumes the
@@ -21,9 +23,9 @@ Contract (each point's detail is in the module named):
   `unsendable`, `bad_value`, `spoofed` (supervision.unexpected_source); optional MAVLink 2
   signing (`signing`, `bad_signature`).
 
-All I/O runs in one background thread (`start()` / `stop()`); `set_formation`, `set_start`,
-`gcs_heard`, `gcs_state`, `status`, `link_stats`, `drain_events`, `track_started` and `target`
-are thread-safe and are what the ROS node calls.
+All I/O runs in one background thread (`start()` / `stop()`, `io_thread`); `set_formation`,
+`set_start`, `gcs_heard`, `gcs_state`, `status`, `link_stats`, `drain_events`,
+`track_started` and `target` are thread-safe and are what the ROS node calls.
 """
 from __future__ import annotations
 
@@ -34,25 +36,14 @@ from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 
-from uav_insar_planner.mavlink.catch_up import CATCH_UP_FROM_M, CatchUp, governed
 from uav_insar_planner.mavlink.config import BridgeConfig
-from uav_insar_planner.mavlink.frames import TrackFrame, Vec3
+from uav_insar_planner.mavlink.flight_state import FlightState
+from uav_insar_planner.mavlink.frames import TrackFrame
 from uav_insar_planner.mavlink.guard import DropLog
-from uav_insar_planner.mavlink.holding import REJOIN_S, Holding
+from uav_insar_planner.mavlink.io_thread import IoThread
 from uav_insar_planner.mavlink.link import MAV, Link, LinkStats, Source, open_links
-from uav_insar_planner.mavlink.pass_start import (
-    capture_start,
-    lags,
-    planner_start,
-    resume_where_held,
-)
-from uav_insar_planner.mavlink.report import BridgeEvent, VehicleStatus, vehicle_status
-from uav_insar_planner.mavlink.sequencer import (
-    COPTER_MODE_GUIDED,
-    ArmingSequence,
-    command_name,
-    result_name,
-)
+from uav_insar_planner.mavlink.report import BridgeEvent, VehicleStatus
+from uav_insar_planner.mavlink.sequencer import command_name, result_name
 from uav_insar_planner.mavlink.setpoints import (
     boot_ms,
     command_message,
@@ -60,7 +51,7 @@ from uav_insar_planner.mavlink.setpoints import (
     setpoint_message,
 )
 from uav_insar_planner.mavlink.supervision import WatchedVehicle, is_vehicle_heartbeat
-from uav_insar_planner.mavlink.trajectory import PassTrajectory, clean_formation, separation
+from uav_insar_planner.plan import Vec3
 from uav_insar_planner.swarm import MAX_UAVS
 
 __all__ = ["Bridge", "BridgeConfig", "BridgeEvent", "VehicleStatus"]
@@ -69,7 +60,7 @@ BRIDGE_COMPID = MAV.MAV_COMP_ID_ONBOARD_COMPUTER  # 191
 POSITION_INTERVAL_US = 100_000  # ask for LOCAL_POSITION_NED at 10 Hz
 
 
-class Bridge:
+class Bridge(IoThread):
     """Streams formation setpoints to N MAVLink vehicles and watches them (see module doc).
 
     Links are opened in the constructor (ValueError if the config or a link is bad); the I/O
@@ -79,20 +70,16 @@ class Bridge:
 
     def __init__(self, config: BridgeConfig, clock: Callable[[], float] = time.monotonic):
         config.validate()
+        super().__init__("mavlink-bridge")
         self.config = config
         self.frame = TrackFrame.from_degrees(config.track_bearing_deg, config.origin_ned_m)
         self._clock = clock
         self._t0 = clock()
         self._lock = threading.Lock()
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
         #: why the I/O thread died (None while it runs or never ran): nothing is sent then,
         #: and whoever reports the bridge's health must say so.
         self.failure: str | None = None
         self._events: deque[BridgeEvent] = deque(maxlen=1000)
-        self._pass = PassTrajectory(config.speed_mps, config.track_duration_s)
-        self._start_label = ""  # the plan whose pass start the track clock is (planner)
-        self._catch_up: dict[int, CatchUp] = {}  # vehicles catching up after a rejoin
         self._drops = DropLog(clock=clock)
         addresses = config.addresses()
         self._links, warning = open_links(addresses, config.source_sysid,
@@ -105,79 +92,40 @@ class Bridge:
                           for k, sysid, address
                           in zip(self.uavs, config.target_sysids, addresses, strict=True)]
         # poses read: one per vehicle, or every pose a plan may have (separation from the others)
-        self._count = max(self.uavs) + 1 if config.uav_id < 0 else MAX_UAVS
-        self._separation = [""] * self._count
-        self._sequences: dict[int, ArmingSequence] = {}  # per UAV, once arm_and_takeoff ran
-        self._holding = Holding(config.autopilot, config.gcs_timeout_s,
-                                [v.uav for v in self._vehicles], self._event)
+        count = max(self.uavs) + 1 if config.uav_id < 0 else MAX_UAVS
+        self._flight = FlightState(config, self.frame, self._vehicles, count, self._event,
+                                   self._send_command)
         self._by_link: dict[int, dict[int, WatchedVehicle]] = {}
         for v in self._vehicles:
             self._by_link.setdefault(id(v.link), {})[v.sysid] = v
 
     # ----------------------------------------------------------------- public, thread-safe
-    def start(self) -> None:
-        """Start the I/O thread (idempotent)."""
-        if self._thread is None:
-            self._thread = threading.Thread(target=self._run, name="mavlink-bridge",
-                                            daemon=True)
-            self._thread.start()
-
-    def stop(self) -> None:
-        """Stop the I/O thread and close every link."""
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=5.0)
-            self._thread = None
-        self.close()
-
     def close(self) -> None:
         for link in self._links.values():
             link.close()
 
-    def __enter__(self) -> Bridge:
-        self.start()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.stop()
-
     def set_formation(self, poses: Sequence[Vec3 | None]) -> None:
         """New formation: poses[k] = (x_k, y_start, z_k) in the track frame, None or NaN: not
         flown. Another y_start restarts the approach; the same keeps the track clock."""
-        clean = clean_formation(poses, self._count)
         with self._lock:
-            now = self._clock()
-            flown = self._pass.formation is not None and any(self._pass.formation)
-            self._holding.on_plan(clean, flown)
-            if self._pass.set_formation(clean):
-                self._event(-1, "info", "new track start: approaching the formation again")
-            self._rejoin(now, "a new plan", here=self.config.pass_start != "planner")
-            self._separation, warnings = separation(clean, self.config.min_separation_m)
-            for text in warnings:
-                self._event(-1, "warn", text)
-            if self.config.arm_and_takeoff:
-                for v in self._vehicles:
-                    if clean[v.uav] is not None and v.uav not in self._sequences:
-                        self._sequences[v.uav] = self._new_sequence(v)
+            self._flight.set_formation(poses, self._clock())
 
     def gcs_heard(self, what: str, heartbeat: bool = False) -> None:
         """Something came from the ground station (`what`: a heartbeat, plan or start;
         `heartbeat`: a gcs/heartbeat, which starts the silence clock)."""
         with self._lock:
-            now = self._clock()
-            if self._holding.gcs_heard(what, now, heartbeat):
-                self._rejoin(now, "the ground station heard again")
+            self._flight.gcs_heard(what, self._clock(), heartbeat)
 
     def gcs_state(self) -> str:
-        """The ground station's link as the bridge sees it (holding.GcsWatch.state)."""
+        """The ground station's link as the bridge sees it (holds.GcsWatch.state)."""
         with self._lock:
-            return self._holding.gcs.state(self._clock())
+            return self._flight.holding.gcs.state(self._clock())
 
     def status(self) -> list[VehicleStatus]:
         """One snapshot per UAV, in UAV order."""
         now = self._clock()
         with self._lock:
-            return [self._status(v, now) for v in self._vehicles]
+            return [self._flight.status(v, now) for v in self._vehicles]
 
     def link_stats(self) -> dict[str, LinkStats]:
         """Counters per connection string (copies)."""
@@ -193,46 +141,24 @@ class Bridge:
 
     def track_started(self) -> bool:
         with self._lock:
-            return self._pass.t_start is not None and self._clock() >= self._pass.t_start
+            t_start = self._flight.pass_.t_start
+            return t_start is not None and self._clock() >= t_start
 
     def set_start(self, wall_time_s: float, label: str, offset_m: float = 0.0) -> None:
         """pass_start "planner": plan `label`'s pass starts at `wall_time_s` (time.time()),
-        `offset_m` past its start line (pass_start.planner_start)."""
+        `offset_m` past its start line (pass_clock.planner_start)."""
         if self.config.pass_start != "planner":
             return
         with self._lock:
-            now = self._clock()
-            text = planner_start(self._pass, wall_time_s, now, time.time(), label, offset_m)
-            self._start_label = label if self._pass.formation is not None else ""
-            if text:  # held ones near their targets rejoin, ones too late to keep up hold
-                self._event(-1, "info", text)
-                self._rejoin(now, "a new pass start", late=True)
+            self._flight.set_start(wall_time_s, self._clock(), label, offset_m)
 
     def target(self, uav: int, now: float) -> tuple[Vec3, Vec3] | None:
         """(position, velocity) of UAV `uav` in the track frame at `now`, or None."""
         with self._lock:
-            return self._pass.target(uav, now)
-
-    def _rejoin(self, now: float, why: str, here: bool = False, late: bool = False) -> None:
-        """Held vehicles near their targets rejoin (`holding.rejoin`); `here`: the clock first
-        moves to where the rearmost held one stands; `late`: `holding.fall_back`."""
-        lag = lags(self._vehicles, self._pass, self.frame, now)
-        held = [lag[v.uav] for v in self._vehicles if self._holding.stopped(v)]
-        if here and (text := resume_where_held(self._pass, held)):
-            self._event(-1, "info", text)
-            lag = lags(self._vehicles, self._pass, self.frame, now)
-        rejoin_m = self.config.speed_mps * REJOIN_S
-        given = self._holding.rejoin(self._vehicles, lag, rejoin_m, why)
-        if late:
-            self._holding.fall_back(self._vehicles, lag, rejoin_m, why)
-        for v in self._vehicles:  # behind a moving target: a gentle catch-up (`catch_up`)
-            if (v.uav in given or late and not self._holding.stopped(v)) and (
-                    lag[v.uav] or 0.0) > CATCH_UP_FROM_M:
-                y = self.frame.from_ned(*v.position_ned)[1]
-                self._catch_up[v.uav] = CatchUp(now, y, self.config.speed_mps)
+            return self._flight.pass_.target(uav, now)
 
     # ------------------------------------------------------------------ the I/O thread
-    def _run(self) -> None:
+    def run(self) -> None:
         try:
             self._loop()
         except Exception as exc:  # recorded, never silent: the node turns every UAV ERROR
@@ -243,7 +169,7 @@ class Bridge:
         period = 1.0 / self.config.setpoint_rate_hz
         now = self._clock()
         next_setpoint, next_heartbeat = now, now
-        while not self._stop.is_set():
+        while not self.stopping:
             # TCP descriptors change on reconnect, and a link without one must be polled
             fds = [fd for fd in (link.fileno() for link in self._links.values())
                    if fd is not None]
@@ -261,19 +187,13 @@ class Bridge:
                     for msg, source in link.poll_sources():
                         self._handle(link, msg, source, now)
                 self._check_links(now)
-                self._holding.check(now)
-                for v in self._vehicles:
-                    if (seq := self._running(v)) and v.linked:
-                        seq.step(now)
+                self._flight.check(now)
                 if now >= next_heartbeat:
                     for link in self._links.values():
                         link.send(companion_heartbeat(link.mav))
                     next_heartbeat = max(next_heartbeat + 1.0, now)
                 if now >= next_setpoint:
-                    if capture_start(self._vehicles, self._sequences, self._pass, self.frame,
-                                     now, self.config):
-                        self._event(-1, "info", f"formation established; flying the track "
-                                                f"at {self.config.speed_mps:g} m/s")
+                    self._flight.capture(now)
                     self._send_setpoints(now)
                     next_setpoint += period
                     if next_setpoint < now:  # we fell behind (suspended?): do not burst
@@ -288,21 +208,6 @@ class Bridge:
         line = self._drops.drop(f"{counter} (sysid {v.sysid})", detail)
         if line is not None:
             self._event(v.uav, "warn", line)
-
-    def _running(self, v: WatchedVehicle) -> ArmingSequence | None:
-        seq = self._sequences.get(v.uav)
-        return seq if seq is not None and seq.active else None
-
-    def _new_sequence(self, v: WatchedVehicle) -> ArmingSequence:
-        def start_down() -> float:
-            return self.frame.to_ned(*self._pass.start_pose(v.uav))[2]
-
-        return ArmingSequence(
-            self.config.autopilot, v,
-            send=lambda command, params, confirmation: self._send_command(
-                v, command, params, confirmation),
-            emit=lambda level, text: self._event(v.uav, level, text), start_down=start_down,
-            readiness_timeout_s=self.config.readiness_timeout_s)
 
     def _handle(self, link: Link, msg: MAV.MAVLink_message, source: Source | None,
                 now: float) -> None:
@@ -326,7 +231,7 @@ class Bridge:
                 self._event(v.uav, "info", found)
                 self._send_command(v, MAV.MAV_CMD_SET_MESSAGE_INTERVAL,
                                    (MAV.MAVLINK_MSG_ID_LOCAL_POSITION_NED, POSITION_INTERVAL_US))
-                if seq := self._running(v):
+                if seq := self._flight.running(v):
                     seq.retry_now()
         elif kind == "LOCAL_POSITION_NED":
             if not v.on_position(msg, now):
@@ -345,7 +250,7 @@ class Bridge:
 
     def _on_ack(self, v: WatchedVehicle, command: int, result: int, now: float) -> None:
         v.last_ack = f"{command_name(command)}: {result_name(result)}"
-        if seq := self._running(v):
+        if seq := self._flight.running(v):
             seq.on_ack(command, result, now)
         elif command != MAV.MAV_CMD_SET_MESSAGE_INTERVAL or result != MAV.MAV_RESULT_ACCEPTED:
             self._event(v.uav, "info", f"sysid {v.sysid} COMMAND_ACK {v.last_ack}")
@@ -366,13 +271,11 @@ class Bridge:
 
     def _send_setpoints(self, now: float) -> None:
         for v in self._vehicles:
-            if order := self._holding.order_due(v, now):
+            if order := self._flight.order_due(v, now):
                 self._send_command(v, order.command, order.params)
                 order.sent(v, now)
-            target = governed(self._catch_up, v.uav, self._pass.target(v.uav, now), now)
-            ardupilot = self.config.autopilot == "ardupilot"
-            holding = ardupilot and (self._running(v) or v.custom_mode != COPTER_MODE_GUIDED)
-            if target is None or holding or self._holding.stopped(v):
+            target = self._flight.target_to_send(v, now)
+            if target is None:
                 v.stream_since = None
                 continue
             msg = setpoint_message(v.link.mav, self.frame, target, boot_ms(now - self._t0),
@@ -384,10 +287,3 @@ class Bridge:
             v.setpoints_sent += 1
             if v.stream_since is None:
                 v.stream_since = now
-
-    def _status(self, v: WatchedVehicle, now: float) -> VehicleStatus:
-        status = vehicle_status(v, now, self._pass, self.frame, self.config.capture_radius_m,
-                                self._sequences.get(v.uav), self._separation[v.uav])
-        held = self._holding.phase(v)
-        return replace(status, phase=held or status.phase, pass_plan=self._start_label,
-                       behind=self._holding.behind.get(v.uav, ""))

@@ -8,8 +8,8 @@ is back in about 10 s at Table I's 4.3 m/s.
 """
 from __future__ import annotations
 
-from uav_insar_planner.mavlink.frames import Vec3
 from uav_insar_planner.mavlink.trajectory import ramp_up
+from uav_insar_planner.plan import Vec3
 
 CATCH_UP_MPS = 1.0  # issue 27: never faster than the planned speed + 1 m/s
 CATCH_UP_FROM_M = 0.3  # closer behind, the position controller closes the gap unaided

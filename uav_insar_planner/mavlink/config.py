@@ -11,7 +11,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, TypeVar
 
-from uav_insar_planner.mavlink.frames import Vec3
 from uav_insar_planner.mavlink.link import parse_address
 from uav_insar_planner.param_specs.nodes import (
     BRIDGE_SPECS,
@@ -23,6 +22,7 @@ from uav_insar_planner.param_specs.nodes import (
     vehicle_connection,
 )
 from uav_insar_planner.params import check_value, shown
+from uav_insar_planner.plan import Vec3
 from uav_insar_planner.swarm import MAX_UAVS
 
 #: A config built in code (a test, a script flying without a planner) starts its own pass at

@@ -7,7 +7,9 @@ and `fits_int` say whether a value may go out; what does not is dropped, never s
 
 `DropLog` counts what was dropped per kind and says when a kind deserves a log line: its first
 drop, then at most once per `period_s`, with the count since the last line, so a flood of bad
-input costs one line per kind every few seconds.
+input costs one line per kind every few seconds. It is the one drop log of the suite: the
+bridge, the simulated vehicle, the agent and the ROS message decoders (ros/plan_gate.py,
+ros/claims.py, ros/start_msgs.py) all count with it.
 """
 from __future__ import annotations
 
@@ -54,6 +56,11 @@ class DropLog:
         self._clock = clock
         self.counts: dict[str, int] = {}
         self._said: dict[str, tuple[float, int]] = {}  # kind -> (when, count then)
+
+    @property
+    def total(self) -> int:
+        """Drops of every kind."""
+        return sum(self.counts.values())
 
     def drop(self, kind: str, detail: str) -> str | None:
         """Count one drop of `kind`; return the line to log now, or None (rate-limited)."""

@@ -1,7 +1,8 @@
 """The optional readiness-and-arming sequence of one vehicle, the way an operator flies it.
 
-ArduPilot: wait for position -> GUIDED (confirmed from the heartbeat) -> arm -> NAV_TAKEOFF to
-the formation altitude -> wait for the climb; the bridge holds the setpoints back until the
+The steps are the autopilot profile's (`autopilots.profiles.AutopilotProfile.arming_steps`).
+ArduPilot: wait for position -> GUIDED (confirmed from the heartbeat) -> arm -> NAV_TAKEOFF to the
+formation altitude -> wait for the climb; the bridge holds the setpoints back until the
 sequence is done. PX4: wait for position -> stream setpoints > 1 s -> OFFBOARD (confirmed) ->
 arm (the offboard setpoint is the takeoff).
 
@@ -18,23 +19,21 @@ Contract:
   does a command without any COMMAND_ACK after COMMAND_ATTEMPTS tries, COMMAND_TIMEOUT_S apart
   (the confirmation field counts them). IN_PROGRESS waits for the final ACK.
 - Every outcome is reported through `emit(level, text)`. A vehicle already armed under our
-  control (and, for ArduPilot, airborne) skips the sequence; one already airborne skips the
-  takeoff, unless it was seen disarmed during the sequence: a disarmed multicopter stands on
-  the ground, whatever its position estimate says (an EKF's height on the ground wanders by
-  tenths of a metre with the barometer and the GNSS, past `WatchedVehicle.airborne`'s 0.5 m).
+  control (and airborne, where the sequence takes off) skips the sequence; one already
+  airborne skips the takeoff, unless it was seen disarmed during the sequence: a disarmed
+  multicopter stands on the ground, whatever its position estimate says (an EKF's height on
+  the ground wanders by tenths of a metre with the barometer and the GNSS, past
+  `WatchedVehicle.airborne`'s 0.5 m).
 """
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
-from uav_insar_planner.mavlink.autopilots import COPTER_MODES, PX4_MAIN_MODE_MASK, PX4_MODES
+from uav_insar_planner.autopilots.profiles import AutopilotProfile
 from uav_insar_planner.mavlink.link import MAV
 from uav_insar_planner.mavlink.supervision import WatchedVehicle
 
-COPTER_MODE_GUIDED = COPTER_MODES["GUIDED"]
-PX4_MAIN_MODE_OFFBOARD = PX4_MODES["OFFBOARD"][0]
-PX4_STREAM_BEFORE_OFFBOARD_S = 1.2  # PX4 wants > 1 s of setpoints; margin for jitter
 COMMAND_TIMEOUT_S = 1.0
 COMMAND_ATTEMPTS = 3
 CONFIRM_S = 3.0  # heartbeats come at >= 1 Hz
@@ -66,28 +65,23 @@ class Step:
     params: tuple[float, ...] = ()
 
 
-def arming_steps(autopilot: str) -> list[Step]:
-    """The steps for "ardupilot" or "px4"."""
-    arm = Step("arm", MAV.MAV_CMD_COMPONENT_ARM_DISARM, (1.0,))
+def arming_steps(autopilot: AutopilotProfile) -> list[Step]:
+    """The steps of `autopilot`'s arming sequence."""
     custom = float(MAV.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED)
-    if autopilot == "px4":
-        return [Step("wait for position"), Step("stream setpoints"),
-                Step("mode OFFBOARD", MAV.MAV_CMD_DO_SET_MODE,
-                     (custom, float(PX4_MAIN_MODE_OFFBOARD), 0.0)),
-                arm]
-    return [Step("wait for position"),
-            Step("mode GUIDED", MAV.MAV_CMD_DO_SET_MODE, (custom, float(COPTER_MODE_GUIDED))),
-            arm,
-            Step("takeoff", MAV.MAV_CMD_NAV_TAKEOFF),
-            Step("climb")]
+    flight = autopilot.flight
+    commands = {"mode": Step(f"mode {flight.name}", MAV.MAV_CMD_DO_SET_MODE,
+                             (custom, *flight.set_params)),
+                "arm": Step("arm", MAV.MAV_CMD_COMPONENT_ARM_DISARM, (1.0,)),
+                "takeoff": Step("takeoff", MAV.MAV_CMD_NAV_TAKEOFF)}
+    return [commands.get(name, Step(name)) for name in autopilot.arming_steps]
 
 
 class ArmingSequence:
     """The sequence of one vehicle. `start_down()` gives the formation's start D (NED, m),
     read when the takeoff is sent. Not thread-safe (the bridge holds its lock)."""
 
-    def __init__(self, autopilot: str, vehicle: WatchedVehicle, send: SendCommand, emit: Emit,
-                 start_down: Callable[[], float], readiness_timeout_s: float = 120.0):
+    def __init__(self, autopilot: AutopilotProfile, vehicle: WatchedVehicle, send: SendCommand,
+                 emit: Emit, start_down: Callable[[], float], readiness_timeout_s: float = 120.0):
         self.autopilot = autopilot
         self.vehicle = vehicle
         self.steps = arming_steps(autopilot)
@@ -142,7 +136,7 @@ class ArmingSequence:
         if step == "arm" and not v.armed:
             return f"prearm: {v.prearm}" if v.prearm else "arming"
         if step == "stream setpoints":
-            return "streaming setpoints before OFFBOARD"
+            return f"streaming setpoints before {self.autopilot.flight.name}"
         return "armed, taking off"
 
     def retry_now(self) -> None:
@@ -174,7 +168,8 @@ class ArmingSequence:
                 self._advance(now)
             return
         if step.name == "stream setpoints":
-            if v.stream_since is not None and now - v.stream_since > PX4_STREAM_BEFORE_OFFBOARD_S:
+            if v.stream_since is not None and \
+                    now - v.stream_since > self.autopilot.stream_before_flight_s:
                 self._advance(now)
             return
         if step.name == "climb":
@@ -230,10 +225,7 @@ class ArmingSequence:
 
     # ------------------------------------------------------------------ internals
     def _in_mode(self) -> bool:
-        v = self.vehicle
-        if self.autopilot == "px4":
-            return (v.custom_mode & PX4_MAIN_MODE_MASK) == PX4_MAIN_MODE_OFFBOARD << 16
-        return v.custom_mode == COPTER_MODE_GUIDED
+        return self.autopilot.flight.shown_by(self.vehicle.custom_mode)
 
     def _heard_since(self, t: float | None) -> bool:
         """A heartbeat arrived after time `t` (so it shows the state after that moment)."""
@@ -270,9 +262,7 @@ class ArmingSequence:
 
     def _already_in_control(self) -> bool:
         v = self.vehicle
-        if self.autopilot == "px4":
-            return v.armed and self._in_mode()
-        return v.armed and self._in_mode() and v.airborne
+        return v.armed and self._in_mode() and (v.airborne or not self.autopilot.takes_off)
 
     def _takeoff_altitude(self) -> float:
         """Metres above the current (home) height up to the formation's start height."""

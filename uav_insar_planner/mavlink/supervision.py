@@ -22,8 +22,8 @@ from dataclasses import dataclass
 
 from pymavlink import mavutil
 
-from uav_insar_planner.mavlink.frames import Vec3
 from uav_insar_planner.mavlink.link import MAV, Link, Source
+from uav_insar_planner.plan import Vec3
 
 _NOT_VEHICLE_TYPES = frozenset((MAV.MAV_TYPE_GCS, MAV.MAV_TYPE_ONBOARD_CONTROLLER,
                                 MAV.MAV_TYPE_GIMBAL, MAV.MAV_TYPE_ADSB, MAV.MAV_TYPE_CAMERA,

@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-from uav_insar_planner.mavlink.frames import Vec3
+from uav_insar_planner.plan import Vec3
 from uav_insar_planner.swarm import uav_name
 
 # Braking at the end of a finite pass, gentle for a multicopter's position controller.

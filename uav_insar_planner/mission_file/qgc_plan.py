@@ -42,10 +42,10 @@ import math
 from dataclasses import dataclass
 from datetime import datetime, timedelta
 
+from uav_insar_planner.autopilots.profiles import profile
 from uav_insar_planner.mavlink.frames import TrackFrame
 from uav_insar_planner.mission_file.geodesy import ned_to_latlon
 
-FIRMWARE_TYPES = {"ardupilot": 3, "px4": 12}  # MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_AUTOPILOT_PX4
 VEHICLE_TYPE = 2  # MAV_TYPE_QUADROTOR
 ENDS = ("hold", "rtl")
 FRAME_GLOBAL, FRAME_MISSION, FRAME_RELATIVE_ALT = 0, 2, 3
@@ -143,12 +143,13 @@ def mission_items(home: Home, flight: Pass, x: float, z: float, start: datetime 
 def plan_document(home: Home, flight: Pass, x: float, z: float, start: datetime | None,
                   end: str, autopilot: str, frame: str = "amsl") -> dict:
     """The whole `.plan` JSON object of one UAV (geofence and rally points empty); `start`
-    is ignored for PX4 (no NAV_DELAY: it holds for MISSION_START)."""
-    start = None if autopilot == "px4" else start
-    if start is None and autopilot != "px4":
-        raise ValueError("start: None; an ArduPilot file waits for a UTC time (NAV_DELAY)")
+    is ignored where the autopilot holds for MISSION_START (PX4: no NAV_DELAY)."""
+    flavour = profile(autopilot)
+    start = start if flavour.mission_waits_for_utc else None
+    if start is None and flavour.mission_waits_for_utc:
+        raise ValueError(f"start: None; an {autopilot} file waits for a UTC time (NAV_DELAY)")
     return {"fileType": "Plan", "version": 1, "groundStation": "QGroundControl",
-            "mission": {"version": 2, "firmwareType": FIRMWARE_TYPES[autopilot],
+            "mission": {"version": 2, "firmwareType": flavour.firmware_type,
                         "vehicleType": VEHICLE_TYPE, "cruiseSpeed": flight.speed_mps,
                         "hoverSpeed": flight.speed_mps,
                         "globalPlanAltitudeMode": ALTITUDE_FRAMES[frame][1],

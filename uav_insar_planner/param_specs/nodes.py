@@ -6,6 +6,7 @@ names, its defaults their defaults).
 """
 from __future__ import annotations
 
+from uav_insar_planner.autopilots.profiles import AUTOPILOTS
 from uav_insar_planner.param_specs import ParamSpec
 from uav_insar_planner.param_specs.science import PARAM_SPECS, SPEC_BY_NAME
 from uav_insar_planner.plan import SAFE_SEPARATION_M
@@ -22,9 +23,6 @@ FIRST_PORT, PORT_STEP = 14552, 10
 def vehicle_connection(k: int) -> str:
     """The bridge's default connection to vehicle k (`uav-insar-vehicle --listen` of it)."""
     return f"udpout:127.0.0.1:{FIRST_PORT + PORT_STEP * k}"
-
-
-AUTOPILOTS = ("ardupilot", "px4")  # the flavours mavlink/autopilots.py knows the modes of
 PASS_STARTS = ("auto", "capture", "planner")  # who starts the bridge's pass
 POSITION_SOURCES = ("agent", "autopilot")  # where an agent takes its UAV's position from
 

@@ -7,7 +7,7 @@ then stays silent for more than `timeout_s`, or that the MAVLink bridge reports 
 /diagnostics (`bridge_lost`). A UAV never heard is never lost, so a planner started before
 its agents waits for them. Lost is final for the mission: a UAV heard again later is reported
 (`back`, once through `take_back`), not taken back into the plan. Its own stack holds it: it
-timed out on the ground station's silence (mavlink/holding.py) and the survivors' plan gives
+timed out on the ground station's silence (mavlink/holds.py) and the survivors' plan gives
 it no target; only a new mission (a planner started again) flies it again.
 
 The slot the swarm has reached (`next_slot`): one past the latest slot any surviving UAV

@@ -7,9 +7,8 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
+from uav_insar_planner.plan import Vec3
 from uav_insar_planner.swarm import uav_name
-
-Vec3 = tuple[float, float, float]
 
 
 @dataclass

@@ -17,10 +17,8 @@ from dataclasses import dataclass
 
 from uav_insar_planner import model
 from uav_insar_planner.params import Params
-from uav_insar_planner.plan import Plan
+from uav_insar_planner.plan import Plan, Vec3
 from uav_insar_planner.solver.power import station_radius_sq
-
-Vec3 = tuple[float, float, float]
 
 
 @dataclass(frozen=True)

@@ -25,8 +25,9 @@ from dataclasses import dataclass
 from rclpy.node import Node
 from std_msgs.msg import String
 
+from uav_insar_planner.mavlink.guard import DropLog
 from uav_insar_planner.ros import topics
-from uav_insar_planner.ros.plan_msgs import DropLog, PlanMessageError
+from uav_insar_planner.ros.plan_msgs import DROP_LOG_PERIOD_S, PlanMessageError
 from uav_insar_planner.swarm import uav_name
 
 # Fast DDS discovers a new participant on one host in ~0.1-1 s, on a loaded 2-core machine or
@@ -77,7 +78,7 @@ class UavClaims:
         self.granted = False
         self._on_granted, self._on_refused = on_granted, on_refused
         self._seen: dict[int, set[Claim]] = {}
-        self._drops = DropLog(node.get_logger().warning, time.monotonic)
+        self._drops, self._log = DropLog(DROP_LOG_PERIOD_S), node.get_logger()
         self._pubs = []
         for k in uavs:
             topic = topics.resolve(swarm_ns, topics.mavlink_claim(k))
@@ -92,13 +93,14 @@ class UavClaims:
 
     @property
     def dropped(self) -> int:
-        return self._drops.count
+        return self._drops.total
 
     def _on_claim(self, k: int, topic: str, msg: String) -> None:
         try:
             claim = Claim.parse(msg.data, topic)
         except PlanMessageError as exc:
-            self._drops.drop(exc)
+            if (line := self._drops.drop("claim", str(exc))) is not None:
+                self._log.warning(line)
             return
         self._seen[k].add(claim)
         if self.granted:  # a late older claim: yield to it

@@ -10,7 +10,7 @@ clock from when it received something, so the two clocks need not agree.
 `on_heard(what, True)` for each one; `heard(what)` is the same door for the other messages
 from the ground (the plan, through PlanGate's `on_message`; a pass start: `on_heard(what,
 False)`), so that anything the ground sends counts as proof of a live radio link, once a
-heartbeat has come (mavlink/holding.py).
+heartbeat has come (mavlink/holds.py).
 
 Sized for the documented loss: at GCS_HEARTBEAT_PERIOD_S the shortest gcs_timeout_s
 (GCS_TIMEOUT_MIN_S) spans ten heartbeats, all lost with probability 0.3^10 = 6e-6 at 30 %

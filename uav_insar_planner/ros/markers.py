@@ -32,8 +32,8 @@ from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
 from uav_insar_planner.params import Params
-from uav_insar_planner.plan import Plan
-from uav_insar_planner.report.scene import Scene, Vec3, scene
+from uav_insar_planner.plan import Plan, Vec3
+from uav_insar_planner.report.scene import Scene, scene
 from uav_insar_planner.ros import topics
 from uav_insar_planner.swarm import uav_rgb
 

@@ -9,7 +9,7 @@ Parameters (param_specs/nodes.py BRIDGE_SPECS, all read-only: the links are open
   origin_ned_m (double[3], N E D), setpoint_rate_hz, velocity_feedforward, arm_and_takeoff,
   autopilot (ardupilot|px4), speed_mps, track_duration_s, capture_radius_m,
   heartbeat_timeout_s, readiness_timeout_s, min_separation_m, signing_key_file,
-  gcs_timeout_s (hold when the ground station is silent, mavlink/holding.py; auto: 5 s
+  gcs_timeout_s (hold when the ground station is silent, mavlink/holds.py; auto: 5 s
   with uav_id, else off).
 A bad value or unknown name logs one line and exits with code 2 before anything is published
 or opened. Claims (ros/claims.py): no MAVLink byte for DISCOVERY_WINDOW_S; a UAV another bridge

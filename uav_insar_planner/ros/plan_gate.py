@@ -27,16 +27,16 @@ given, hears of every valid message (the bridge's ground-station link, ros/gcs_l
 """
 from __future__ import annotations
 
-import time
 from collections.abc import Callable, Sequence
 
 from geometry_msgs.msg import PoseArray
 from rclpy.node import Node
 from std_msgs.msg import Float64MultiArray, String
 
+from uav_insar_planner.mavlink.guard import DropLog
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.plan_msgs import (
-    DropLog,
+    DROP_LOG_PERIOD_S,
     Formation,
     PlanId,
     PlanMessageError,
@@ -127,8 +127,7 @@ class PlanGate:
         self._node, self._on_plan, self._prefix = node, on_plan, prefix
         self._on_message = on_message
         self._pairing = PlanPairing()
-        log = node.get_logger()
-        self._drops = DropLog(log.warning, time.monotonic)
+        self._drops = DropLog(DROP_LOG_PERIOD_S)
         self._held: tuple[str, ...] = ()
         ns = node.get_namespace() if swarm_ns is None else swarm_ns
         self._formation_topic = node.resolve_topic_name(topics.resolve(ns, topics.FORMATION))
@@ -143,17 +142,22 @@ class PlanGate:
 
     @property
     def dropped(self) -> int:
-        return self._drops.count
+        return self._drops.total
 
     @property
     def current(self) -> PlanId | None:
         return self._pairing.current
 
+    def _drop(self, error: PlanMessageError) -> None:
+        line = self._drops.drop("plan message", str(error))
+        if line is not None:
+            self._node.get_logger().warning(self._prefix + line)
+
     def _on_formation(self, msg: PoseArray) -> None:
         try:
             formation = decode_formation(msg)
         except PlanMessageError as exc:
-            self._drops.drop(exc, self._prefix)
+            self._drop(exc)
             return
         self._heard("formation", formation.stamp)
         self._pairing.add_formation(formation)
@@ -163,7 +167,7 @@ class PlanGate:
         try:
             power = decode_power(msg)
         except PlanMessageError as exc:
-            self._drops.drop(exc, self._prefix)
+            self._drop(exc)
             return
         self._heard("formation/power", power.plan_id.stamp)
         self._pairing.add_power(power)

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -43,6 +43,7 @@ from uav_insar_planner.swarm import MAX_UAVS, MIN_UAVS, uav_name
 POSITION_BOUND_M = 1e6
 FLOAT32_MAX = 3.4e38
 SHOWN_CHARS = 40
+DROP_LOG_PERIOD_S = 1.0  # bad messages of these topics: at most a line a second (DropLog)
 _ID_LABEL = re.compile(r"^plan (/\S*) (\d{1,12})\.(\d{9})$")
 
 
@@ -188,30 +189,6 @@ def decode_power(msg: Float64MultiArray) -> PowerSchedule:
         i = int(np.flatnonzero(wrong)[0])
         raise bad(f"data[{i}]", float(data[i]), f"a finite power >= 0 W, at most {FLOAT32_MAX:g}")
     return PowerSchedule(plan_id, data.reshape(rows, cols))
-
-
-class DropLog:
-    """Counts dropped messages and logs at most one line per `period_s` (the first of a burst
-    at once; the next line says how many were not shown in between).
-
-    `warn(text)` logs; `now()` is a monotonic clock in seconds."""
-
-    def __init__(self, warn: Callable[[str], None], now: Callable[[], float],
-                 period_s: float = 1.0) -> None:
-        self.count = 0
-        self._warn, self._now, self._period = warn, now, period_s
-        self._last: float | None = None
-        self._unshown = 0
-
-    def drop(self, error: Exception, prefix: str = "") -> None:
-        self.count += 1
-        t = self._now()
-        if self._last is not None and t - self._last < self._period:
-            self._unshown += 1
-            return
-        extra = f"; {self._unshown} more not shown" if self._unshown else ""
-        self._warn(f"{prefix}{error}; message dropped ({self.count} dropped so far{extra})")
-        self._last, self._unshown = t, 0
 
 
 def describe(points: Sequence[tuple[float, float, float] | None]) -> str:

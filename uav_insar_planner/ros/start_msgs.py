@@ -28,8 +28,9 @@ from collections.abc import Callable
 from rclpy.node import Node
 from std_msgs.msg import Header
 
+from uav_insar_planner.mavlink.guard import DropLog
 from uav_insar_planner.ros import topics
-from uav_insar_planner.ros.plan_msgs import DropLog, PlanId, PlanMessageError
+from uav_insar_planner.ros.plan_msgs import DROP_LOG_PERIOD_S, PlanId, PlanMessageError
 
 # A day: far beyond any pass and clock offset worth flying with, close enough to catch a host
 # whose clock was never set.
@@ -86,19 +87,20 @@ class StartFollower:
         self._flown, self._set_start, self._prefix = flown, set_start, prefix
         self._on_message = on_message
         self._starts: dict[PlanId, tuple[float, float]] = {}
-        self._drops = DropLog(node.get_logger().warning, time.monotonic)
+        self._drops, self._log = DropLog(DROP_LOG_PERIOD_S), node.get_logger()
         node.create_subscription(Header, topics.resolve(swarm_ns, topics.FORMATION_START),
                                  self._on_start, topics.LATCHED)
 
     @property
     def dropped(self) -> int:
-        return self._drops.count
+        return self._drops.total
 
     def _on_start(self, msg: Header) -> None:
         try:
             plan_id, start, offset = decode_start(msg, time.time())
         except PlanMessageError as exc:
-            self._drops.drop(exc, self._prefix)
+            if (line := self._drops.drop("start message", str(exc))) is not None:
+                self._log.warning(self._prefix + line)
             return
         if self._on_message is not None:
             self._on_message(f"{topics.FORMATION_START} of {plan_id.label}")

@@ -1,6 +1,6 @@
 """solve(params) -> Plan: run a back end, then check its answer independently.
 
-Back ends, each declared once in `param_specs.BACKENDS` (name, objectives, certified or not,
+Back ends, each declared once in `param_specs.science.BACKENDS` (name, objectives, certified or not,
 where its solve function is): `global` (solver/global_opt/, certified optimum of the exact,
 bound or multilook objective), `paper-ao` (solver/ao/, Algorithm 2 of the paper with SCA on
 CVXPY + Clarabel) and `evolution` (solver/evolution/, seeded differential evolution, no

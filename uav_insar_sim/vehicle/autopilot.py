@@ -34,36 +34,29 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from uav_insar_planner.mavlink.autopilots import AUTOPILOTS, copter_mode_name, px4_mode_name
 from uav_insar_planner.mavlink.link import MAV
 from uav_insar_planner.mavlink.setpoints import POSITION_BITS, VELOCITY_BITS
 from uav_insar_sim.physics.kinematics import PointMass, step_toward
+from uav_insar_sim.vehicle.profiles import vehicle_profile
 
 KP = 1.5  # 1/s, position error -> velocity
-ARDUPILOT_FRAMES = frozenset((MAV.MAV_FRAME_LOCAL_NED, MAV.MAV_FRAME_LOCAL_OFFSET_NED,
-                              MAV.MAV_FRAME_BODY_NED, MAV.MAV_FRAME_BODY_OFFSET_NED))
-PX4_FRAMES = frozenset((MAV.MAV_FRAME_LOCAL_NED, MAV.MAV_FRAME_BODY_NED))
 ARDUPILOT_VELOCITY_TIMEOUT_S = 3.0
 PX4_DEFAULT_TAKEOFF_M = 2.5  # MIS_TAKEOFF_ALT default
 LAND_SPEED = 1.0
 MAX_TAKEOFF_M = 1000.0
-NOT_ARMABLE_COPTER = frozenset(("RTL", "LAND", "BRAKE"))
-PREARM_TEXT = {"ardupilot": "PreArm: AHRS: waiting for home",
-               "px4": "Preflight Fail: No valid global position estimate"}
 _ZERO = (0.0, 0.0, 0.0)
 
 
 class Autopilot:
-    """ArduCopter-like or PX4-like flight logic of one vehicle (see the module doc)."""
+    """ArduCopter-like or PX4-like flight logic of one vehicle (see the module doc); what
+    differs per flavour is its `profile` (`profiles.VehicleProfile`)."""
 
     def __init__(self, autopilot: str = "ardupilot",
                  start_ned: Sequence[float] = (0.0, 0.0, 0.0), max_speed: float = 10.0,
                  max_accel: float = 5.0, airborne: bool = False, offboard_timeout_s: float = 0.5,
                  boot_s: float = 0.0, now: float | None = None,
                  wind_ned: Sequence[float] = (0.0, 0.0, 0.0)):
-        if autopilot not in AUTOPILOTS:
-            raise ValueError(f"autopilot: {autopilot!r} is not allowed; expected ardupilot "
-                             "or px4")
+        self.profile = vehicle_profile(autopilot)
         for name, value, high in (("max_speed", max_speed, 1000.0),
                                   ("max_accel", max_accel, 1000.0),
                                   ("offboard_timeout_s", offboard_timeout_s, 60.0)):
@@ -82,12 +75,10 @@ class Autopilot:
         if not (0.0 <= boot_s < 3600.0):
             raise ValueError(f"boot_s: value {boot_s!r:.24} is not allowed; expected "
                              "0 <= s < 3600")
-        self.autopilot = autopilot
-        self.px4 = autopilot == "px4"
         self.max_speed, self.max_accel = float(max_speed), float(max_accel)
         self.offboard_timeout_s = float(offboard_timeout_s)
         self.takeoff_alt_m = PX4_DEFAULT_TAKEOFF_M
-        self.rtl_alt_m = 60.0 if self.px4 else 15.0  # RTL_RETURN_ALT / RTL_ALT defaults
+        self.rtl_alt_m = self.profile.rtl_alt_m
         self.boot_s = 0.0 if airborne else float(boot_s)
         self.boot_end = (time.monotonic() if now is None else now) + self.boot_s
         self._booted = self.boot_s == 0.0
@@ -97,8 +88,7 @@ class Autopilot:
         self.ground_d = max(0.0, float(start_ned[2]))
         self.home = np.array([start_ned[0], start_ned[1], self.ground_d], dtype=float)
         self.armed = airborne
-        self.mode = ("OFFBOARD" if self.px4 else "GUIDED") if airborne else (
-            "POSCTL" if self.px4 else "STABILIZE")
+        self.mode = self.profile.autopilot.flight.name if airborne else self.profile.ground_mode
         self._hold = self.state.position.copy()  # where hold / loiter / guided-no-target stays
         self._braking = False
         self._target_pos: np.ndarray | None = None
@@ -130,8 +120,9 @@ class Autopilot:
         """True once the boot phase is over (position estimate, home, armable)."""
         if not self._booted and now >= self.boot_end:
             self._booted = True
-            if not self.px4 and self.mode != "STABILIZE":
-                self._enter("STABILIZE")  # ArduCopter: a mode set while booting does not stick
+            fallback = self.profile.boot_fallback_mode
+            if fallback is not None and self.mode != fallback:
+                self._enter(fallback)  # ArduCopter: a mode set while booting does not stick
         return self._booted
 
     def landed_state(self) -> int:
@@ -146,23 +137,20 @@ class Autopilot:
 
     # --------------------------------------------------------------------- modes, arming
     def set_mode(self, custom: int, main: int, sub: int, now: float) -> int:
-        """Switch mode: ArduPilot by Copter number `custom`, PX4 by (main, sub)."""
-        if self.px4:
-            name = px4_mode_name(main, sub)
-            if name is None:
-                return MAV.MAV_RESULT_UNSUPPORTED
-            if not self.booted(now):
+        """Switch mode: by custom mode `custom` or (main, sub), as the flavour names them."""
+        p = self.profile
+        name = p.mode_named(custom, main, sub)
+        if name is None:
+            return p.unknown_mode
+        if p.refuses_while_booting and not self.booted(now):
+            return MAV.MAV_RESULT_TEMPORARILY_REJECTED
+        if name == "OFFBOARD":
+            if not self._recent_setpoint(now):
                 return MAV.MAV_RESULT_TEMPORARILY_REJECTED
-            if name == "OFFBOARD":
-                if not self._recent_setpoint(now):
-                    return MAV.MAV_RESULT_TEMPORARILY_REJECTED
-                self._target_time = now
-            elif name == "TAKEOFF":
-                return self.takeoff(float("nan"), now)
-        else:
-            name = copter_mode_name(custom)
-            if name is None:
-                return MAV.MAV_RESULT_FAILED
+            self._target_time = now
+        elif name == p.takeoff_mode:
+            return self.takeoff(float("nan"), now)
+        if p.mode_change_clears_target:
             if name == self.mode:
                 return MAV.MAV_RESULT_ACCEPTED  # ArduCopter: no change, GUIDED keeps its target
             self._target_pos = self._target_vel = None  # a new GUIDED session: no target
@@ -174,46 +162,43 @@ class Autopilot:
         return MAV.MAV_RESULT_ACCEPTED
 
     def rtl(self, now: float) -> int:
-        if not self.booted(now) and self.px4:
+        if self.profile.refuses_while_booting and not self.booted(now):
             return MAV.MAV_RESULT_TEMPORARILY_REJECTED
         self._enter("RTL")
         return MAV.MAV_RESULT_ACCEPTED
 
     def arm(self, arm: bool, force: bool, now: float) -> int:
         """Arm, or disarm (in flight only with `force`)."""
+        p = self.profile
         if arm:
             if self.armed:
                 return MAV.MAV_RESULT_ACCEPTED
             if not self.booted(now) and not force:
-                self.statustexts.append((MAV.MAV_SEVERITY_CRITICAL,
-                                         PREARM_TEXT[self.autopilot]))
-                return (MAV.MAV_RESULT_TEMPORARILY_REJECTED if self.px4
-                        else MAV.MAV_RESULT_FAILED)
-            if self.px4 and self.mode == "OFFBOARD" and not self._recent_setpoint(now):
+                self.statustexts.append((MAV.MAV_SEVERITY_CRITICAL, p.prearm_text))
+                return p.boot_arm_refusal
+            if self.mode == "OFFBOARD" and not self._recent_setpoint(now):
                 return MAV.MAV_RESULT_DENIED
-            if not self.px4 and self.mode in NOT_ARMABLE_COPTER and not force:
+            if self.mode in p.not_armable_modes and not force:
                 self.statustexts.append((MAV.MAV_SEVERITY_CRITICAL, "Arm: Mode not armable"))
                 return MAV.MAV_RESULT_FAILED
             self.home = self.state.position.copy()  # both autopilots set home on arming
             self.armed = True
             return MAV.MAV_RESULT_ACCEPTED
         if not self.on_ground() and not force:
-            return MAV.MAV_RESULT_DENIED if self.px4 else MAV.MAV_RESULT_FAILED
+            return p.refused
         self.armed = False
         return MAV.MAV_RESULT_ACCEPTED
 
     def takeoff(self, height: float, now: float | None = None) -> int:
         """NAV_TAKEOFF to `height` m above home (PX4: NaN for MIS_TAKEOFF_ALT)."""
-        if not self.armed:
-            return MAV.MAV_RESULT_DENIED if self.px4 else MAV.MAV_RESULT_FAILED
-        if not (math.isnan(height) or -MAX_TAKEOFF_M < height < MAX_TAKEOFF_M):
-            return MAV.MAV_RESULT_DENIED if self.px4 else MAV.MAV_RESULT_FAILED
-        if self.px4:
+        p = self.profile
+        if not self.armed or not (math.isnan(height) or -MAX_TAKEOFF_M < height < MAX_TAKEOFF_M):
+            return p.refused
+        if p.takeoff_mode is not None:
             height = self.takeoff_alt_m if math.isnan(height) or height < 0.5 else height
-            self._enter("TAKEOFF")
-        else:
-            if self.mode != "GUIDED" or not self.on_ground() or not height > 0:
-                return MAV.MAV_RESULT_FAILED
+            self._enter(p.takeoff_mode)
+        elif self.mode != p.autopilot.flight.name or not self.on_ground() or not height > 0:
+            return p.refused
         self._takeoff_d = float(self.home[2]) - height
         self._hold = np.array([self.state.position[0], self.state.position[1],
                                self._takeoff_d])
@@ -222,16 +207,16 @@ class Autopilot:
     def setpoint(self, frame: int, mask: int, position: Sequence[float],
                  velocity: Sequence[float], now: float) -> bool:
         """One SET_POSITION_TARGET_LOCAL_NED; False (and counted) when it is refused."""
-        frames = PX4_FRAMES if self.px4 else ARDUPILOT_FRAMES
+        p = self.profile
         pos_bits, vel_bits = mask & POSITION_BITS, mask & VELOCITY_BITS
         use_pos, use_vel = pos_bits == 0, vel_bits == 0
         valid_groups = pos_bits in (0, POSITION_BITS) and vel_bits in (0, VELOCITY_BITS)
         finite = (not use_pos or all(math.isfinite(c) and abs(c) < 1e6 for c in position)) \
             and (not use_vel or all(math.isfinite(c) and abs(c) < 1e3 for c in velocity))
-        if frame not in frames or not valid_groups or not (use_pos or use_vel) or not finite:
+        if frame not in p.frames or not valid_groups or not (use_pos or use_vel) or not finite:
             self.setpoints_rejected += 1
             return False
-        if not self.px4 and self.mode != "GUIDED":
+        if p.autopilot.setpoints_in_flight_only and self.mode != p.autopilot.flight.name:
             self.setpoints_rejected += 1  # ArduPilot ignores targets outside GUIDED
             return False
         goal = np.array(position, dtype=float)

@@ -14,9 +14,9 @@ import threading
 
 from uav_insar_planner.cli.parser import OneLineParser
 from uav_insar_planner.exit_codes import EXIT_BAD_INPUT, EXIT_CRASH, EXIT_OK
-from uav_insar_planner.mavlink.autopilots import AUTOPILOTS
 from uav_insar_planner.mavlink.signing import read_key_file
 from uav_insar_sim.vehicle import estimate_error
+from uav_insar_sim.vehicle.profiles import SIMULATED
 from uav_insar_sim.vehicle.simulator import SimVehicle
 from uav_insar_sim.vehicle.telemetry import SITL_HOME, parse_home
 
@@ -31,7 +31,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--listen", required=True,
                    help="pymavlink connection string, e.g. udpin:127.0.0.1:14552 (wait for "
                         "the bridge) or udpout:127.0.0.1:14550 (talk to it)")
-    p.add_argument("--autopilot", choices=AUTOPILOTS, default="ardupilot",
+    p.add_argument("--autopilot", choices=SIMULATED, default="ardupilot",
                    help="heartbeat, modes and command semantics to imitate")
     p.add_argument("--start-ned", type=float, nargs=3, metavar=("N", "E", "D"),
                    default=(0.0, 0.0, 0.0), help="initial position in local NED [m]")

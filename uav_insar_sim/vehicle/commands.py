@@ -101,8 +101,7 @@ def _dispatch(vehicle, command: int, p: list[float], now: float) -> int:
 
 def _takeoff(vehicle, param7: float, now: float) -> int:
     ap = vehicle._ap
-    refused = DENIED if ap.px4 else FAILED
-    if ap.px4:
+    if ap.profile.takeoff_mode is not None:  # param 7 AMSL (PX4)
         if math.isnan(param7):
             return ap.takeoff(float("nan"), now)
         if not math.isfinite(param7) or abs(param7) > 100000.0:
@@ -113,7 +112,7 @@ def _takeoff(vehicle, param7: float, now: float) -> int:
     if not math.isfinite(param7):
         raise BadParam(f"param7 (altitude) = {param7!r} is not finite")
     if not 0.0 < param7 < 10000.0:
-        return refused
+        return ap.profile.refused
     return ap.takeoff(param7, now)
 
 
@@ -121,7 +120,7 @@ def _mission_start(vehicle, p: list[float]) -> int:
     first = as_int(p[0], -1, 65535, default=0, name="param1 (first item)")
     last = as_int(p[1], -1, 65535, default=0, name="param2 (last item)")
     count = len(vehicle.mission.items)
-    if vehicle._ap.px4:
+    if vehicle._ap.profile.mission_start_from_item:
         result = ACCEPTED if count and first < count else DENIED
     else:
         result = DENIED if first or last else ACCEPTED if count else FAILED

@@ -36,47 +36,61 @@ def _const(value: float) -> Callable[[], float]:
     return lambda: value
 
 
-def vehicle_params(vehicle) -> list[Param]:
-    """The parameter list of a `SimVehicle` (its autopilot flavour decides the names)."""
+def _getter(obj: object, attr: str, scale: float = 1.0) -> Callable[[], float]:
+    return lambda: getattr(obj, attr) * scale
+
+
+def _setter(obj: object, attr: str, scale: float = 1.0) -> Callable[[float], None]:
+    return lambda v: setattr(obj, attr, v / scale)
+
+
+def _common(vehicle, gcs_name: str) -> tuple[Param, Param]:
+    """The GCS sysid (under `gcs_name`) and the simulator's boot time, on every flavour."""
+    return (Param(gcs_name, INT32, 0, 255, _getter(vehicle, "gcs_sysid"),
+                  _setter(vehicle, "gcs_sysid")),
+            Param("SIM_BOOT_TIME", REAL32, 0, 3600, _getter(vehicle._ap, "boot_s")))
+
+
+def px4_params(vehicle) -> list[Param]:
+    """The parameter list of a PX4-like `SimVehicle`."""
     ap = vehicle._ap
+    gcs, boot = _common(vehicle, "SIM_GCS_SYSID")
+    return [
+        Param("MAV_SYS_ID", INT32, 1, 255, _const(vehicle.sysid)),
+        gcs,
+        Param("MPC_XY_VEL_MAX", REAL32, 0.1, 50, _getter(ap, "max_speed"),
+              _setter(ap, "max_speed")),
+        Param("MPC_ACC_HOR_MAX", REAL32, 0.1, 30, _getter(ap, "max_accel"),
+              _setter(ap, "max_accel")),
+        Param("MIS_TAKEOFF_ALT", REAL32, 0.5, 1000, _getter(ap, "takeoff_alt_m"),
+              _setter(ap, "takeoff_alt_m")),
+        Param("RTL_RETURN_ALT", REAL32, 0, 1000, _getter(ap, "rtl_alt_m"),
+              _setter(ap, "rtl_alt_m")),
+        Param("COM_OF_LOSS_T", REAL32, 0.1, 60, _getter(ap, "offboard_timeout_s"),
+              _setter(ap, "offboard_timeout_s")),
+        Param("CAL_GYRO0_ID", INT32, -2**31, 2**31 - 1, _const(1310988)),
+        Param("CAL_ACC0_ID", INT32, -2**31, 2**31 - 1, _const(1310988)),
+        Param("CAL_MAG0_ID", INT32, -2**31, 2**31 - 1, _const(197388)),
+        Param("SYS_HITL", INT32, 0, 2, _const(0)),
+        boot,
+    ]
 
-    def setter(attr: str, scale: float = 1.0, obj=ap) -> Callable[[float], None]:
-        return lambda v: setattr(obj, attr, v / scale)
 
-    def getter(attr: str, scale: float = 1.0, obj=ap) -> Callable[[], float]:
-        return lambda: getattr(obj, attr) * scale
-
-    gcs = Param("MAV_GCS_SYSID" if not ap.px4 else "SIM_GCS_SYSID", INT32, 0, 255,
-                getter("gcs_sysid", obj=vehicle), setter("gcs_sysid", obj=vehicle))
-    boot = Param("SIM_BOOT_TIME", REAL32, 0, 3600, getter("boot_s"))
-    if ap.px4:
-        return [
-            Param("MAV_SYS_ID", INT32, 1, 255, _const(vehicle.sysid)),
-            gcs,
-            Param("MPC_XY_VEL_MAX", REAL32, 0.1, 50, getter("max_speed"), setter("max_speed")),
-            Param("MPC_ACC_HOR_MAX", REAL32, 0.1, 30, getter("max_accel"), setter("max_accel")),
-            Param("MIS_TAKEOFF_ALT", REAL32, 0.5, 1000, getter("takeoff_alt_m"),
-                  setter("takeoff_alt_m")),
-            Param("RTL_RETURN_ALT", REAL32, 0, 1000, getter("rtl_alt_m"), setter("rtl_alt_m")),
-            Param("COM_OF_LOSS_T", REAL32, 0.1, 60, getter("offboard_timeout_s"),
-                  setter("offboard_timeout_s")),
-            Param("CAL_GYRO0_ID", INT32, -2**31, 2**31 - 1, _const(1310988)),
-            Param("CAL_ACC0_ID", INT32, -2**31, 2**31 - 1, _const(1310988)),
-            Param("CAL_MAG0_ID", INT32, -2**31, 2**31 - 1, _const(197388)),
-            Param("SYS_HITL", INT32, 0, 2, _const(0)),
-            boot,
-        ]
+def copter_params(vehicle) -> list[Param]:
+    """The parameter list of an ArduCopter-like `SimVehicle`."""
+    ap = vehicle._ap
+    gcs, boot = _common(vehicle, "MAV_GCS_SYSID")
     return [
         Param("SYSID_THISMAV", INT32, 1, 255, _const(vehicle.sysid)),
         gcs,
-        Param("WPNAV_SPEED", REAL32, 10, 5000, getter("max_speed", 100.0),
-              setter("max_speed", 100.0)),
-        Param("WPNAV_ACCEL", REAL32, 10, 3000, getter("max_accel", 100.0),
-              setter("max_accel", 100.0)),
-        Param("RTL_ALT", REAL32, 0, 300000, getter("rtl_alt_m", 100.0),
-              setter("rtl_alt_m", 100.0)),
-        Param("PILOT_TKOFF_ALT", REAL32, 0, 100000, getter("takeoff_alt_m", 100.0),
-              setter("takeoff_alt_m", 100.0)),
+        Param("WPNAV_SPEED", REAL32, 10, 5000, _getter(ap, "max_speed", 100.0),
+              _setter(ap, "max_speed", 100.0)),
+        Param("WPNAV_ACCEL", REAL32, 10, 3000, _getter(ap, "max_accel", 100.0),
+              _setter(ap, "max_accel", 100.0)),
+        Param("RTL_ALT", REAL32, 0, 300000, _getter(ap, "rtl_alt_m", 100.0),
+              _setter(ap, "rtl_alt_m", 100.0)),
+        Param("PILOT_TKOFF_ALT", REAL32, 0, 100000, _getter(ap, "takeoff_alt_m", 100.0),
+              _setter(ap, "takeoff_alt_m", 100.0)),
         *(Param(f"{group}_{axis}", REAL32, -10, 10, _const(value))
           for group, value in (("INS_GYROFFS", 0.001), ("INS_ACCOFFS", 0.01),
                                ("COMPASS_OFS", 5.0)) for axis in "XYZ"),

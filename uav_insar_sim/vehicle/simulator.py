@@ -21,7 +21,7 @@ In-process (a background thread; what tests and an agent node use):
 In-process the boot phase defaults to 0 s (`boot_s`), on the command line to 3 s; a vehicle
 started `airborne` never boots. The MAVLink side, like the real autopilots (flight logic:
 `autopilot.Autopilot`, telemetry: `telemetry`, parameters: `parameters`, commands:
-`commands`):
+`commands`, what differs per flavour: `profiles`; the loop's thread: `mavlink.io_thread`):
 - Sent as (sysid, compid 1): HEARTBEAT (MAV_TYPE_QUADROTOR; ArduCopter mode numbers or PX4
   main << 16 | sub << 24), SYS_STATUS, GPS_RAW_INT, ATTITUDE, LOCAL_POSITION_NED,
   GLOBAL_POSITION_INT, HOME_POSITION, EXTENDED_SYS_STATE, BATTERY_STATUS at the
@@ -58,6 +58,7 @@ from collections.abc import Callable
 from dataclasses import replace
 
 from uav_insar_planner.mavlink.guard import DropLog, finite
+from uav_insar_planner.mavlink.io_thread import IoThread
 from uav_insar_planner.mavlink.link import MAV, Link, LinkStats
 from uav_insar_planner.mavlink.sequencer import command_name
 from uav_insar_planner.mavlink.setpoints import used_values
@@ -66,7 +67,7 @@ from uav_insar_sim.vehicle import estimate_error
 from uav_insar_sim.vehicle.autopilot import Autopilot
 from uav_insar_sim.vehicle.commands import run_command
 from uav_insar_sim.vehicle.mission_upload import MissionStore
-from uav_insar_sim.vehicle.parameters import ParamTable, vehicle_params
+from uav_insar_sim.vehicle.parameters import ParamTable
 from uav_insar_sim.vehicle.telemetry import SITL_HOME, Streams, Telemetry
 
 __all__ = ["SimVehicle"]
@@ -81,7 +82,7 @@ OBEYED = frozenset(("COMMAND_LONG", "COMMAND_INT", "SET_MODE",
 HANDLED = OBEYED | MISSION_IN | {"PARAM_REQUEST_LIST", "PARAM_REQUEST_READ"}
 
 
-class SimVehicle:
+class SimVehicle(IoThread):
     """One simulated multicopter on one MAVLink endpoint (see the module doc for behaviour).
 
     The constructor opens the link (ValueError if it or an argument is bad); `start()` runs
@@ -103,6 +104,7 @@ class SimVehicle:
             raise ValueError(f"sysid: {sysid!r} is not allowed; expected 1..255")
         if not 0 <= gcs_sysid <= 255:
             raise ValueError(f"gcs_sysid: {gcs_sysid!r} is not allowed; expected 0..255")
+        super().__init__(f"sim-vehicle-{sysid}")
         self.sysid, self.compid, self.autopilot = sysid, compid, autopilot
         self.gcs_sysid = int(gcs_sysid)
         self._boot = time.monotonic()
@@ -119,10 +121,9 @@ class SimVehicle:
         self.telemetry = Telemetry(self._link.mav, self._ap, tuple(home), self._boot, sysid,
                                    error)
         self.streams = Streams()
-        self.params = ParamTable(vehicle_params(self), bytewise=self._ap.px4)
+        self.params = ParamTable(self._ap.profile.params(self),
+                                 bytewise=self._ap.profile.bytewise_params)
         self._lock = threading.Lock()
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
         self._radio = True
         #: the last MAX_COMMANDS_KEPT (command, result) answered, in order (bounded: a flood
         #: of commands must not grow memory)
@@ -201,43 +202,26 @@ class SimVehicle:
     @property
     def alive(self) -> bool:
         """True while the background thread runs and has not failed."""
-        return self._thread is not None and self._thread.is_alive() and self.failure is None
+        return self.thread_alive and self.failure is None
 
-    def start(self) -> None:
-        if self._thread is None:
-            self._thread = threading.Thread(target=self.run, name=f"sim-vehicle-{self.sysid}",
-                                            daemon=True)
-            self._thread.start()
-
-    def stop(self) -> None:
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=5.0)
-            self._thread = None
+    def close(self) -> None:
         self._link.close()
-
-    def __enter__(self) -> SimVehicle:
-        self.start()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.stop()
 
     def run(self, stop: threading.Event | None = None) -> None:
         """The vehicle loop; returns when `stop` (or `self.stop()`) is set, or when the loop
         failed: then `failure` says why (logged through `log`), never silently."""
         try:
-            self._loop(stop or self._stop)
+            self._loop(stop)
         except Exception as exc:  # recorded: whoever runs the vehicle must stop too
             self.failure = f"{type(exc).__name__}: {str(exc)[:200]}"
             if self._log is not None:
                 self._log(f"sysid {self.sysid}: vehicle loop died: {self.failure}")
 
-    def _loop(self, stop: threading.Event) -> None:
+    def _loop(self, stop: threading.Event | None) -> None:
         dt = 1.0 / PHYSICS_HZ
         next_tick = time.monotonic()
         fd = self._link.fileno()
-        while not stop.is_set() and not self._stop.is_set():
+        while not self.stopping and not (stop is not None and stop.is_set()):
             wait = max(0.0, next_tick - time.monotonic())
             if fd is None:
                 time.sleep(min(wait, 0.01))

@@ -15,7 +15,6 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
-from uav_insar_planner.mavlink.autopilots import COPTER_MODES, px4_custom_mode
 from uav_insar_planner.mavlink.link import MAV
 from uav_insar_sim.vehicle.estimate_error import EstimateError
 
@@ -58,9 +57,6 @@ CAPABILITIES = (M.MAV_PROTOCOL_CAPABILITY_MAVLINK2 | M.MAV_PROTOCOL_CAPABILITY_P
                 | M.MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_LOCAL_NED
                 | M.MAV_PROTOCOL_CAPABILITY_COMMAND_INT
                 | M.MAV_PROTOCOL_CAPABILITY_MISSION_INT)  # uploads: vehicle/mission_upload
-#: (major, minor, patch, FIRMWARE_VERSION_TYPE) each imitates.
-VERSIONS = {"ardupilot": (4, 7, 0, M.FIRMWARE_VERSION_TYPE_DEV),
-            "px4": (1, 15, 0, M.FIRMWARE_VERSION_TYPE_OFFICIAL)}
 CELLS, CELL_FULL_MV, CELL_EMPTY_MV = 4, 4200, 3500
 BATTERY_DRAIN_PER_S = 0.05  # % per second while armed (~33 min from full)
 
@@ -187,24 +183,20 @@ class Telemetry:
     # ------------------------------------------------------------------------ messages
     def heartbeat(self, now: float) -> MAV.MAVLink_message:
         """MAV_TYPE_QUADROTOR; ArduCopter mode numbers or PX4 main << 16 | sub << 24."""
-        ap = self.ap
-        flags = M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
+        ap, p = self.ap, self.ap.profile
+        flags = M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | p.heartbeat_flags
         if ap.armed:
             flags |= M.MAV_MODE_FLAG_SAFETY_ARMED
-        if ap.px4:
-            custom, autopilot = px4_custom_mode(ap.mode), M.MAV_AUTOPILOT_PX4
-        else:
-            custom, autopilot = COPTER_MODES[ap.mode], M.MAV_AUTOPILOT_ARDUPILOTMEGA
-            flags |= M.MAV_MODE_FLAG_STABILIZE_ENABLED
-            if ap.mode == "GUIDED":
-                flags |= M.MAV_MODE_FLAG_GUIDED_ENABLED
+        if ap.mode == "GUIDED":
+            flags |= M.MAV_MODE_FLAG_GUIDED_ENABLED
         if not ap.booted(now):
-            state = M.MAV_STATE_BOOT if ap.px4 else M.MAV_STATE_CALIBRATING
+            state = p.boot_state
         elif ap.armed and not ap.on_ground():
             state = M.MAV_STATE_ACTIVE
         else:
             state = M.MAV_STATE_STANDBY
-        return self.mav.heartbeat_encode(M.MAV_TYPE_QUADROTOR, autopilot, flags, custom, state)
+        return self.mav.heartbeat_encode(M.MAV_TYPE_QUADROTOR, p.mav_autopilot, flags,
+                                         p.custom_mode(ap.mode), state)
 
     def sys_status(self, now: float) -> MAV.MAVLink_message:
         health = SENSORS if self.ap.booted(now) else SENSORS & ~NOT_HEALTHY_WHILE_BOOTING
@@ -264,8 +256,9 @@ class Telemetry:
                                               self._current_ca(), -1, -1, round(self.battery))
 
     def autopilot_version(self, now: float) -> MAV.MAVLink_message:
-        major, minor, patch, kind = VERSIONS[self.ap.autopilot]
-        encoding = (M.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE if self.ap.px4
+        major, minor, patch, kind = self.ap.profile.version
+        encoding = (M.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE
+                    if self.ap.profile.bytewise_params
                     else M.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_C_CAST)
         return self.mav.autopilot_version_encode(
             CAPABILITIES | encoding, major << 24 | minor << 16 | patch << 8 | kind, 0, 0, 0,

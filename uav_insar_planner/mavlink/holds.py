@@ -7,8 +7,8 @@ for a vehicle (`order_due`) and whether its setpoints are stopped (`stopped`). N
 thread-safe: the bridge holds its lock.
 
 - Mission stop: a formation with every pose NaN after one with targets (`replanning.plans`)
-  engages the hold order (`hold.HoldOrder`: LOITER / AUTO.LOITER) for every vehicle; a later
-  plan releases it for the UAVs it gives a target, which stay in their hold mode until the
+  engages the hold order (`mode_orders.hold_order`: LOITER / AUTO.LOITER) for every vehicle; a
+  later plan releases it for the UAVs it gives a target, which stay in their hold mode until the
   pilot or a GCS switches them back.
 - Ground station silent (`gcs_timeout_s` > 0): the clock starts with the first gcs/heartbeat
   (before one was matched, silence is not loss: a lossy radio may take seconds to match the
@@ -20,7 +20,7 @@ thread-safe: the bridge holds its lock.
   start or plan comes): a held vehicle whose target, on the pass clock it flies, is at most
   `rejoin_m` ahead of where it stands rejoins the pass: its setpoints resume, and if it is
   still in the hold mode the bridge commanded it is switched back to GUIDED / OFFBOARD
-  (`hold.ResumeOrder`: the bridge put it there, so it may take it back; one a pilot switched
+  (`mode_orders.resume_order`: the bridge put it there, so it may take it back; one a pilot switched
   to another mode is not taken back). One farther behind cannot keep the pass without a
   sprint: it keeps holding and is reported `behind` (for the planner to resume the swarm from
   where it stands, or replan without it). A vehicle without a target (the planner's
@@ -30,9 +30,10 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 
-from uav_insar_planner.mavlink.frames import Vec3
-from uav_insar_planner.mavlink.hold import HoldOrder, ModeOrder, ResumeOrder
+from uav_insar_planner.autopilots.profiles import AutopilotProfile
+from uav_insar_planner.mavlink.mode_orders import ModeOrder, hold_order, resume_order
 from uav_insar_planner.mavlink.supervision import WatchedVehicle
+from uav_insar_planner.plan import Vec3
 from uav_insar_planner.swarm import uav_name
 
 Emit = Callable[[int, str, str], None]  # (uav or -1 for the swarm, level, text)
@@ -87,8 +88,9 @@ class GcsWatch:
 class Holding:
     """See the module doc; `uavs` are the bridge's UAV indices, `emit` its event sink."""
 
-    def __init__(self, autopilot: str, gcs_timeout_s: float, uavs: Sequence[int], emit: Emit):
-        self.hold, self.resume = HoldOrder(autopilot), ResumeOrder(autopilot)
+    def __init__(self, autopilot: AutopilotProfile, gcs_timeout_s: float, uavs: Sequence[int],
+                 emit: Emit):
+        self.hold, self.resume = hold_order(autopilot), resume_order(autopilot)
         self.gcs = GcsWatch(gcs_timeout_s)
         self._uavs, self._emit = tuple(uavs), emit
         self._stopped: set[int] = set()  # setpoints stopped for the ground's silence
@@ -119,7 +121,7 @@ class Holding:
         self.resume.release()
         self.hold.engage(self._uavs)
         self._emit(-1, "warn", f"{why}: stopping the setpoints and commanding "
-                               f"{self.hold.mode_name} to every vehicle")
+                               f"{self.hold.mode.name} to every vehicle")
 
     def rejoin(self, vehicles: Sequence[WatchedVehicle], lags: Mapping[int, float | None],
                rejoin_m: float, why: str) -> list[int]:
@@ -160,7 +162,7 @@ class Holding:
             self.behind[v.uav] = (f"{lag:.2f} m behind its target, more than the "
                                   f"{rejoin_m:.2f} m it may catch up: cannot keep the pass, "
                                   "keeps holding")
-            self._emit(v.uav, "warn", f"{why}: {self.behind[v.uav]} ({self.hold.mode_name}, "
+            self._emit(v.uav, "warn", f"{why}: {self.behind[v.uav]} ({self.hold.mode.name}, "
                                       "no sprint)")
 
     def _give_back(self, v: WatchedVehicle, text: str) -> None:
@@ -170,10 +172,10 @@ class Holding:
         if self.hold.reached(v) or self.resume.reached(v):
             # (still in the flying mode as last heard: the hold order may be on its way)
             self.resume.engage([v.uav])
-            text += f"; {self.hold.mode_name} -> {self.resume.mode_name}"
+            text += f"; {self.hold.mode.name} -> {self.resume.mode.name}"
         else:
-            text += (f"; in {v.mode}, not the {self.hold.mode_name} the bridge commanded (a "
-                     f"pilot switched it): not taken back to {self.resume.mode_name}")
+            text += (f"; in {v.mode}, not the {self.hold.mode.name} the bridge commanded (a "
+                     f"pilot switched it): not taken back to {self.resume.mode.name}")
         self._emit(v.uav, "info", text)
 
     def on_plan(self, formation: Sequence[Vec3 | None], flown_before: bool) -> None:
@@ -185,7 +187,7 @@ class Holding:
             if flown_before and not self.held:
                 self.hold.engage(self._uavs)
                 self._emit(-1, "warn", "every pose NaN: the mission stopped; commanding "
-                                       f"{self.hold.mode_name} to every vehicle")
+                                       f"{self.hold.mode.name} to every vehicle")
             return
         self.hold.release(targets - self._stopped)
         self._gcs_held -= targets
@@ -214,12 +216,12 @@ class Holding:
         if v.uav not in self._stopped:
             return ""
         if v.uav in self._no_target:
-            return (f"holding ({self.hold.mode_name}) since the ground station fell silent: no "
+            return (f"holding ({self.hold.mode.name}) since the ground station fell silent: no "
                     "target in the current plan")
         if self.gcs.silent:
-            return f"holding ({self.hold.mode_name}): ground station silent"
+            return f"holding ({self.hold.mode.name}): ground station silent"
         if v.uav in self.behind:
-            return f"holding ({self.hold.mode_name}): {self.behind[v.uav]}"
-        return (f"holding ({self.hold.mode_name}): ground station heard again, waiting for "
+            return f"holding ({self.hold.mode.name}): {self.behind[v.uav]}"
+        return (f"holding ({self.hold.mode.name}): ground station heard again, waiting for "
                 "the pass to resume")
 

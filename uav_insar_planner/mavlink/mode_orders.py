@@ -1,48 +1,42 @@
 """Mode orders: MAV_CMD_DO_SET_MODE into one mode, for the UAVs an order is engaged for.
 
-`HoldOrder` is each vehicle's position-hold mode: ArduCopter LOITER (custom_mode 5), PX4
-AUTO.LOITER ("HOLD": main 4, sub 3). The bridge engages it when the planner publishes a
-formation with every pose NaN (the mission cannot continue, `replanning.plans`) and when the
-ground station falls silent for `gcs_timeout_s` (`holding`); it then sends no setpoints.
-`ResumeOrder` is the mode the bridge flies in, GUIDED / OFFBOARD: `holding` engages it for a
-vehicle the ground-silence hold put in LOITER once a new plan gives it a target again.
+The modes are the autopilot profile's (`autopilots.profiles.AutopilotProfile`). `hold_order`
+is each vehicle's position hold (`hold`: ArduCopter LOITER, PX4 AUTO.LOITER). The bridge
+engages it when the planner publishes a formation with every pose NaN (the mission cannot
+continue, `replanning.plans`) and when the ground station falls silent for `gcs_timeout_s`
+(`holds`); it then sends no setpoints. `resume_order` is the mode the bridge flies in
+(`flight`: GUIDED / OFFBOARD): `holds` engages it for a vehicle the ground-silence hold put in
+its hold mode once a new plan gives it a target again.
 
 An engaged order is sent again every RESEND_S until a vehicle heartbeat that came after the
 engagement shows the mode (an older one may predate a hold order still in flight),
 at most ATTEMPTS times per vehicle and engagement; a vehicle that is not linked gets it when
 it comes back. Once a vehicle showed the mode the order is done for it: a pilot who switches
 it to another mode afterwards is not fought. PX4 leaves OFFBOARD at once without a setpoint
-stream, so ResumeOrder waits until the bridge has streamed for PX4_STREAM_BEFORE_OFFBOARD_S.
+stream, so a resume waits until the bridge has streamed for the profile's
+`stream_before_flight_s`.
 """
 from __future__ import annotations
 
 from collections.abc import Iterable
 
-from uav_insar_planner.mavlink.autopilots import (
-    COPTER_MODES,
-    PX4_MAIN_MODE_MASK,
-    PX4_MODES,
-    px4_custom_mode,
-)
+from uav_insar_planner.autopilots.profiles import AutopilotProfile, Mode
 from uav_insar_planner.mavlink.link import MAV
-from uav_insar_planner.mavlink.sequencer import PX4_STREAM_BEFORE_OFFBOARD_S
 from uav_insar_planner.mavlink.supervision import WatchedVehicle
 
 RESEND_S = 1.0
 ATTEMPTS = 5
-_ALL_BITS = 0xFFFFFFFF
 
 
 class ModeOrder:
-    """DO_SET_MODE into `mode_name` (HEARTBEAT custom_mode `custom_mode`, compared under
-    `mask`) with command params `params`; see the module doc. Not thread-safe (the bridge's
-    lock)."""
+    """DO_SET_MODE into `mode`, once `stream_first_s` of setpoints went out; see the module
+    doc. Not thread-safe (the bridge's lock)."""
 
-    def __init__(self, mode_name: str, custom_mode: int, params: tuple[float, ...],
-                 mask: int = _ALL_BITS, stream_first_s: float = 0.0):
-        self.mode_name, self.custom_mode, self.params = mode_name, custom_mode, params
+    def __init__(self, mode: Mode, stream_first_s: float = 0.0):
+        self.mode = mode
+        self.params = (float(MAV.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED), *mode.set_params)
         self.command = MAV.MAV_CMD_DO_SET_MODE
-        self._mask, self._stream_first_s = mask, stream_first_s
+        self._stream_first_s = stream_first_s
         # engaged uav -> (attempts, last time sent, engaged at: None until the first `due`)
         self._sent: dict[int, tuple[int, float, float | None]] = {}
         self._done: set[int] = set()  # engaged uavs that showed the mode
@@ -68,7 +62,7 @@ class ModeOrder:
 
     def reached(self, v: WatchedVehicle) -> bool:
         """Whether `v`'s latest heartbeat shows the mode."""
-        return (v.custom_mode & self._mask) == (self.custom_mode & self._mask)
+        return self.mode.shown_by(v.custom_mode)
 
     def due(self, v: WatchedVehicle, now: float) -> bool:
         """True when the command should go to `v` now (call `sent` after sending)."""
@@ -91,31 +85,12 @@ class ModeOrder:
         self._sent[v.uav] = (attempts + 1, now, engaged)
 
 
-class HoldOrder(ModeOrder):
-    """Into the position-hold mode of `autopilot` ("ardupilot" | "px4")."""
-
-    def __init__(self, autopilot: str):
-        custom = float(MAV.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED)
-        if autopilot == "px4":
-            main, sub = PX4_MODES["HOLD"]
-            super().__init__("AUTO.LOITER", px4_custom_mode("HOLD"),
-                             (custom, float(main), float(sub)))
-        else:
-            super().__init__("LOITER", COPTER_MODES["LOITER"],
-                             (custom, float(COPTER_MODES["LOITER"])))
+def hold_order(autopilot: AutopilotProfile) -> ModeOrder:
+    """Into `autopilot`'s position hold."""
+    return ModeOrder(autopilot.hold)
 
 
-class ResumeOrder(ModeOrder):
-    """Back into the mode the bridge flies `autopilot` in: GUIDED / OFFBOARD (after a
-    setpoint stream, see the module doc)."""
-
-    def __init__(self, autopilot: str):
-        custom = float(MAV.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED)
-        if autopilot == "px4":
-            main = PX4_MODES["OFFBOARD"][0]
-            super().__init__("OFFBOARD", px4_custom_mode("OFFBOARD"),
-                             (custom, float(main), 0.0), mask=PX4_MAIN_MODE_MASK,
-                             stream_first_s=PX4_STREAM_BEFORE_OFFBOARD_S)
-        else:
-            super().__init__("GUIDED", COPTER_MODES["GUIDED"],
-                             (custom, float(COPTER_MODES["GUIDED"])))
+def resume_order(autopilot: AutopilotProfile) -> ModeOrder:
+    """Back into the mode the bridge flies `autopilot` in (after a setpoint stream where it
+    needs one, see the module doc)."""
+    return ModeOrder(autopilot.flight, autopilot.stream_before_flight_s)

@@ -1,0 +1,157 @@
+"""The swarm's flight as the bridge keeps it: the formation and its pass, who holds, the arming
+sequences, the catch-ups after a rejoin and the separation warnings.
+
+No I/O and not thread-safe: the bridge (`bridge.Bridge`) feeds it what it hears and sends the
+commands it asks for, under its lock. Each point's detail is in the module named:
+- The pass (`trajectory`), started by the capture gate or the planner's instant
+  (`pass_clock`); the setpoint target of each vehicle (`target_to_send`), none where the
+  autopilot ignores them (`autopilots.profiles`: `setpoints_in_flight_only`), a held
+  vehicle or one catching up gently (`catch_up`).
+- Holds (`holds`): the planner's mission stop (every pose NaN) and the ground station's
+  silence; a held vehicle at most `holds.REJOIN_S` of the pass behind its target rejoins when
+  the ground is heard again or a new start or plan comes, one farther behind keeps holding
+  and is reported `behind` (under pass_start "capture" a new plan resumes the pass where the
+  swarm holds).
+- Optional arm_and_takeoff (`sequencer`), one sequence per UAV a plan flies.
+- Two planned UAVs closer than `min_separation_m` are warned about (`separation`).
+"""
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import replace
+
+from uav_insar_planner.autopilots.profiles import profile
+from uav_insar_planner.mavlink.catch_up import CATCH_UP_FROM_M, CatchUp, governed
+from uav_insar_planner.mavlink.config import BridgeConfig
+from uav_insar_planner.mavlink.frames import TrackFrame
+from uav_insar_planner.mavlink.holds import REJOIN_S, Holding
+from uav_insar_planner.mavlink.mode_orders import ModeOrder
+from uav_insar_planner.mavlink.pass_clock import (
+    capture_start,
+    lags,
+    planner_start,
+    resume_where_held,
+)
+from uav_insar_planner.mavlink.report import VehicleStatus, vehicle_status
+from uav_insar_planner.mavlink.sequencer import ArmingSequence
+from uav_insar_planner.mavlink.supervision import WatchedVehicle
+from uav_insar_planner.mavlink.trajectory import PassTrajectory, clean_formation, separation
+from uav_insar_planner.plan import Vec3
+
+Emit = Callable[[int, str, str], None]  # (uav or -1 for the swarm, level, text)
+SendCommand = Callable[[WatchedVehicle, int, Sequence[float], int], None]
+
+
+class FlightState:
+    """See the module doc. `count` is how many poses a formation is read for; `emit` and
+    `send_command` are the bridge's event sink and command sender."""
+
+    def __init__(self, config: BridgeConfig, frame: TrackFrame,
+                 vehicles: Sequence[WatchedVehicle], count: int, emit: Emit,
+                 send_command: SendCommand):
+        self.config, self.frame, self.vehicles = config, frame, tuple(vehicles)
+        self.autopilot = profile(config.autopilot)
+        self._count, self._emit, self._send_command = count, emit, send_command
+        self.pass_ = PassTrajectory(config.speed_mps, config.track_duration_s)
+        self._start_label = ""  # the plan whose pass start the track clock is (planner)
+        self._catch_up: dict[int, CatchUp] = {}  # vehicles catching up after a rejoin
+        self._separation = [""] * count
+        self.sequences: dict[int, ArmingSequence] = {}  # per UAV, once arm_and_takeoff ran
+        self.holding = Holding(self.autopilot, config.gcs_timeout_s,
+                               [v.uav for v in self.vehicles], emit)
+
+    def set_formation(self, poses: Sequence[Vec3 | None], now: float) -> None:
+        """New formation (see `Bridge.set_formation`)."""
+        clean = clean_formation(poses, self._count)
+        flown = self.pass_.formation is not None and any(self.pass_.formation)
+        self.holding.on_plan(clean, flown)
+        if self.pass_.set_formation(clean):
+            self._emit(-1, "info", "new track start: approaching the formation again")
+        self._rejoin(now, "a new plan", here=self.config.pass_start != "planner")
+        self._separation, warnings = separation(clean, self.config.min_separation_m)
+        for text in warnings:
+            self._emit(-1, "warn", text)
+        if self.config.arm_and_takeoff:
+            for v in self.vehicles:
+                if clean[v.uav] is not None and v.uav not in self.sequences:
+                    self.sequences[v.uav] = self._new_sequence(v)
+
+    def gcs_heard(self, what: str, now: float, heartbeat: bool) -> None:
+        if self.holding.gcs_heard(what, now, heartbeat):
+            self._rejoin(now, "the ground station heard again")
+
+    def set_start(self, wall_time_s: float, now: float, label: str, offset_m: float) -> None:
+        """pass_start "planner": see `Bridge.set_start`."""
+        text = planner_start(self.pass_, wall_time_s, now, time.time(), label, offset_m)
+        self._start_label = label if self.pass_.formation is not None else ""
+        if text:  # held ones near their targets rejoin, ones too late to keep up hold
+            self._emit(-1, "info", text)
+            self._rejoin(now, "a new pass start", late=True)
+
+    def running(self, v: WatchedVehicle) -> ArmingSequence | None:
+        """`v`'s arming sequence while it runs."""
+        seq = self.sequences.get(v.uav)
+        return seq if seq is not None and seq.active else None
+
+    def check(self, now: float) -> None:
+        """The clock moved on: the ground's silence, the arming sequences."""
+        self.holding.check(now)
+        for v in self.vehicles:
+            if (seq := self.running(v)) and v.linked:
+                seq.step(now)
+
+    def capture(self, now: float) -> None:
+        """pass_start "capture": start the pass once every UAV of the gate is captured."""
+        if capture_start(self.vehicles, self.sequences, self.pass_, self.frame, now,
+                         self.config):
+            self._emit(-1, "info", f"formation established; flying the track at "
+                                   f"{self.config.speed_mps:g} m/s")
+
+    def order_due(self, v: WatchedVehicle, now: float) -> ModeOrder | None:
+        return self.holding.order_due(v, now)
+
+    def target_to_send(self, v: WatchedVehicle, now: float) -> tuple[Vec3, Vec3] | None:
+        """The (position, velocity) setpoint for `v` now, or None: none goes out."""
+        target = governed(self._catch_up, v.uav, self.pass_.target(v.uav, now), now)
+        waits = self.autopilot.setpoints_in_flight_only and (
+            self.running(v) is not None or not self.autopilot.flight.shown_by(v.custom_mode))
+        if target is None or waits or self.holding.stopped(v):
+            return None
+        return target
+
+    def status(self, v: WatchedVehicle, now: float) -> VehicleStatus:
+        status = vehicle_status(v, now, self.pass_, self.frame, self.config.capture_radius_m,
+                                self.sequences.get(v.uav), self._separation[v.uav])
+        held = self.holding.phase(v)
+        return replace(status, phase=held or status.phase, pass_plan=self._start_label,
+                       behind=self.holding.behind.get(v.uav, ""))
+
+    def _rejoin(self, now: float, why: str, here: bool = False, late: bool = False) -> None:
+        """Held vehicles near their targets rejoin (`holds.Holding.rejoin`); `here`: the clock
+        first moves to where the rearmost held one stands; `late`: `holds.Holding.fall_back`."""
+        lag = lags(self.vehicles, self.pass_, self.frame, now)
+        held = [lag[v.uav] for v in self.vehicles if self.holding.stopped(v)]
+        if here and (text := resume_where_held(self.pass_, held)):
+            self._emit(-1, "info", text)
+            lag = lags(self.vehicles, self.pass_, self.frame, now)
+        rejoin_m = self.config.speed_mps * REJOIN_S
+        given = self.holding.rejoin(self.vehicles, lag, rejoin_m, why)
+        if late:
+            self.holding.fall_back(self.vehicles, lag, rejoin_m, why)
+        for v in self.vehicles:  # behind a moving target: a gentle catch-up (`catch_up`)
+            if (v.uav in given or late and not self.holding.stopped(v)) and (
+                    lag[v.uav] or 0.0) > CATCH_UP_FROM_M:
+                y = self.frame.from_ned(*v.position_ned)[1]
+                self._catch_up[v.uav] = CatchUp(now, y, self.config.speed_mps)
+
+    def _new_sequence(self, v: WatchedVehicle) -> ArmingSequence:
+        def start_down() -> float:
+            return self.frame.to_ned(*self.pass_.start_pose(v.uav))[2]
+
+        return ArmingSequence(
+            self.autopilot, v,
+            send=lambda command, params, confirmation: self._send_command(
+                v, command, params, confirmation),
+            emit=lambda level, text: self._emit(v.uav, level, text), start_down=start_down,
+            readiness_timeout_s=self.config.readiness_timeout_s)
