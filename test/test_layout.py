@@ -86,8 +86,9 @@ def test_no_product_file_reaches_into_another_modules_private_names():
 
 
 def test_no_product_line_branches_on_a_solver_back_ends_name():
-    """Each back end is declared once (param_specs.science.BACKENDS) and the dispatcher, the objective
-    rule and the docs read the declaration: no code compares a value with a back end's name."""
+    """Each back end is declared once (param_specs.science.BACKENDS) and the dispatcher, the
+    objective rule and the docs read the declaration: no code compares a value with a back
+    end's name."""
     from uav_insar_planner.param_specs.science import SOLVERS
 
     offenders = [f"{path.relative_to(ROOT)}:{node.lineno}" for path in product_files()
