@@ -32,9 +32,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-
-def db_to_linear(db: float) -> float:
-    return 10.0 ** (db / 10.0)
+from uav_insar_planner.param_specs.science import db_to_linear
 
 
 class LinkFading:

@@ -36,12 +36,12 @@ from geometry_msgs.msg import Point, Pose, PoseArray, Quaternion
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
 from uav_insar_planner import published
+from uav_insar_planner.mavlink.guard import FLOAT32_MAX
 from uav_insar_planner.plan import Plan
 from uav_insar_planner.ros import topics
 from uav_insar_planner.swarm import MAX_UAVS, MIN_UAVS, uav_name
 
 POSITION_BOUND_M = 1e6
-FLOAT32_MAX = 3.4e38
 SHOWN_CHARS = 40
 DROP_LOG_PERIOD_S = 1.0  # bad messages of these topics: at most a line a second (DropLog)
 _ID_LABEL = re.compile(r"^plan (/\S*) (\d{1,12})\.(\d{9})$")
