@@ -11,6 +11,7 @@ import pytest
 from diagnostic_msgs.msg import DiagnosticStatus
 from process_group import interrupt_group
 
+from uav_insar_planner.param_specs.nodes import FIRST_SYSID
 from uav_insar_planner.ros.claims import DISCOVERY_WINDOW_S
 from uav_insar_planner.swarm import MAX_UAVS
 from uav_insar_sim.vehicle.simulator import SimVehicle
@@ -38,14 +39,17 @@ def finish(proc: subprocess.Popen) -> str:
     return proc.stdout.read()
 
 
+# one sysid more than the largest swarm has UAVs (swarm.MAX_UAVS)
+TOO_MANY = f"target_sysids:={[FIRST_SYSID + k for k in range(MAX_UAVS + 1)]}"
+
+
 @pytest.mark.parametrize("param", ["setpoint_rate_hz:=1.0", "autopilot:=inav",
                                    "target_sysids:=[2, 2, 3]", "connections:=['nowhere']",
                                    "signing_key_file:=/no/such/key",
                                    "track_bearing_deg:=1e308",
                                    # an empty list has no type in rcl (was a traceback)
                                    "connections:=[]", "target_sysids:=[]",
-                                   # more UAVs than the largest swarm (swarm.MAX_UAVS)
-                                   "target_sysids:=[2, 3, 4, 5, 6, 7, 8]"])
+                                   TOO_MANY])
 def test_bad_parameter_exits_2_with_one_line(param, ros_domain):
     proc = start("uav_insar_planner.ros.mavlink_bridge", ros_env(), param)
     try:
@@ -57,7 +61,7 @@ def test_bad_parameter_exits_2_with_one_line(param, ros_domain):
     assert param.split(":=")[0].split("_")[0] in errors[0] or "connections" in errors[0]
     if param.endswith("[]"):
         assert "value [] is not allowed" in errors[0] and "non-empty list" in errors[0], out
-    if param.endswith("8]"):
+    if param == TOO_MANY:
         assert f"at most {MAX_UAVS}" in errors[0], out
 
 

@@ -19,6 +19,7 @@ from uav_insar_planner.param_specs.nodes import NODE_SPECS, RCLPY_PARAMETER_NAME
 from uav_insar_planner.param_specs.science import SPEC_BY_NAME
 from uav_insar_planner.params import ParamError, unknown_parameter
 from uav_insar_planner.params_file import load_params, read_params_file, section_matches
+from uav_insar_planner.swarm import MAX_UAVS, agent_name
 
 CLI = [sys.executable, "-m", "uav_insar_planner.cli"]
 N = 8
@@ -39,8 +40,8 @@ CASES = {
                                   "section '/**/planer' names no node of uav_insar_planner "
                                   "(did you mean planner?)"),
     "agent beyond the largest swarm": (
-        BASE + "agent6:\n  ros__parameters:\n    speed_mps: 4.0\n", "",
-        "section 'agent6' names no node"),
+        BASE + f"{agent_name(MAX_UAVS)}:\n  ros__parameters:\n    speed_mps: 4.0\n", "",
+        f"section '{agent_name(MAX_UAVS)}' names no node"),
     "empty file": ("", "", "is empty; expected '/**:' or 'NODE:' sections"),
     "list at top level": ("- planner\n- agent\n", "", "must map node names to"),
     "no ros__parameters": ('"/**":\n  num_slots: 3\n', "",
