@@ -73,7 +73,7 @@ setup(
     zip_safe=True,
     maintainer="uav_insar_planner developers",
     maintainer_email="dev@example.invalid",
-    description="Plan and fly a multi-baseline InSAR swarm of 2 to 6 UAVs (ROS 2 Jazzy nodes)",
+    description="Plan and fly a multi-baseline InSAR swarm of 2 to 10 UAVs (ROS 2 Jazzy nodes)",
     license="Apache-2.0",
     entry_points={
         "console_scripts": [

@@ -1,7 +1,8 @@
-"""Swarms of 2 and 5 UAVs through the suite (num_uavs, 2..6): the plan messages' readers, the
-planner's topics, an agent beyond the plan, a slave lost in a five-UAV mission (real planner
-and agent processes on a private domain), the demo with five vehicles flown over MAVLink by
-the bridge and recorded, and the report of that bag.
+"""Swarms of 2 and 5 UAVs through the suite (num_uavs, swarm.py's MIN_UAVS..MAX_UAVS; ten in
+test_ten_uavs.py): the plan messages' readers, the planner's topics, an agent beyond the plan,
+a slave lost in a five-UAV mission (real planner and agent processes on a private domain), the
+demo with five vehicles flown over MAVLink by the bridge and recorded, and the report of that
+bag.
 """
 from __future__ import annotations
 
@@ -20,7 +21,7 @@ import pytest
 from geometry_msgs.msg import Pose, PoseArray
 
 from uav_insar_planner.ros import plan_msgs
-from uav_insar_planner.swarm import uav_name
+from uav_insar_planner.swarm import MAX_UAVS, MIN_UAVS, uav_name
 
 pytestmark = pytest.mark.timeout(240)
 SLOTS_LINE = re.compile(r"uav(\d): x= *[-\d.]+ m z= *[-\d.]+ m  6/6 slots, (rate met in every "
@@ -44,17 +45,17 @@ def formation_of(count: int) -> PoseArray:
     return msg
 
 
-@pytest.mark.parametrize("count", [2, 5, 6])
-def test_a_formation_of_two_to_six_uavs_is_read(count):
+@pytest.mark.parametrize("count", [MIN_UAVS, 5, MAX_UAVS])
+def test_a_formation_of_any_swarms_size_is_read(count):
     assert len(plan_msgs.decode_formation(formation_of(count)).points) == count
 
 
-@pytest.mark.parametrize("count", [1, 7])
+@pytest.mark.parametrize("count", [MIN_UAVS - 1, MAX_UAVS + 1])
 def test_a_formation_of_another_count_is_refused_in_one_line(count):
     with pytest.raises(plan_msgs.PlanMessageError) as err:
         plan_msgs.decode_formation(formation_of(count))
     text = str(err.value)
-    assert text.startswith("formation: poses: value ") and "2 to 6 poses" in text
+    assert text.startswith("formation: poses: value ") and f"{MIN_UAVS} to {MAX_UAVS} poses" in text
     assert "\n" not in text
 
 
@@ -184,7 +185,9 @@ def test_demo_flies_two_uavs_on_the_mission_clock(ros_domain):
 
 
 @pytest.mark.parametrize("argv,field", [
-    (["--uavs", "7"], "--uavs: value 7"), (["--uavs", "1"], "--uavs: value 1"),
+    (["--uavs", str(MAX_UAVS + 1)], f"--uavs: value {MAX_UAVS + 1} is not allowed; expected "
+                                    f"{MIN_UAVS}..{MAX_UAVS}"),
+    (["--uavs", "1"], "--uavs: value 1"),
     (["--uavs", "2", "--kill-uav", "2"], "--kill-uav: value 2")])
 def test_a_bad_swarm_size_for_the_demo_exits_2_in_one_line(argv, field):
     proc = process_group.run([sys.executable, "-m", "uav_insar_planner.demo", *argv, "--no-bag"],

@@ -1,4 +1,4 @@
-"""uav_insar_planner: plan and fly a multi-baseline InSAR swarm of 2 to 6 UAVs (swarm.py), after
+"""uav_insar_planner: plan and fly a multi-baseline InSAR swarm of 2 to 10 UAVs (swarm.py), after
 Lahmeri et al.'s dual-baseline three.
 
 Library use:

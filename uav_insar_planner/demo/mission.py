@@ -1,6 +1,6 @@
 """`make demo` / `python -m uav_insar_planner.demo`: one whole mission, every node a process.
 
-Starts one `agent` executable per UAV (`--uavs N`, 2..6, num_uavs; default the params file's,
+Starts one `agent` executable per UAV (`--uavs N`, 2..10, num_uavs; default the params file's,
 Table I's 3) and the `planner` as separate processes, as `ros2 run` would, on a private
 ROS_DOMAIN_ID with discovery kept on this host; this process watches the topics like `ros2
 topic echo` would. Unless `--no-mavlink`, the agents ride on MAVLink vehicles: one

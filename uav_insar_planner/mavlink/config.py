@@ -148,9 +148,9 @@ class BridgeConfig:
 def from_parameters(values: dict[str, Any]) -> BridgeConfig:
     """The config of the node's parameter values (lists as given). With `uav_id` K >= 0,
     `connections` and `target_sysids` left at their defaults (Table I's three UAVs') mean UAV
-    K's own default (param_specs.nodes.vehicle_connection(K), sysid FIRST_SYSID + K, any K < MAX_UAVS);
-    "auto" `pass_start` is planner (one mission clock, which the agents' slots follow too), and
-    "auto" (-1) `gcs_timeout_s`
+    K's own default (param_specs.nodes.vehicle_connection(K), sysid FIRST_SYSID + K, any
+    K < MAX_UAVS); "auto" `pass_start` is planner (one mission clock, which the agents' slots
+    follow too), and "auto" (-1) `gcs_timeout_s`
     GCS_TIMEOUT_DEFAULT_S with a uav_id, else off. TypeError or ValueError (one line) when a
     value is bad."""
     values = {name: tuple(v) if isinstance(v, list) else v for name, v in values.items()}

@@ -24,8 +24,10 @@ from uav_insar_planner.solver.power import station_radius_sq  # noqa: E402
 from uav_insar_planner.solver.problem import make_problem  # noqa: E402
 from uav_insar_planner.study.grid import MapRow  # noqa: E402
 from uav_insar_planner.study.sweep import SweepRow  # noqa: E402
-from uav_insar_planner.swarm import uav_color  # noqa: E402
+from uav_insar_planner.swarm import uav_color, uav_index  # noqa: E402
 
+# Monte-Carlo panels, one per pair and the fused DEM: nine slaves' ten panels in two rows
+HISTOGRAMS_PER_ROW = 5
 SCHEME_STYLE = {
     "proposed": ("tab:blue", "o", "Proposed"),
     "single-baseline": ("tab:orange", "s", "Benchmark 1 (single-baseline)"),
@@ -142,8 +144,9 @@ def plot_formation(p: Params, plan: Plan, path: str | Path) -> None:
     xs_all = [plan.formation[k, 0] for k in flown] + [p.x_t, gx]
     xlo, xhi = min(xs_all) - 40, max(xs_all) + 40
     zhi = max(max(plan.formation[k, 1] for k in flown), gz) + 30
-    # equal axes: size the figure to the plane so the plot fills it
-    fig, ax = plt.subplots(figsize=(10, max(3.5, 10 * zhi / (xhi - xlo) + 1.2)))
+    # equal axes: size the figure to the plane so the plot fills it; the legend (a row per
+    # UAV, ten fit) sits to the right of the plane, off the drawing
+    fig, ax = plt.subplots(figsize=(12.5, max(3.5, 10 * zhi / (xhi - xlo) + 1.2)))
     xs, zs = np.linspace(xlo, xhi, 400), np.linspace(0, zhi, 300)
     for k in flown:
         if k > 0:
@@ -178,7 +181,7 @@ def plot_formation(p: Params, plan: Plan, path: str | Path) -> None:
     ax.set_ylabel("z (altitude) [m]")
     ax.set_title(f"{plan.scheme}: sigma_h = {plan.sigma_h_m:.4f} m  (shaded: slave feasible "
                  "regions; dotted: C9-C11 disks; thick: swaths)", fontsize=9)
-    ax.legend(fontsize=7, loc="upper right")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     ax.grid(True, alpha=0.3)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
@@ -191,8 +194,12 @@ def plot_montecarlo(result: dict, path: str | Path) -> None:
     (eq. 13 with the Cramer-Rao phase error; eq. 15 for the fused)."""
     errs = result["height_errors_m"]
     rows = {**result["pairs"], **({"fused": result["fused"]} if "fused" in result else {})}
-    fig, axes = plt.subplots(1, len(rows), figsize=(4.2 * len(rows), 3.6), squeeze=False)
-    for ax, (name, row) in zip(axes[0], rows.items(), strict=True):
+    cols = min(len(rows), HISTOGRAMS_PER_ROW)
+    grid = -(-len(rows) // cols)
+    fig, axes = plt.subplots(grid, cols, figsize=(4.2 * cols, 3.6 * grid), squeeze=False)
+    for ax in axes.flat[len(rows):]:
+        ax.set_visible(False)
+    for ax, (name, row) in zip(axes.flat, rows.items(), strict=False):
         e = errs[name]
         s_model, s_mc = row["sigma_h_model_m"], row["sigma_h_mc_m"]["value"]
         lim = 4.0 * max(s_model, s_mc)
@@ -201,11 +208,12 @@ def plot_montecarlo(result: dict, path: str | Path) -> None:
         x = np.linspace(-lim, lim, 400)
         ax.plot(x, np.exp(-0.5 * (x / s_model) ** 2) / (s_model * np.sqrt(2 * np.pi)), "k--",
                 label=f"model Gaussian, {s_model:.4f} m")
-        ax.set_title("fused DEM" if name == "fused" else f"pair U0-U{name[-1]}", fontsize=10)
+        ax.set_title("fused DEM" if name == "fused" else f"pair U0-U{uav_index(name)}", fontsize=10)
         ax.set_xlabel("height error [m]")
         ax.legend(fontsize=7)
         ax.grid(True, alpha=0.3)
-    axes[0][0].set_ylabel("density [1/m]")
+    for ax in axes[:, 0]:
+        ax.set_ylabel("density [1/m]")
     fig.suptitle(f"{result['samples']} samples per pair, n_L = {result['looks']}, "
                  f"seed {result['seed']}", fontsize=9)
     fig.tight_layout()

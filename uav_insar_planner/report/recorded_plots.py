@@ -10,6 +10,7 @@ one panel per flown UAV, planned or required dashed, achieved solid.
 """
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import matplotlib
@@ -24,12 +25,12 @@ from uav_insar_planner.swarm import uav_color, uav_name  # noqa: E402
 
 FILES = ("report_rate.png", "report_power.png", "report_energy.png", "report_error.png",
          "report_formation.png")
-PANELS_PER_ROW = 3
+PANELS_PER_ROW = 3  # up to nine UAVs; a larger swarm takes a squarer grid (ten: 4 x 3)
 
 
 def _panels(f: MissionFigures, title: str):
-    """A panel per flown UAV, at most PANELS_PER_ROW a row (a swarm of up to 6)."""
-    cols = min(len(f.uavs), PANELS_PER_ROW)
+    """A panel per flown UAV, PANELS_PER_ROW a row, or ceil(sqrt(n)) for more than 3 rows."""
+    cols = min(len(f.uavs), max(PANELS_PER_ROW, math.ceil(math.sqrt(len(f.uavs)))))
     rows = -(-len(f.uavs) // cols)
     fig, axes = plt.subplots(rows, cols, figsize=(4 * cols, 3.2 * rows), squeeze=False)
     fig.suptitle(title, fontsize=10)
@@ -86,12 +87,13 @@ def plot_report(f: MissionFigures, p: Params, out: Path) -> list[Path]:
     _finish(axes)
     written.append(_save(fig, out / FILES[3]))
 
-    fig, ax = plt.subplots(figsize=(7, 4))
+    fig, ax = plt.subplots(figsize=(9, 4))
     for k in f.uavs:
         x, _, z = f.targets[k]
         t = f.tracks[k]
+        # one legend row per UAV (ten of them fit): the flown dots take its colour unnamed
         ax.plot(x + t.dx, z + t.dz, ".", color=uav_color(k), ms=2, alpha=0.4,
-                label=f"U{k} flown")
+                label="flown (each UAV's colour)" if k == f.uavs[0] else None)
         ax.plot([x], [z], "o", mfc="none", color=uav_color(k), ms=10,
                 label=f"U{k} planned ({x:.1f}, {z:.1f}) m")
     gx, _, gz = p.ground_station
@@ -102,7 +104,7 @@ def plot_report(f: MissionFigures, p: Params, out: Path) -> list[Path]:
                  f"{f.sigma_h_flown_m:.4g} m")
     ax.set_aspect("equal", adjustable="datalim")
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=7, loc="best")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
     written.append(_save(fig, out / FILES[4]))
     return written
 

@@ -2,7 +2,7 @@
 over `uav_insar_planner.mavlink.bridge.Bridge`, which does all MAVLink work in its own thread.
 
 Parameters (param_specs/nodes.py BRIDGE_SPECS, all read-only: the links are opened once):
-  uav_id (-1: every UAV of target_sysids, N entries for N UAVs; 0..5: this UAV only, a
+  uav_id (-1: every UAV of target_sysids, N entries for N UAVs; 0..num_uavs - 1: this UAV only, a
   stack per UAV, in namespace /uavK or the swarm's; another UAV's namespace is refused; a plan
   with fewer UAVs holds it, one line), pass_start (auto|capture|planner),
   connections (string[]), target_sysids (int[]), source_sysid, track_bearing_deg,

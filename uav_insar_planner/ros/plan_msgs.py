@@ -17,7 +17,7 @@ cut short and what is allowed, and the caller drops it without any change of sta
   formation  each pose's x, y, z finite with |v| <= POSITION_BOUND_M (1e6 m, well inside
              float32, which MAVLink carries), or a UAV not flown: x and z both NaN (y, the
              track start, may be finite or NaN); MIN_UAVS to MAX_UAVS poses (swarm.py: a
-             swarm of 2 to 6, one pose per UAV, NaN for a UAV not flown); the quaternion is
+             swarm of 2 to 10, one pose per UAV, NaN for a UAV not flown); the quaternion is
              ignored;
   power      exactly the three dimensions above (MIN_UAVS to MAX_UAVS rows, slots >= 1,
              strides row-major, data_offset 0, a parseable identity label), len(data) = K*N,

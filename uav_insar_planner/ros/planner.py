@@ -7,7 +7,7 @@ callback (refused with the same lines, nothing changes) and solved after it took
 
 Publishes (names relative to the node's namespace, except /diagnostics):
   formation         geometry_msgs/PoseArray, reliable + transient_local, depth 1: one pose
-                    per UAV of the plan (num_uavs, 2..6; NaN for a UAV not flown)
+                    per UAV of the plan (num_uavs, 2..10; NaN for a UAV not flown)
   formation/power   std_msgs/Float64MultiArray, reliable + transient_local, depth 1, one row
                     of P_com per UAV of the plan; both
                     carry the plan's identity (ros/plan_msgs.py)

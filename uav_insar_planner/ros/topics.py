@@ -184,7 +184,7 @@ def swarm_namespace(node_namespace: str, k: int | None) -> str:
     parent, _, last = ns.rpartition("/")
     if k is not None and last == uav_name(k):
         return parent or "/"
-    if uav_index(last) is not None:  # any swarm's uav0..uav5
+    if uav_index(last) is not None:  # any swarm's uav0..uav(MAX_UAVS - 1)
         raise ValueError(f"namespace: {ns!r} is another UAV's; expected {uav_name(k)!r} "
                          f"(its own) or the swarm's namespace" if k is not None else
                          f"namespace: {ns!r} is one UAV's; expected the swarm's namespace "
