@@ -69,8 +69,9 @@ def test_every_panel_in_the_tree_has_a_config_and_every_config_a_panel():
     assert {pid.partition("!")[0] for pid in leaves} == PANEL_TYPES
 
 
-# Table I's and swarm.py's smallest and largest swarms (test_num_uavs.py reports a 5-UAV bag)
-SWARMS = sorted({MIN_UAVS, DEFAULT_NUM_UAVS, MAX_UAVS})
+# Table I's and swarm.py's smallest and largest swarms, and six, the largest before ten
+# (test_num_uavs.py reports a 5-UAV bag, test_ten_uavs.py a 10-UAV one)
+SWARMS = sorted({MIN_UAVS, DEFAULT_NUM_UAVS, 6, MAX_UAVS})
 
 
 @pytest.mark.parametrize("num_uavs", SWARMS)
@@ -152,8 +153,13 @@ def _bag_messages(bag: Path) -> tuple[dict[str, str], dict[str, list]]:
 
 
 def test_a_recorded_mission_holds_every_topic_and_each_plot_reads_numbers(mission):
-    layout = foxglove_layout()
-    types, messages = _bag_messages(mission.bag)
+    check_layout_reads_the_bag(foxglove_layout(), mission.bag)
+
+
+def check_layout_reads_the_bag(layout: dict, bag: Path) -> None:
+    """Every topic `layout` names is in `bag`, the markers in its frame, and each plot path,
+    evaluated as Foxglove reads it, gives finite numbers (test_ten_uavs.py: ten UAVs' bag)."""
+    types, messages = _bag_messages(bag)
     assert _topics_named(layout) <= set(types), sorted(_topics_named(layout) - set(types))
     for topic in layout["configById"]["3D!markers"]["topics"]:
         assert types[topic] == MARKER_TYPE and messages[topic], topic
