@@ -10,6 +10,7 @@ solver's K = 9 work lands (issue 29), and no test here is about the objective.
 """
 from __future__ import annotations
 
+import csv
 import json
 import math
 import subprocess
@@ -168,6 +169,27 @@ def test_export_mission_writes_ten_plans_and_a_smaller_export_removes_them(tmp_p
     out = capsys.readouterr().out
     assert f"removed {', '.join(names[2:])} from" in out, out
     assert sorted(p.name for p in tmp_path.iterdir()) == names[:2]
+
+
+def test_a_sweep_and_a_map_run_over_swarm_sizes_up_to_ten(tmp_path):
+    """`sweep num_uavs 2 10 9` and a map with num_uavs on one axis: Table I's rate list fitted
+    to each size (swarm.fit_to_swarm), every point planned; more slaves never raise the least
+    bound (each adds a baseline, and the smaller swarm's formation is still there to keep)."""
+    sweep, grid = tmp_path / "sweep.csv", tmp_path / "map.csv"
+    common = ["--objective", "bound", "--schemes", "proposed", "--jobs", "1", "--no-progress"]
+    assert cli(["sweep", "num_uavs", "2", str(MAX_UAVS), str(MAX_UAVS - 1), *common,
+                "--csv", str(sweep)]) == EXIT_OK
+    rows = [r for r in csv.DictReader(line for line in sweep.read_text().splitlines()
+                                      if not line.startswith("#"))]
+    assert [float(r["value"]) for r in rows] == [float(n) for n in range(2, MAX_UAVS + 1)]
+    assert all(r["feasible"] == "True" for r in rows), rows
+    bounds = [float(r["sigma_h_bound_m"]) for r in rows]
+    assert all(b <= a * (1 + 1e-6) for a, b in zip(bounds, bounds[1:], strict=False)), bounds
+    assert cli(["map", "num_uavs", str(MAX_UAVS - 1), str(MAX_UAVS), "2", "h_amb_min_m", "1.0",
+                "1.2", "2", *common, "--csv", str(grid)]) == EXIT_OK
+    cells = [line for line in grid.read_text().splitlines()
+             if line and not line.startswith(("#", "value1"))]
+    assert len(cells) == 4 and all(",True," in c for c in cells), cells
 
 
 # Fast DDS's default ports of domain d (PB 7400, DG 250, PG 2): multicast 7400 + 250 d (+1),

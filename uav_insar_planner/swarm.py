@@ -8,6 +8,9 @@ here.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import TypeVar
+
 DEFAULT_NUM_UAVS = 3  # Table I: one master, two slaves (the paper's dual baseline)
 MIN_UAVS = 2  # one interferogram: the single-baseline benchmark
 MAX_UAVS = 10  # nine interferograms
@@ -41,6 +44,16 @@ def agent_name(k: int) -> str:
 def uav_names(num_uavs: int) -> tuple[str, ...]:
     """uav0..uav(N-1)."""
     return tuple(uav_name(k) for k in uavs(num_uavs))
+
+
+_Item = TypeVar("_Item")
+
+
+def fit_to_swarm(values: Sequence[_Item], num_uavs: int) -> list[_Item]:
+    """A per-UAV list for `num_uavs` UAVs: its first num_uavs values, its last one repeated for
+    the UAVs beyond it (Table I's [10, 16.95, 1] is [10, 16.95] for two UAVs, [10, 16.95, 1,
+    1, 1] for five): how the demo's --uavs and a sweep or map of num_uavs size rate_min_mbps."""
+    return (list(values) + list(values[-1:]) * num_uavs)[:num_uavs]
 
 
 def uav_color(k: int) -> str:

@@ -9,7 +9,7 @@ from typing import Any
 from uav_insar_planner.cli.parser import OneLineParser
 from uav_insar_planner.demo.recorder import default_bag_path
 from uav_insar_planner.param_specs.nodes import PORT_STEP
-from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, MAX_UAVS, MIN_UAVS
+from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, MAX_UAVS, MIN_UAVS, fit_to_swarm
 
 REPO_CONFIG = Path(__file__).resolve().parents[1] / "config" / "params.yaml"
 # --kill-uav: the agents' default time_scale, slow enough that the swarm flies on for a while
@@ -126,9 +126,8 @@ def parse_options(argv: list[str] | None = None) -> argparse.Namespace:
 
 def fit_swarm(args: argparse.Namespace, overrides: dict[str, Any]) -> list[str]:
     """Put --uavs N into `overrides` (num_uavs) and, unless -p gives rate_min_mbps, R_min,k
-    for N UAVs: the params file's first N, its last repeated (Table I's [10, 16.95, 1] gives
-    [10, 16.95] for two UAVs, [10, 16.95, 1, 1, 1] for five). Returns the problems (one line
-    each) of a --kill-uav beyond the swarm flown."""
+    for N UAVs: the params file's, fitted by swarm.fit_to_swarm. Returns the problems (one
+    line each) of a --kill-uav beyond the swarm flown."""
     from uav_insar_planner.param_specs.science import SPEC_BY_NAME
     from uav_insar_planner.params_file import read_params_file
 
@@ -138,7 +137,7 @@ def fit_swarm(args: argparse.Namespace, overrides: dict[str, Any]) -> list[str]:
         if "rate_min_mbps" not in overrides:
             given = list(file.get("rate_min_mbps", SPEC_BY_NAME["rate_min_mbps"].default))
             if len(given) != args.uavs and given:
-                overrides["rate_min_mbps"] = (given + given[-1:] * args.uavs)[:args.uavs]
+                overrides["rate_min_mbps"] = fit_to_swarm(given, args.uavs)
     n = overrides.get("num_uavs", file.get("num_uavs", DEFAULT_NUM_UAVS))
     if args.kill_uav is not None and isinstance(n, int) and args.kill_uav >= n:
         return [f"--kill-uav: value {args.kill_uav} is not allowed; expected a UAV 0..{n - 1} "

@@ -9,10 +9,10 @@ from pathlib import Path
 
 import numpy as np
 
-from uav_insar_planner.params import SPEC_BY_NAME, ParamError, Params, shown
+from uav_insar_planner.params import PARAM_SPECS, SPEC_BY_NAME, ParamError, Params, shown
 from uav_insar_planner.solver import solve
 from uav_insar_planner.study.executors import Runner, run_serial
-from uav_insar_planner.swarm import MAX_UAVS
+from uav_insar_planner.swarm import MAX_UAVS, count_problem, fit_to_swarm
 
 _INDEXED = re.compile(r"^(?P<name>[a-z_0-9]+)(?:\[(?P<index>\d+)\])?$")
 
@@ -58,7 +58,13 @@ def parse_sweep_name(text: str, field: str = "sweep NAME") -> tuple[str, int | N
 
 
 def with_value(params: Params, name: str, index: int | None, value: float) -> Params:
-    """params with one (file-unit) parameter, or one element of a list parameter, set."""
+    """params with one (file-unit) parameter, or one element of a list parameter, set. A swarm
+    size (num_uavs) takes the per-UAV lists with it, fitted by swarm.fit_to_swarm, so that one
+    sweep or map runs over swarms of several sizes; any other value is validated as given."""
+    if name == "num_uavs" and float(value).is_integer() and not count_problem(name, int(value)):
+        n = int(value)
+        return params.replace(**{name: n}, **{s.name: fit_to_swarm(params.raw[s.name], n)
+                                              for s in PARAM_SPECS if s.per_uav})
     if index is None:
         return params.replace(**{name: value})
     items = list(params.raw[name])
