@@ -192,6 +192,26 @@ def test_a_sweep_and_a_map_run_over_swarm_sizes_up_to_ten(tmp_path):
     assert len(cells) == 4 and all(",True," in c for c in cells), cells
 
 
+def test_plot_formation_and_montecarlo_take_ten_uavs_and_refuse_eleven(tmp_path, capsys):
+    formation_png, histograms_png = tmp_path / "formation.png", tmp_path / "mc.png"
+    assert cli(["plot-formation", *SETS, "--out", str(formation_png)]) == EXIT_OK
+    assert formation_png.stat().st_size > 10_000
+    capsys.readouterr()
+    assert cli(["solve", *SETS, "--json"]) == EXIT_OK
+    plan = json.loads(capsys.readouterr().out)
+    numbers = ",".join(f"{plan['formation'][uav_name(k)][axis]:.3f}" for k in TEN
+                       for axis in ("x_m", "z_m"))
+    assert cli(["montecarlo", f"--formation={numbers}", "--samples", "300", "--json",
+                "--plot", str(histograms_png)]) == EXIT_OK
+    pairs = json.loads(capsys.readouterr().out)["montecarlo"]["pairs"]
+    assert list(pairs) == [uav_name(k) for k in TEN[1:]]
+    assert histograms_png.stat().st_size > 10_000
+    assert cli(["montecarlo", f"--formation={numbers},-70,80", "--samples", "300"]) != EXIT_OK
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("uav-insar: error: --formation: value ") and "\n" not in err
+    assert f"x{MAX_UAVS - 1},z{MAX_UAVS - 1}]" in err and f"or {2 * MAX_UAVS} finite" in err
+
+
 # Fast DDS's default ports of domain d (PB 7400, DG 250, PG 2): multicast 7400 + 250 d (+1),
 # unicast 7410 + 250 d + 2 p (+1) for participant p on a host
 def _dds_ports(participants: int) -> set[int]:
