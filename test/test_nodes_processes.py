@@ -11,6 +11,7 @@ import pytest
 from uav_insar_planner import load_params, model, solve
 from uav_insar_planner.demo.processes import stop_node
 from uav_insar_planner.evaluate import rate_tolerance_bps
+from uav_insar_planner.swarm import MAX_UAVS
 
 CONFIG = str(Path(__file__).resolve().parents[1] / "config" / "params.yaml")
 N = 30
@@ -76,7 +77,7 @@ def test_bad_params_file_stops_the_planner_with_code_2_and_publishes_nothing(
     assert (w.formations, w.powers, w.diagnostics) == ([], [], [])
 
 
-@pytest.mark.parametrize("args,name", [(["-p", "uav_id:=6"], "uav_id"),
+@pytest.mark.parametrize("args,name", [(["-p", f"uav_id:={MAX_UAVS}"], "uav_id"),  # no swarm's
                                        (["-p", "uav_id:=5"], "uav_id"),  # num_uavs is 3
                                        (["-p", "max_speed_mps:=2.0"], "max_speed_mps")])
 def test_bad_agent_parameter_exits_2(procs, args, name):

@@ -25,7 +25,7 @@ from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.mavlink_bridge import POSE_PERIOD_S
 from uav_insar_planner.ros.start_msgs import decode_start
 from uav_insar_planner.solver import solve
-from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, uavs
+from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, MAX_UAVS, uavs
 
 # Table I's swarm: this test is of three UAVs (test_num_uavs.py flies others)
 UAVS = uavs(DEFAULT_NUM_UAVS)
@@ -213,7 +213,7 @@ def test_a_second_bridge_for_a_flown_uav_is_refused_within_discovery(ros_domain)
 
 
 @pytest.mark.parametrize("args,field", [
-    (("-p", "uav_id:=6"), "uav_id"),
+    (("-p", f"uav_id:={MAX_UAVS}"), "uav_id"),  # beyond the largest swarm
     (("-p", "uav_id:=-2"), "uav_id"),
     (("-p", "uav_id:=1", "-p", "target_sysids:=[3, 4]"), "target_sysids"),
     (("-r", "__ns:=/uav2", "-p", "uav_id:=1"), "namespace"),

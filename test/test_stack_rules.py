@@ -18,6 +18,7 @@ from uav_insar_planner.ros.claims import Claim, refusal
 from uav_insar_planner.ros.formation_start import POSE_FRESH_S, all_captured, not_captured
 from uav_insar_planner.ros.plan_msgs import PlanId, PlanMessageError
 from uav_insar_planner.ros.start_msgs import PLAUSIBLE_S, decode_start, encode_start
+from uav_insar_planner.swarm import MAX_UAVS
 
 DEFAULTS = {s.name: s.default for s in BRIDGE_SPECS}
 
@@ -51,9 +52,9 @@ def test_a_config_built_in_code_has_the_nodes_defaults_but_starts_its_own_pass()
     assert built.origin_ned_m == (0.0, 0.0, 0.0) and built.target_sysids == (2, 3, 4)
 
 
-@pytest.mark.parametrize("k", [3, 5])
+@pytest.mark.parametrize("k", [3, 5, MAX_UAVS - 1])
 def test_a_stack_of_a_larger_swarm_gets_its_own_default_vehicle(k):
-    """uav_id 3..5 (a swarm of 4 to 6) with the default wiring: that UAV's own port and sysid,
+    """uav_id 3..9 (a swarm of 4 to 10) with the default wiring: that UAV's own port and sysid,
     as uav-insar-vehicle --sysid 2+K --listen udpin:127.0.0.1:14552+10K serves it."""
     config = from_parameters(dict(DEFAULTS, uav_id=k))
     config.validate()
@@ -62,7 +63,7 @@ def test_a_stack_of_a_larger_swarm_gets_its_own_default_vehicle(k):
 
 
 @pytest.mark.parametrize("change,field", [
-    ({"uav_id": 6}, "uav_id"), ({"uav_id": -2}, "uav_id"),
+    ({"uav_id": MAX_UAVS}, "uav_id"), ({"uav_id": -2}, "uav_id"),
     ({"uav_id": 0, "target_sysids": [2, 3]}, "target_sysids"),
     ({"uav_id": 0, "target_sysids": [2], "connections": ["udpout:a:1", "udpout:b:2"]},
      "connections")])
