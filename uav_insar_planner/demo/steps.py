@@ -282,10 +282,14 @@ class Mission:
         finishing = [] if MASTER in killed else [k for k in self.targets if k not in killed]
         last = w.formations[-1]
         # (a UAV whose first slots were flown before the watcher saw it: its last slot counts)
+        def last_offload(k: int) -> bool:
+            return bool(w.offloads[k]) and w.offloads[k][-1][0] == n - 1
+
         complete = answered and w.spin_until(
-            lambda: all(len(w.rates[k]) >= n or (
-                w.offloads[k] and w.offloads[k][-1][0] == n - 1) for k in finishing),
+            lambda: all(len(w.rates[k]) >= n or last_offload(k) for k in finishing),
             self.wall_timeout_s, self.running)
+        # the last slot's energy, which may come just after its rate (ten UAVs: often)
+        w.spin_until(lambda: all(last_offload(k) for k in finishing), STATUS_S, self.running)
         if finishing:  # the survivors' targets of the re-plan
             self.targets = {k: ((p.position.x, p.position.y, p.position.z) if k in finishing
                                 else self.targets[k])
