@@ -124,8 +124,8 @@ def test_figures_of_a_known_bag(known_bag):
 
 def test_every_uav_has_its_colour_past_the_largest_swarm():
     """One colour table for the report's plots and the markers: Table I's U0 red, U1 blue,
-    U2 green, a colour of its own for each UAV a swarm may have, and one (no IndexError) for
-    the seventh UAV and past it, should MAX_UAVS grow."""
+    U2 green, a colour of its own for each UAV a swarm may have (tab10's ten), and one (no
+    IndexError) past the largest swarm, should MAX_UAVS grow."""
     import matplotlib.colors
 
     assert [uav_color(k) for k in range(3)] == [
