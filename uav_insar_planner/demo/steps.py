@@ -281,10 +281,10 @@ class Mission:
         self.running = [p for k, p in enumerate(self.procs) if k not in killed]
         finishing = [] if MASTER in killed else [k for k in self.targets if k not in killed]
         last = w.formations[-1]
-        # (a UAV whose first slots were flown before the watcher saw it: its last slot counts)
         def last_offload(k: int) -> bool:
             return bool(w.offloads[k]) and w.offloads[k][-1][0] == n - 1
 
+        # (a UAV whose first slots were flown before the watcher saw it: its last slot counts)
         complete = answered and w.spin_until(
             lambda: all(len(w.rates[k]) >= n or last_offload(k) for k in finishing),
             self.wall_timeout_s, self.running)

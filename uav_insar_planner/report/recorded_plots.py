@@ -29,7 +29,8 @@ PANELS_PER_ROW = 3  # up to nine UAVs; a larger swarm takes a squarer grid (ten:
 
 
 def _panels(f: MissionFigures, title: str):
-    """A panel per flown UAV, PANELS_PER_ROW a row, or ceil(sqrt(n)) for more than 3 rows."""
+    """A panel per flown UAV, PANELS_PER_ROW a row, or ceil(sqrt(n)) a row when that is more
+    (n flown UAVs)."""
     cols = min(len(f.uavs), max(PANELS_PER_ROW, math.ceil(math.sqrt(len(f.uavs)))))
     rows = -(-len(f.uavs) // cols)
     fig, axes = plt.subplots(rows, cols, figsize=(4 * cols, 3.2 * rows), squeeze=False)
