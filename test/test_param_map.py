@@ -31,6 +31,7 @@ from uav_insar_planner.study.executors import (
     jobs_max,
 )
 from uav_insar_planner.study.sweep import SweepRow
+from uav_insar_planner.swarm import MAX_UAVS
 
 CLI = [sys.executable, "-m", "uav_insar_planner.cli"]
 # 3 x 3 cells, two schemes; static-power is feasible at rate 17 Mbit/s and not at 18 with
@@ -129,7 +130,7 @@ BAD_MAP = {
               "map NAME1: value 'nope' is not allowed; expected a numeric parameter"),
     "name2 index": (("map", "z_max_m", "80", "90", "2", "rate_min_mbps", "1", "2", "2"),
                     "map NAME2: value 'rate_min_mbps' is not allowed; rate_min_mbps needs an "
-                    "index 0..5"),
+                    f"index 0..{MAX_UAVS - 1}"),
     "same name": (("map", "z_max_m", "80", "90", "2", "z_max_m", "80", "90", "2"),
                   "map NAME2: value 'z_max_m' is not allowed; expected a parameter other"),
     "count1": (("map", "z_max_m", "80", "90", "0", "h_amb_min_m", "1", "2", "2"),
