@@ -10,7 +10,7 @@ from __future__ import annotations
 
 DEFAULT_NUM_UAVS = 3  # Table I: one master, two slaves (the paper's dual baseline)
 MIN_UAVS = 2  # one interferogram: the single-baseline benchmark
-MAX_UAVS = 6  # five interferograms
+MAX_UAVS = 10  # nine interferograms
 MASTER = 0
 # One colour per UAV in every plot and marker: matplotlib's tab10, reordered so Table I's U0 is
 # red, U1 blue, U2 green; the slaves of larger swarms take the rest, then it starts again.

@@ -56,17 +56,23 @@ def formation_of(sc: Problem, point) -> np.ndarray:
     return q
 
 
-def solve_global(p: Params, scheme: str, objective: str) -> SolverResult:
+def solve_global(p: Params, scheme: str, objective: str,
+                 time_budget_s: float | None = None) -> SolverResult:
     """Global minimum of sigma_h (`exact`, eq. 15), of Proposition 1's bound (`bound`) or of
     sigma_h with the exact multilook phase std (`multilook`, multilook.phase_std in eq. 13)
-    over C1..C11 for `scheme`, with a certificate: lower_bound <= optimum <= objective."""
+    over C1..C11 for `scheme`, with a certificate: lower_bound <= optimum <= objective.
+
+    A search that reaches its node limit or `time_budget_s` (seconds of branch and bound;
+    None: no limit but the nodes) returns the best feasible plan found with its proven lower
+    bound and gap, and its message says the certificate is incomplete."""
     if scheme == "fixed-master" and not master_on_c2(p):
         return _nan_result(p, 0, blocking=["C2"], lower_bound=math.inf,
                            certificate="q0_fixed violates C2", message="q0_fixed is off the "
                            "master's look-angle line x0 = x_t - z0 tan(theta_0)")
     sc = make_problem(p, scheme, objective)
     # Two slaves or fewer: the exact inner solve already makes the incumbents good.
-    res = branch_bound.search(sc, rel_gap=REL_GAP, refine=len(sc.slaves) > 2)
+    res = branch_bound.search(sc, rel_gap=REL_GAP, refine=len(sc.slaves) > 2,
+                              time_budget_s=time_budget_s)
     if res.point is None:
         block = infeasibility.irreducible_set(p, scheme)
         _, fixes = infeasibility.blocking_sets(p, scheme)
@@ -77,7 +83,7 @@ def solve_global(p: Params, scheme: str, objective: str) -> SolverResult:
         if not res.exhausted:
             return _nan_result(p, res.nodes, blocking=block, lower_bound=res.lower_bound,
                                message="no feasible point found and infeasibility not proven "
-                               f"within {res.nodes} boxes; " + together)
+                               f"within {res.nodes} boxes ({res.stopped}); " + together)
         return _nan_result(p, res.nodes, blocking=block, lower_bound=math.inf,
                            certificate="infeasible: every box of ("
                            + ", ".join(["r0"] + [f"theta{k}" for k in sc.slaves])
@@ -101,5 +107,7 @@ def solve_global(p: Params, scheme: str, objective: str) -> SolverResult:
         lower_bound=lower, gap=gap,
         certificate=(f"branch and bound over ({dims}) boxes with monotone interval bounds; "
                      f"{res.nodes} boxes, " + ("all closed" if res.exhausted
-                                               else "node limit reached")),
-        message="" if res.exhausted else "certificate incomplete: node limit reached")
+                                               else f"{res.stopped} reached")),
+        message="" if res.exhausted else (
+            f"certificate incomplete: {res.stopped} reached; the best feasible plan found, "
+            f"proven within {gap:.2g} of the optimum"))
