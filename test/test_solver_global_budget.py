@@ -72,7 +72,7 @@ def test_ten_uavs_at_1_mbit_are_certified_and_pass_the_independent_check():
     assert sigma_1 / 3.0 * (1.0 - 1e-4) <= ev.sigma_h <= sigma_1 / 3.0 * 1.01
 
 
-@pytest.mark.parametrize("num_uavs", [6, 7])
+@pytest.mark.parametrize("num_uavs", [7])
 def test_the_chain_bound_agrees_with_the_branch_and_bound(num_uavs):
     sc = make_problem(swarm(num_uavs), "proposed", "exact")
     chained = solve_global(swarm(num_uavs), "proposed", "exact")

@@ -37,7 +37,7 @@ POLISH_STEP = 1e-3
 # From this many slaves the chain's incumbent and bound (chain_packing.py) come first; the
 # branch and bound runs only when they leave a gap (its box bound needs every slave's angle
 # box narrow, which takes exponentially many boxes in K).
-CHAIN_MIN_K = 5
+CHAIN_MIN_K = 6
 
 
 def _nan_result(p: Params, nodes: int, **kw) -> SolverResult:
