@@ -3,8 +3,9 @@
 A search stopped by its budget must still hand back a feasible plan (as the independent
 checker sees it) with a proven lower bound, and say that the certificate is incomplete: never
 a silent uncertified answer. Ten UAVs with every slave at 1 Mbit/s are certified by the chain
-bound (chain_packing.py); the bound is checked at random feasible formations and against the
-branch and bound alone.
+bound (chain_packing.py), and so is Table I's U1 at 16.95 Mbit/s beside them (the bound
+relaxes every slave to the loosest disk); the bound is checked at random feasible formations
+and against the branch and bound alone.
 """
 from __future__ import annotations
 
@@ -56,8 +57,9 @@ def test_a_budget_the_search_does_not_need_changes_nothing():
     assert (timed.formation == free.formation).all()
 
 
-def test_ten_uavs_at_1_mbit_are_certified_and_pass_the_independent_check():
-    p = swarm(10)
+@pytest.mark.parametrize("u1_mbps", [1.0, 16.95])
+def test_ten_uavs_at_1_mbit_are_certified_and_pass_the_independent_check(u1_mbps):
+    p = swarm(10).replace(rate_min_mbps=[10.0, u1_mbps] + [1.0] * 8)
     res = solve_global(p, "proposed", "exact")
     ev = evaluate(p, res.formation, res.p_com, "proposed")
     assert res.feasible and ev.feasible, ev.violated
@@ -86,8 +88,9 @@ def test_the_chain_bound_agrees_with_the_branch_and_bound(num_uavs):
 
 def test_the_chain_bound_holds_at_random_feasible_formations():
     rng = np.random.default_rng(7)
-    for num_uavs in (3, 6, 10):
-        sc = make_problem(swarm(num_uavs), "proposed", "exact")
+    table_i_grown = default_params().replace(num_uavs=7, rate_min_mbps=[10.0, 16.95] + [1.0] * 5)
+    for num_uavs, p in ((3, swarm(3)), (6, swarm(6)), (10, swarm(10)), (7, table_i_grown)):
+        sc = make_problem(p, "proposed", "exact")
         n = 4000
         r0 = sc.r0_lo + (sc.r0_hi - sc.r0_lo) * rng.random(n) ** 3
         # angles near theta_max, where the optimum's chain is, and anywhere

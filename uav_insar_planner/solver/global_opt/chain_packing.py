@@ -6,8 +6,8 @@ the master's line of sight and b = r sin(theta - theta_0) across it (|b| = b_per
 |b| <= cap r0 (slave_ranges.c8_cap), a line parallel to the master's line of sight, and C4
 between two slaves is the Euclidean distance in (u, b).
 
-Relaxation of a master interval r0 in [r0a, r0b], per group of interchangeable slaves (equal
-station disk and C8 rung; the groups' sums add, C4 between groups dropped). With
+Relaxation of a master interval r0 in [r0a, r0b]: every slave gets the largest station disk
+and the loosest C8 cap of the slaves (`relaxed`), so all are interchangeable. With
 B = cap r0b and a strip width delta < d_min, every slave is in one of three places:
 - the upper strip B - delta < b <= B or the lower one -B <= b < -(B - delta): two slaves in
   one strip differ by less than delta in b, so by at least d' = sqrt(d_min^2 - delta^2) in u;
@@ -28,6 +28,7 @@ column width per slave along the chain (h = CELL_M) and by the strip's slack d_m
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 
@@ -45,24 +46,23 @@ COARSE_CELL_M = 0.05  # a first, cheaper pass of each master interval
 SUB_ROWS = 10       # rows of a strip's column for its weight bound
 STRIP_M = 0.1       # strip width below the C8 cap (as a fraction of d_min at most STRIP_FRAC)
 STRIP_FRAC = 0.2
+NOT_TIGHT = 1e-3
 MAX_INTERVALS = 256  # master intervals evaluated per certificate (then the search takes over)
 
 
-def groups(sc: Problem) -> list[tuple[int, ...]]:
-    """The slaves of sc.slaves in groups of interchangeable ones (equal station disk and C8
-    cap), first seen first."""
-    out: dict[tuple[float, float], list[int]] = {}
-    for k in sc.slaves:
-        out.setdefault((sc.disk_r2[k], slave_ranges.c8_cap(sc, k)), []).append(k)
-    return [tuple(v) for v in out.values()]
-
-
 def applies(sc: Problem) -> bool:
-    """The bound needs C4 (the spacing), C8 (the cap), a master range above 0, and is tight
-    only when every slave is interchangeable with every other (one group: with several, the
-    groups' chains are bounded apart and would all claim the best spot)."""
-    return (sc.on("C4") and sc.on("C8") and sc.p.d_min > 0 and sc.r0_lo > 0
-            and len(groups(sc)) == 1)
+    """The bound needs C4 (the spacing), C8 (the cap) and a master range above 0."""
+    return sc.on("C4") and sc.on("C8") and sc.p.d_min > 0 and sc.r0_lo > 0
+
+
+def relaxed(sc: Problem) -> tuple[Problem, int]:
+    """(P) with every slave's station disk the largest of theirs (C9-C11 relaxed), and the
+    slave with the loosest C8 cap: every slave given that slave's limits is a relaxation
+    in which all are interchangeable."""
+    big = max(sc.disk_r2[k] for k in sc.slaves)
+    disk = tuple(big if i in sc.slaves else r2 for i, r2 in enumerate(sc.disk_r2))
+    return (dataclasses.replace(sc, disk_r2=disk),
+            max(sc.slaves, key=lambda k: slave_ranges.c8_cap(sc, k)))
 
 
 def _cells(sc: Problem, k: int, r0a: float, r0b: float, ua, ub, ba, bb):
@@ -156,22 +156,26 @@ def group_weight_bound(sc: Problem, group: tuple[int, ...], r0a: float, r0b: flo
 
 def interval_bound(sc: Problem, r0a: float, r0b: float, cell_m: float = CELL_M) -> float:
     """Lower bound on the objective over every feasible point with r0 in [r0a, r0b] (+inf:
-    none there), with columns cell_m wide."""
-    total = 0.0
-    for group in groups(sc):
-        total += group_weight_bound(sc, group, r0a, r0b, cell_m)
-        if total == -math.inf:
-            return math.inf
+    none there), with columns cell_m wide: the group bound of the relaxation (`relaxed`)."""
+    loose, k = relaxed(sc)
+    total = group_weight_bound(loose, (k,) * len(sc.slaves), r0a, r0b, cell_m)
+    if total == -math.inf:
+        return math.inf
     return float(objective_from_normalised(sc, total)) if total < math.inf else 0.0
 
 
-def certify(sc: Problem, value: float, rel_gap: float,
+def certify(sc: Problem, value: float, r0_best: float, rel_gap: float,
             deadline: float = math.inf) -> tuple[float, bool, int]:
     """(lower bound on the optimum, every master interval closed, intervals evaluated):
     bisection over r0, an interval closed when its bound is within rel_gap of `value` (a
-    feasible objective)."""
+    feasible objective at master range r0_best). When even the point interval at r0_best
+    stays open, the relaxation is not tight there (a slave's own disk or rung binds, or the
+    optimum is no chain) and the bisection is not tried: by NOT_TIGHT, as a bound's columns
+    fall differently on each interval (a few 1e-5 either way)."""
+    if interval_bound(sc, r0_best, r0_best * (1.0 + 1e-12)) < value * (1.0 - NOT_TIGHT):
+        return 0.0, False, 1
     open_iv = [(sc.r0_lo, sc.r0_hi, 0.0)]  # (r0a, r0b, a lower bound on it)
-    closed_lb, evaluated = math.inf, 0
+    closed_lb, evaluated = math.inf, 1
     while open_iv and evaluated < MAX_INTERVALS and time.monotonic() < deadline:
         nxt = []
         for a, b, _ in open_iv:

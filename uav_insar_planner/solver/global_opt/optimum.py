@@ -113,7 +113,7 @@ def _chain_first(sc: Problem, time_budget_s: float | None):
     value, point = chain_packing.chain_incumbent(sc)
     if point is None:
         return None
-    lower, closed, intervals = chain_packing.certify(sc, value, REL_GAP, deadline)
+    lower, closed, intervals = chain_packing.certify(sc, value, point[0], REL_GAP, deadline)
     return value, point, lower, closed, intervals
 
 
