@@ -47,6 +47,7 @@ SUB_ROWS = 10       # rows of a strip's column for its weight bound
 STRIP_M = 0.1       # strip width below the C8 cap (as a fraction of d_min at most STRIP_FRAC)
 STRIP_FRAC = 0.2
 NOT_TIGHT = 1e-3
+CHAIN_STARTS, CHAIN_STARTS_M = 400, 100.0  # where the incumbent's chain may start
 MAX_INTERVALS = 256  # master intervals evaluated per certificate (then the search takes over)
 
 
@@ -195,21 +196,24 @@ def certify(sc: Problem, value: float, r0_best: float, rel_gap: float,
 
 def chain_incumbent(sc: Problem):
     """(value, point) of the chain itself: the master at its smallest range, the slaves on
-    the C8 line (|b| = cap r0) d_min apart in u, the first at the look-angle limit of its
-    side (theta_max above theta_0, theta_min below), their ranges from
-    slave_sets.ranges_for at those angles (feasible by construction), then local_refine;
-    (inf, None) when neither side gives a feasible point."""
+    the C8 line (|b| = cap r0) d_min apart in u, on either side of theta_0, the first at the
+    look-angle limit or further out by up to CHAIN_STARTS_M (a station disk or the master's
+    hole may cut the line's start), their ranges from slave_sets.ranges_for at those angles
+    (feasible by construction), the best then through local_refine; (inf, None) when no
+    start gives a feasible point."""
     r0, d, k_count = sc.r0_lo, sc.p.d_min, len(sc.slaves)
     cap_b = min(slave_ranges.c8_cap(sc, k) for k in sc.slaves) * r0
     best: tuple[float, tuple | None] = (math.inf, None)
     for side, edge in ((1.0, sc.th_hi), (-1.0, sc.th_lo)):
         if side * (edge - sc.th0) <= 0:
             continue
-        u = cap_b / math.tan(abs(edge - sc.th0)) + d * np.arange(k_count)
-        th = sc.th0 + side * np.arctan2(cap_b, u)
-        f, ranges = slave_sets.ranges_for(sc, np.array([r0]), th[None])
-        if np.isfinite(f[0]) and f[0] < best[0]:
-            best = (float(f[0]), (r0, tuple(map(float, th)), tuple(map(float, ranges[0]))))
+        first = cap_b / math.tan(abs(edge - sc.th0)) + np.linspace(0.0, CHAIN_STARTS_M,
+                                                                   CHAIN_STARTS)
+        th = sc.th0 + side * np.arctan2(cap_b, first[:, None] + d * np.arange(k_count))
+        f, ranges = slave_sets.ranges_for(sc, np.full(len(first), r0), th)
+        i = int(np.argmin(f))
+        if np.isfinite(f[i]) and f[i] < best[0]:
+            best = (float(f[i]), (r0, tuple(map(float, th[i])), tuple(map(float, ranges[i]))))
     if best[1] is None:
         return best
     value, point, _ = local_refine.refine(sc, best[1], best[0])
