@@ -26,6 +26,7 @@ ordered point) and dropped when that leaves nothing.
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -42,7 +43,8 @@ class SearchResult:
     """value: best objective found (+inf: none); point: (r0, slave angles, slave ranges), the
     angles and ranges one per slave of sc.slaves; lower_bound: proven bound on the optimum
     (+inf when infeasibility is proven); exhausted: every box was closed (the certificate is
-    complete); refined: the point is local_refine's (no better box centre turned up)."""
+    complete); refined: the point is local_refine's (no better box centre turned up);
+    stopped: why an unfinished search stopped ("node limit" or "time budget")."""
 
     value: float
     point: tuple[float, tuple[float, ...], tuple[float, ...]] | None
@@ -50,6 +52,7 @@ class SearchResult:
     nodes: int
     exhausted: bool
     refined: bool = False
+    stopped: str = ""
 
 
 def interchangeable_pairs(sc: Problem) -> list[tuple[int, int]]:
@@ -205,10 +208,14 @@ def _coarse_splits(k_count: int) -> int:
 
 
 def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: int = 4096,
-           stop_when_feasible: bool = False, refine: bool = False) -> SearchResult:
+           stop_when_feasible: bool = False, refine: bool = False,
+           time_budget_s: float | None = None) -> SearchResult:
     """Best-first (in batches) branch and bound; see the module docstring. refine: take
     markedly better incumbents (up to MAX_REFINES) to their local optimum (local_refine),
-    which the optimisation wants and a feasibility test does not."""
+    which the optimisation wants and a feasibility test does not. time_budget_s: stop after
+    the round that passes it, as at the node limit (the open boxes keep the lower bound
+    valid, and `exhausted` is False)."""
+    deadline = math.inf if time_budget_s is None else time.monotonic() + time_budget_s
     if sc.r0_lo > sc.r0_hi or sc.th_lo > sc.th_hi:
         return SearchResult(math.inf, None, math.inf, 0, True)
     k_count = len(sc.slaves)
@@ -236,7 +243,7 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
         if done.any():
             closed_lb = min(closed_lb, float(lb[done].min()))
         boxes, lb = boxes[~done], lb[~done]
-        if not len(boxes) or nodes >= max_nodes:
+        if not len(boxes) or nodes >= max_nodes or time.monotonic() > deadline:
             break
         if (k_count > 1 and best_pt is None and nodes >= PROJECT_AFTER
                 and _a_slave_is_blocked(sc)):
@@ -254,8 +261,9 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
         nodes += len(boxes)
     open_lb = float(lb.min()) if len(boxes) else math.inf
     lower = min(closed_lb, open_lb, best_val)
+    stopped = "" if not len(boxes) else "node limit" if nodes >= max_nodes else "time budget"
     return SearchResult(best_val, best_pt, lower, nodes, not len(boxes),
-                        refined=best_pt is not None and best_pt is local.last)
+                        refined=best_pt is not None and best_pt is local.last, stopped=stopped)
 
 
 def polish(sc: Problem, point, steps, iterations: int = 80):

@@ -12,13 +12,19 @@ infeasible set and the message adds the smallest sets whose removal alone makes 
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 
 from uav_insar_planner import model
 from uav_insar_planner.params import Params
 from uav_insar_planner.solver import power, rays
-from uav_insar_planner.solver.global_opt import branch_bound, infeasibility, local_refine
+from uav_insar_planner.solver.global_opt import (
+    branch_bound,
+    chain_packing,
+    infeasibility,
+    local_refine,
+)
 from uav_insar_planner.solver.problem import Problem, make_problem
 from uav_insar_planner.solver.result import SolverResult
 from uav_insar_planner.swarm import MASTER
@@ -28,6 +34,10 @@ from uav_insar_planner.swarm import MASTER
 REL_GAP = 5e-5
 # The compass search after SLSQP starts at this fraction of the domain's widths.
 POLISH_STEP = 1e-3
+# From this many slaves the chain's incumbent and bound (chain_packing.py) come first; the
+# branch and bound runs only when they leave a gap (its box bound needs every slave's angle
+# box narrow, which takes exponentially many boxes in K).
+CHAIN_MIN_K = 6
 
 
 def _nan_result(p: Params, nodes: int, **kw) -> SolverResult:
@@ -56,50 +66,103 @@ def formation_of(sc: Problem, point) -> np.ndarray:
     return q
 
 
-def solve_global(p: Params, scheme: str, objective: str) -> SolverResult:
+def solve_global(p: Params, scheme: str, objective: str,
+                 time_budget_s: float | None = None) -> SolverResult:
     """Global minimum of sigma_h (`exact`, eq. 15), of Proposition 1's bound (`bound`) or of
     sigma_h with the exact multilook phase std (`multilook`, multilook.phase_std in eq. 13)
-    over C1..C11 for `scheme`, with a certificate: lower_bound <= optimum <= objective."""
+    over C1..C11 for `scheme`, with a certificate: lower_bound <= optimum <= objective.
+
+    A search that reaches its node limit or `time_budget_s` (seconds of branch and bound;
+    None: no limit but the nodes) returns the best feasible plan found with its proven lower
+    bound and gap, and its message says the certificate is incomplete."""
     if scheme == "fixed-master" and not master_on_c2(p):
         return _nan_result(p, 0, blocking=["C2"], lower_bound=math.inf,
                            certificate="q0_fixed violates C2", message="q0_fixed is off the "
                            "master's look-angle line x0 = x_t - z0 tan(theta_0)")
     sc = make_problem(p, scheme, objective)
+    clock = time.monotonic()
+    chain = _chain_first(sc, time_budget_s)
+    if chain is not None and chain[3]:
+        value, point, lower, _, intervals = chain
+        return _feasible(p, scheme, sc, value, point, lower, "", (
+            f"chain packing bound (solver/global_opt/chain_packing.py) over {intervals} "
+            "master-range intervals, all closed"), intervals)
+    left = None if time_budget_s is None else max(0.0, time_budget_s - (time.monotonic() - clock))
     # Two slaves or fewer: the exact inner solve already makes the incumbents good.
-    res = branch_bound.search(sc, rel_gap=REL_GAP, refine=len(sc.slaves) > 2)
-    if res.point is None:
-        block = infeasibility.irreducible_set(p, scheme)
-        _, fixes = infeasibility.blocking_sets(p, scheme)
-        relax = ("; relaxing any of these alone makes it feasible: "
-                 + ", ".join("+".join(s) for s in fixes)) if fixes else ""
-        together = " + ".join(block) + (" cannot hold together" if len(block) > 1
-                                        else " cannot be met") + relax
-        if not res.exhausted:
-            return _nan_result(p, res.nodes, blocking=block, lower_bound=res.lower_bound,
-                               message="no feasible point found and infeasibility not proven "
-                               f"within {res.nodes} boxes; " + together)
-        return _nan_result(p, res.nodes, blocking=block, lower_bound=math.inf,
-                           certificate="infeasible: every box of ("
-                           + ", ".join(["r0"] + [f"theta{k}" for k in sc.slaves])
-                           + ") proven empty by interval bounds of the C1-C11 range limits",
-                           message=together)
-    # The search's incumbent is within REL_GAP of the optimum; SLSQP on the ray coordinates
-    # takes it to the optimum's vertex (value <= the incumbent's, re-checked on the ray model),
-    # and a compass search on the angles stands in when SLSQP ends off the feasible set.
-    value, point, landed = res.value, res.point, res.refined
-    if not landed:
-        value, point, landed = local_refine.refine(sc, point, value)
-    if not landed:
-        widths = (sc.r0_hi - sc.r0_lo,) + (sc.th_hi - sc.th_lo,) * len(sc.slaves)
-        value, point = branch_bound.polish(sc, point, [POLISH_STEP * w for w in widths])
-    lower = min(res.lower_bound, value)
-    q = formation_of(sc, point)
+    res = branch_bound.search(sc, rel_gap=REL_GAP, refine=len(sc.slaves) > 2,
+                              time_budget_s=left)
+    if res.point is None and (chain is None or chain[1] is None):
+        return _no_point(p, scheme, sc, res)
+    value, point, lower = _search_point(sc, res, chain)
     gap = (value - lower) / value
     dims = ", ".join(["r0"] + [f"theta{k}" for k in sc.slaves])
+    return _feasible(p, scheme, sc, value, point, lower, "" if res.exhausted else (
+        f"certificate incomplete: {res.stopped} reached; the best feasible plan found, "
+        f"proven within {gap:.2g} of the optimum"), (
+        f"branch and bound over ({dims}) boxes with monotone interval bounds; "
+        f"{res.nodes} boxes, " + ("all closed" if res.exhausted else f"{res.stopped} reached")),
+        res.nodes)
+
+
+def _chain_first(sc: Problem, time_budget_s: float | None):
+    """For CHAIN_MIN_K slaves or more: (value, point, lower, closed, intervals) of the chain's
+    incumbent and bound (chain_packing.py), None when it does not apply or finds no point."""
+    if len(sc.slaves) < CHAIN_MIN_K or not chain_packing.applies(sc):
+        return None
+    deadline = math.inf if time_budget_s is None else time.monotonic() + time_budget_s
+    value, point = chain_packing.chain_incumbent(sc)
+    if point is None:
+        return None
+    lower, closed, intervals = chain_packing.certify(sc, value, point[0], REL_GAP, deadline)
+    return value, point, lower, closed, intervals
+
+
+def _search_point(sc: Problem, res: branch_bound.SearchResult, chain):
+    """(value, point, lower) from the search (and the chain's, when it ran): the incumbent
+    taken to the optimum's vertex, the better of the two, the larger proven bound."""
+    value, point, lower = math.inf, None, res.lower_bound
+    if res.point is not None:
+        # The search's incumbent is within REL_GAP of the optimum; SLSQP on the ray
+        # coordinates takes it to the optimum's vertex (value <= the incumbent's, re-checked
+        # on the ray model), and a compass search on the angles stands in when SLSQP ends
+        # off the feasible set.
+        value, point, landed = res.value, res.point, res.refined
+        if not landed:
+            value, point, landed = local_refine.refine(sc, point, value)
+        if not landed:
+            widths = (sc.r0_hi - sc.r0_lo,) + (sc.th_hi - sc.th_lo,) * len(sc.slaves)
+            value, point = branch_bound.polish(sc, point, [POLISH_STEP * w for w in widths])
+    if chain is not None:
+        if chain[0] < value:
+            value, point = chain[0], chain[1]
+        lower = max(lower, chain[2])  # both are proven lower bounds
+    return value, point, min(lower, value)
+
+
+def _feasible(p: Params, scheme: str, sc: Problem, value: float, point, lower: float,
+              message: str, certificate: str, iterations: int) -> SolverResult:
+    q = formation_of(sc, point)
     return SolverResult(
-        feasible=True, formation=q, p_com=power.schedules(p, q, scheme), iterations=res.nodes,
-        lower_bound=lower, gap=gap,
-        certificate=(f"branch and bound over ({dims}) boxes with monotone interval bounds; "
-                     f"{res.nodes} boxes, " + ("all closed" if res.exhausted
-                                               else "node limit reached")),
-        message="" if res.exhausted else "certificate incomplete: node limit reached")
+        feasible=True, formation=q, p_com=power.schedules(p, q, scheme),
+        iterations=iterations, lower_bound=lower, gap=(value - lower) / value,
+        certificate=certificate, message=message)
+
+
+def _no_point(p: Params, scheme: str, sc: Problem, res: branch_bound.SearchResult):
+    """The answer of a search that found no feasible point: infeasibility proven (every box
+    empty) with an irreducible set of families, or not proven within its limit."""
+    block = infeasibility.irreducible_set(p, scheme)
+    _, fixes = infeasibility.blocking_sets(p, scheme)
+    relax = ("; relaxing any of these alone makes it feasible: "
+             + ", ".join("+".join(s) for s in fixes)) if fixes else ""
+    together = " + ".join(block) + (" cannot hold together" if len(block) > 1
+                                    else " cannot be met") + relax
+    if not res.exhausted:
+        return _nan_result(p, res.nodes, blocking=block, lower_bound=res.lower_bound,
+                           message="no feasible point found and infeasibility not proven "
+                           f"within {res.nodes} boxes ({res.stopped}); " + together)
+    return _nan_result(p, res.nodes, blocking=block, lower_bound=math.inf,
+                       certificate="infeasible: every box of ("
+                       + ", ".join(["r0"] + [f"theta{k}" for k in sc.slaves])
+                       + ") proven empty by interval bounds of the C1-C11 range limits",
+                       message=together)

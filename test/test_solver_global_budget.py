@@ -1,0 +1,107 @@
+"""The certified global solver under a time budget, and swarms of up to ten UAVs.
+
+A search stopped by its budget must still hand back a feasible plan (as the independent
+checker sees it) with a proven lower bound, and say that the certificate is incomplete: never
+a silent uncertified answer. Ten UAVs with every slave at 1 Mbit/s are certified by the chain
+bound (chain_packing.py), and so is Table I's U1 at 16.95 Mbit/s beside them (the bound
+relaxes every slave to the loosest disk); the bound is checked at random feasible formations
+and against the branch and bound alone.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from uav_insar_planner.evaluate import evaluate
+from uav_insar_planner.params import default_params
+from uav_insar_planner.solver.global_opt import branch_bound, chain_packing, slave_sets
+from uav_insar_planner.solver.global_opt.optimum import REL_GAP, solve_global
+from uav_insar_planner.solver.problem import make_problem
+from uav_insar_planner.swarm import MAX_UAVS
+
+
+def swarm(num_uavs: int):
+    """Table I with `num_uavs` UAVs, every slave at 1 Mbit/s (the master keeps 10)."""
+    return default_params().replace(num_uavs=num_uavs,
+                                    rate_min_mbps=[10.0] + [1.0] * (num_uavs - 1))
+
+
+def test_ten_uavs_are_a_swarm():
+    assert MAX_UAVS == 10
+    assert swarm(10).num_uavs == 10
+
+
+@pytest.mark.parametrize("budget_s", [0.0, 0.05])
+def test_budget_reached_returns_the_best_feasible_plan_and_its_gap(budget_s):
+    p = swarm(10)
+    res = solve_global(p, "proposed", "exact", time_budget_s=budget_s)
+    ev = evaluate(p, res.formation, res.p_com, "proposed")
+    assert res.feasible and ev.feasible, ev.violated
+    assert "certificate incomplete: time budget reached" in res.message
+    assert "time budget reached" in res.certificate
+    assert f"{res.gap:.2g}" in res.message
+    # The gap is the proven one: the bound is below the plan's own (independent) sigma_h.
+    assert 0.0 < res.gap < 0.05
+    assert res.lower_bound <= ev.sigma_h * (1.0 + 1e-9)
+    assert math.isclose(res.gap, (ev.sigma_h - res.lower_bound) / ev.sigma_h, rel_tol=1e-6)
+
+
+def test_a_budget_the_search_does_not_need_changes_nothing():
+    p = swarm(3)
+    free = solve_global(p, "proposed", "exact")
+    timed = solve_global(p, "proposed", "exact", time_budget_s=60.0)
+    assert free.message == timed.message == ""
+    assert timed.gap <= 1e-4
+    assert (timed.formation == free.formation).all()
+
+
+@pytest.mark.parametrize("u1_mbps", [1.0, 16.95])
+def test_ten_uavs_at_1_mbit_are_certified_and_pass_the_independent_check(u1_mbps):
+    p = swarm(10).replace(rate_min_mbps=[10.0, u1_mbps] + [1.0] * 8)
+    res = solve_global(p, "proposed", "exact")
+    ev = evaluate(p, res.formation, res.p_com, "proposed")
+    assert res.feasible and ev.feasible, ev.violated
+    assert res.message == "" and "all closed" in res.certificate
+    assert res.gap <= 1e-4
+    assert res.lower_bound <= ev.sigma_h * (1.0 + 1e-9)
+    assert math.isclose(res.gap, (ev.sigma_h - res.lower_bound) / ev.sigma_h, rel_tol=1e-6)
+    # sigma_h falls as sigma_1 / sqrt(K) at best: nine slaves cannot beat one slave's optimum
+    # over three, and the chain loses little to it
+    one = solve_global(swarm(2), "proposed", "exact")
+    sigma_1 = one.lower_bound / (1.0 - one.gap)
+    assert sigma_1 / 3.0 * (1.0 - 1e-4) <= ev.sigma_h <= sigma_1 / 3.0 * 1.01
+
+
+@pytest.mark.parametrize("num_uavs", [7])
+def test_the_chain_bound_agrees_with_the_branch_and_bound(num_uavs):
+    sc = make_problem(swarm(num_uavs), "proposed", "exact")
+    chained = solve_global(swarm(num_uavs), "proposed", "exact")
+    assert "chain packing" in chained.certificate and chained.gap <= 1e-4
+    boxes = branch_bound.search(sc, rel_gap=REL_GAP, refine=True)
+    assert boxes.exhausted
+    # each certificate's lower bound is below the other's plan
+    assert chained.lower_bound <= boxes.value * (1.0 + 1e-12)
+    assert boxes.lower_bound <= chained.lower_bound / (1.0 - chained.gap) * (1.0 + 1e-12)
+
+
+def test_the_chain_bound_holds_at_random_feasible_formations():
+    rng = np.random.default_rng(7)
+    table_i_grown = default_params().replace(num_uavs=7, rate_min_mbps=[10.0, 16.95] + [1.0] * 5)
+    for num_uavs, p in ((3, swarm(3)), (6, swarm(6)), (10, swarm(10)), (7, table_i_grown)):
+        sc = make_problem(p, "proposed", "exact")
+        n = 4000
+        r0 = sc.r0_lo + (sc.r0_hi - sc.r0_lo) * rng.random(n) ** 3
+        # angles near theta_max, where the optimum's chain is, and anywhere
+        th = np.where(rng.random((n, len(sc.slaves))) < 0.7,
+                      sc.th_hi - 0.03 * rng.random((n, len(sc.slaves))),
+                      rng.uniform(sc.th_lo, sc.th_hi, (n, len(sc.slaves))))
+        f, _ = slave_sets.ranges_for(sc, r0, np.sort(th, axis=1))
+        feasible = np.flatnonzero(np.isfinite(f))
+        assert len(feasible) > 12
+        for i in feasible[np.argsort(f[feasible])[:12]]:
+            for width in (1e-6, 1e-3, 0.1):
+                a = max(sc.r0_lo, r0[i] * (1.0 - width))
+                lb = chain_packing.interval_bound(sc, a, r0[i] * (1.0 + width))
+                assert lb <= f[i] * (1.0 + 1e-12), (num_uavs, r0[i], width)
