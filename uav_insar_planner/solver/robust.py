@@ -1,0 +1,190 @@
+"""Robust plans: every UAV anywhere within e = nav_error_m of its planned point.
+
+The robust problem (P_e). A formation q is robust-feasible when C1 and C3-C11 hold at every
+q' with ||q_k' - q_k|| <= e for each flown UAV k (the across-track plane), with the plan's own
+power schedule; C2 (the master on its look-angle line) binds the planned point only. Its
+value is the worst case max over those q' of the fused sigma_h (eq. 15); (P_e) minimises it.
+
+Certified tightening (`tightened`): a nominal problem whose every feasible point is
+robust-feasible, written in the scenario's own parameters, so any back end that solves (P)
+solves it. With r_0,lo the master's least range and r_lo a slave's (both from the tightened
+C1 and C5), a = asin(e / r_lo) and c_k = lambda sin(theta_0) / h_amb,k^min:
+
+- C1: z in [z_min + e, z_max - e]; C4: d_min + 2e (both exact);
+- C9-C11: the station disk's radius less e and the schedule sized for rho_k + e
+  (solver/power.py; exact);
+- C3: [theta_min + a, theta_max - a] (look angles move at most asin(e / r_k) <= a);
+- C7: gamma_Rg^min raised to the larger gamma_Rg at the C7 interval's ends moved inwards by a,
+  so the new interval lies a inside the old one (gamma_Rg is unimodal, eq. 10);
+- C5: S_min + Theta e max(1 / cos(theta_0), 1 / cos^2(theta_max) + 2 / cos(theta_max)):
+  the master's swath Theta r_0 / cos(theta_0) loses at most Theta e / cos(theta_0), a slave's
+  Theta r^2 / z at most Theta e (r / z) (r / z + 2) (expand r^2 / z - (r - e)^2 / (z + e));
+- C6: gamma_SNR^min (1 + e / r_0,lo)^(5/2) (1 + e / r_lo)^(1/2): 1 / gamma_SNR^2 =
+  (1 + r_0^3 / gamma_m)(1 + r_0^2 r_k / gamma_m) grows at most by that factor squared when both
+  ranges grow by e (eq. 7);
+- C8: b_perp,k <= c_k' r_0 with c_k' = c_k - (2 + c_k) e / r_0,lo, so that
+  b_perp,k + 2e <= c_k (r_0 - e) for every r_0 >= r_0,lo (b_perp moves at most 2e, r_0 at most
+  e); one h_amb_min for every rung: the largest lambda sin(theta_0) / (c_k' rho^(k-1)).
+
+The worst case. The nominal optimum over the tightened set keeps the master near its least
+range, but the worst case gains from a longer one (b_perp - 2e grows with r_0). So the master's
+range floor f (a raised S_min, `tightened(floor_m=f)`) is searched on a grid and the plan with
+the least certified worst case (solver/worst_case.py) is returned: `sigma_h_worst_m`, an upper
+bound of sigma_h over the disks. Every plan is checked by `worst_case.robust_slacks` before it
+is returned.
+
+Lower bound (the gap). A relaxation of (P_e) (`relaxed`): C1, C4 and C9-C11 tightened exactly,
+S_min + Theta e (a UAV moved e towards the target keeps its swath only so), everything else
+nominal; every robust-feasible point is feasible for it and its worst case is at least its
+sigma_h there, so the back end's certified lower bound on it is a lower bound of (P_e). It
+omits the error's effect on sigma_h itself, so the gap is loose (measured in
+docs/science/robust.md). When the relaxation is proven infeasible, so is (P_e), blocked by its
+blocking families; when only the tightening is, the plan is infeasible without a proof.
+"""
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from uav_insar_planner import model
+from uav_insar_planner.params import Params
+from uav_insar_planner.solver.problem import c7_sines, make_problem
+from uav_insar_planner.solver.result import SolverResult
+from uav_insar_planner.solver.worst_case import WorstCase, robust_slacks, worst_sigma
+
+# The master-range floors tried: this many on a grid, then as many between the best's
+# neighbours, up to FLOOR_SPAN times the least range.
+FLOOR_POINTS = 7
+FLOOR_SPAN = 0.6
+SEARCH_TOL = 1e-2  # worst-case bound's tolerance while searching; WORST_TOL at the end
+ALMOST_ONE = 1.0 - 1e-12
+
+Backend = Callable[[Params, str, str], SolverResult]
+
+
+@dataclass(frozen=True)
+class RobustAnswer:
+    """The back end's answer for the chosen tightening, and the worst-case figures."""
+
+    result: SolverResult
+    worst: WorstCase | None
+    lower_bound: float
+    certificate: str
+
+
+def _master_least_range(p: Params, scheme: str) -> float:
+    c0 = math.cos(p.theta0)
+    least = max(p.z_min / c0, p.swath_min * c0 / p.beamwidth)
+    if scheme == "fixed-master":
+        least = min(least, math.hypot(p.master_fixed[0] - p.x_t, p.master_fixed[1]))
+    return least
+
+
+def tightened(p: Params, scheme: str, floor_m: float = 0.0) -> Params:
+    """The certified tightening of (P) for p.nav_error_m (module docstring), with the master's
+    range at least floor_m. e = 0 and no floor: p itself."""
+    e = p.nav_error_m
+    if e == 0.0 and floor_m == 0.0:
+        return p
+    c0, cmax = math.cos(p.theta0), math.cos(p.theta_max)
+    swath = p.swath_min + p.beamwidth * e * max(1.0 / c0, 1.0 / cmax**2 + 2.0 / cmax)
+    swath = max(swath, p.beamwidth * floor_m / c0)
+    z_min = p.z_min + e
+    t = replace(p, z_min=z_min, z_max=p.z_max - e, d_min=p.d_min + 2.0 * e, swath_min=swath)
+    r0_lo = _master_least_range(t, scheme)
+    r_lo = max(z_min, swath * cmax / p.beamwidth)
+    a = math.asin(min(e / r_lo, 1.0))
+    snr = p.coherence_snr_min * (1.0 + e / r0_lo) ** 2.5 * (1.0 + e / r_lo) ** 0.5
+    return replace(t, theta_min=p.theta_min + a, theta_max=p.theta_max - a,
+                   coherence_rg_min=_c7_raised(p, a), coherence_snr_min=min(snr, ALMOST_ONE),
+                   h_amb_min=_c8_raised(p, e, r0_lo))
+
+
+def _c7_raised(p: Params, a: float) -> float:
+    """gamma_Rg^min whose C7 interval lies a inside p's (module docstring)."""
+    sines = c7_sines(p)
+    if sines is None or a == 0.0:
+        return p.coherence_rg_min
+    bp = p.radar_bandwidth_hz / p.center_frequency_hz
+    ends = [math.asin(min(sines[0], 1.0)) + a]
+    if sines[1] < 1.0:
+        ends.append(math.asin(sines[1]) - a)
+    if ends[0] > p.theta0 or (len(ends) > 1 and ends[1] < p.theta0):
+        return ALMOST_ONE  # nothing is left of the interval
+    raised = max(float(model.coherence_baseline(model.chi(p.theta0, t), bp)) for t in ends)
+    return min(max(raised, p.coherence_rg_min), ALMOST_ONE)
+
+
+def _c8_raised(p: Params, e: float, r0_lo: float) -> float:
+    """h_amb^min with b_perp,k + 2e <= c_k (r_0 - e) for every r_0 >= r0_lo (docstring)."""
+    if e == 0.0:
+        return p.h_amb_min
+    s = p.wavelength * math.sin(p.theta0)
+    need = p.h_amb_min
+    for k in range(1, p.num_uavs):
+        c = s / model.h_amb_min_of(p, k)
+        c_new = c - (2.0 + c) * e / r0_lo
+        if c_new <= 0.0:
+            return math.inf  # no baseline survives: C8 leaves nothing
+        need = max(need, s / (c_new * p.h_amb_ratio ** (k - 1)))
+    return need
+
+
+def relaxed(p: Params) -> Params:
+    """A relaxation of (P_e) (module docstring): C1, C4, C9-C11 exact, S_min + Theta e."""
+    e = p.nav_error_m
+    return replace(p, z_min=p.z_min + e, z_max=p.z_max - e, d_min=p.d_min + 2.0 * e,
+                   swath_min=p.swath_min + p.beamwidth * e)
+
+
+def _floors(p: Params, scheme: str, objective: str) -> list[float]:
+    pr = make_problem(tightened(p, scheme), scheme, objective)
+    if pr.fixed_master or not pr.r0_lo < pr.r0_hi:
+        return [0.0]
+    top = min(pr.r0_hi, pr.r0_lo * (1.0 + FLOOR_SPAN))
+    return [float(f) for f in np.linspace(pr.r0_lo, top, FLOOR_POINTS)]
+
+
+def solve(p: Params, scheme: str, objective: str, run: Backend) -> RobustAnswer:
+    """The robust plan for p.nav_error_m > 0 by the back end `run` (module docstring)."""
+    relax = run(relaxed(p), scheme, objective)
+    if not relax.feasible and relax.lower_bound == math.inf:
+        return RobustAnswer(relax, None, math.inf, "robust problem infeasible: its relaxation "
+                            f"(C1, C4, C5, C9-C11 tightened by e) is: {relax.certificate}")
+    tried: dict[float, tuple[float, SolverResult, WorstCase] | None] = {}
+
+    def attempt(floor: float) -> None:
+        res = run(tightened(p, scheme, floor), scheme, objective)
+        if not res.feasible:
+            tried[floor] = None
+            return
+        ok = all(c.ok for c in robust_slacks(p, res.formation, res.p_com, scheme).values())
+        worst = worst_sigma(p, res.formation, scheme, SEARCH_TOL)
+        tried[floor] = (worst.upper, res, worst) if ok else None
+
+    grid = _floors(p, scheme, objective)
+    for f in grid:
+        attempt(f)
+    done = {f: v for f, v in tried.items() if v is not None}
+    if not done:
+        first = run(tightened(p, scheme), scheme, objective)
+        return RobustAnswer(replace(first, feasible=False, message=(
+            "no formation of the certified tightening survives the navigation error; not "
+            "proven infeasible (the relaxation has one)")), None, relax.lower_bound,
+            "robust problem: no plan found, infeasibility not proven")
+    best = min(done, key=lambda f: done[f][0])
+    i = grid.index(best)
+    for f in np.linspace(grid[max(i - 1, 0)], grid[min(i + 1, len(grid) - 1)], FLOOR_POINTS):
+        if float(f) not in tried:
+            attempt(float(f))
+    done = {f: v for f, v in tried.items() if v is not None}
+    _, res, _ = done[min(done, key=lambda f: done[f][0])]
+    worst = worst_sigma(p, res.formation, scheme)
+    # the relaxation's bound is on sigma_h only when sigma_h is what the back end minimised
+    lower = relax.lower_bound if objective == "exact" else math.nan
+    return RobustAnswer(res, worst, lower, (
+        f"worst case over {worst.squares} squares of the master's error disk, each slave's "
+        "by monotone bounds; lower bound: the relaxation's certified optimum"))
