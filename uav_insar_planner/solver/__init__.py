@@ -30,6 +30,7 @@ from uav_insar_planner.params import (
     SOLVERS,
     ParamError,
     Params,
+    nav_error_problems,
     objective_problems,
 )
 from uav_insar_planner.plan import Plan
@@ -65,7 +66,8 @@ def solve(params: Params, scheme: str | None = None, objective: str | None = Non
         if value not in allowed:
             raise ParamError([f"{field}: value {value!r} is not allowed; expected one of "
                               + ", ".join(allowed)])
-    if problems := objective_problems(objective, solver):
+    if problems := (objective_problems(objective, solver)
+                    + nav_error_problems(params.nav_error_m, solver)):
         raise ParamError(problems)
     run = backend(solver)  # a lean install's ModuleNotFoundError is no solver bug
     start = time.perf_counter()

@@ -152,8 +152,11 @@ def solve(p: Params, scheme: str, objective: str, run: Backend) -> RobustAnswer:
     """The robust plan for p.nav_error_m > 0 by the back end `run` (module docstring)."""
     relax = run(relaxed(p), scheme, objective)
     if not relax.feasible and relax.lower_bound == math.inf:
-        return RobustAnswer(relax, None, math.inf, "robust problem infeasible: its relaxation "
-                            f"(C1, C4, C5, C9-C11 tightened by e) is: {relax.certificate}")
+        return RobustAnswer(replace(relax, message=(
+            f"no formation keeps C1, C3-C11 with every UAV anywhere within "
+            f"{p.nav_error_m:g} m of its point: " + relax.message)), None, math.inf,
+            "robust problem infeasible: its relaxation (C1, C4, C5, C9-C11 tightened by e) "
+            f"is: {relax.certificate}")
     tried: dict[float, tuple[float, SolverResult, WorstCase] | None] = {}
 
     def attempt(floor: float) -> None:
@@ -186,5 +189,5 @@ def solve(p: Params, scheme: str, objective: str, run: Backend) -> RobustAnswer:
     # the relaxation's bound is on sigma_h only when sigma_h is what the back end minimised
     lower = relax.lower_bound if objective == "exact" else math.nan
     return RobustAnswer(res, worst, lower, (
-        f"worst case over {worst.squares} squares of the master's error disk, each slave's "
-        "by monotone bounds; lower bound: the relaxation's certified optimum"))
+        f"branch and bound over {worst.squares} squares of the master's error disk, each "
+        "slave's disk by monotone bounds"))
