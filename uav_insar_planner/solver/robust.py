@@ -24,7 +24,8 @@ C1 and C5), a = asin(e / r_lo) and c_k = lambda sin(theta_0) / h_amb,k^min:
   ranges grow by e (eq. 7);
 - C8: b_perp,k <= c_k' r_0 with c_k' = c_k - (2 + c_k) e / r_0,lo, so that
   b_perp,k + 2e <= c_k (r_0 - e) for every r_0 >= r_0,lo (b_perp moves at most 2e, r_0 at most
-  e); one h_amb_min for every rung: the largest lambda sin(theta_0) / (c_k' rho^(k-1)).
+  e); written as h_amb_min = lambda sin(theta_0) / c_1' (the first rung exact) and the least
+  h_amb_ratio rho' >= rho with h_amb_min rho'^(k-1) >= lambda sin(theta_0) / c_k' for every k.
 
 The worst case. The nominal optimum over the tightened set keeps the master near its least
 range, but the worst case gains from a longer one (b_perp - 2e grows with r_0). So the master's
@@ -57,7 +58,7 @@ from uav_insar_planner.solver.worst_case import WorstCase, robust_slacks, worst_
 
 # The master-range floors tried: this many on a grid, then as many between the best's
 # neighbours, up to FLOOR_SPAN times the least range.
-FLOOR_POINTS = 7
+FLOOR_POINTS = 5
 FLOOR_SPAN = 0.6
 SEARCH_TOL = 1e-2  # worst-case bound's tolerance while searching; WORST_TOL at the end
 ALMOST_ONE = 1.0 - 1e-12
@@ -76,11 +77,11 @@ class RobustAnswer:
 
 
 def _master_least_range(p: Params, scheme: str) -> float:
-    c0 = math.cos(p.theta0)
-    least = max(p.z_min / c0, p.swath_min * c0 / p.beamwidth)
+    """r_0,lo: the fixed master's own range, else the least the tightened C1 and C5 allow."""
     if scheme == "fixed-master":
-        least = min(least, math.hypot(p.master_fixed[0] - p.x_t, p.master_fixed[1]))
-    return least
+        return math.hypot(p.master_fixed[0] - p.x_t, p.master_fixed[1])
+    c0 = math.cos(p.theta0)
+    return max(p.z_min / c0, p.swath_min * c0 / p.beamwidth)
 
 
 def tightened(p: Params, scheme: str, floor_m: float = 0.0) -> Params:
@@ -98,9 +99,10 @@ def tightened(p: Params, scheme: str, floor_m: float = 0.0) -> Params:
     r_lo = max(z_min, swath * cmax / p.beamwidth)
     a = math.asin(min(e / r_lo, 1.0))
     snr = p.coherence_snr_min * (1.0 + e / r0_lo) ** 2.5 * (1.0 + e / r_lo) ** 0.5
+    h_amb_min, h_amb_ratio = _c8_raised(p, e, r0_lo)
     return replace(t, theta_min=p.theta_min + a, theta_max=p.theta_max - a,
                    coherence_rg_min=_c7_raised(p, a), coherence_snr_min=min(snr, ALMOST_ONE),
-                   h_amb_min=_c8_raised(p, e, r0_lo))
+                   h_amb_min=h_amb_min, h_amb_ratio=h_amb_ratio)
 
 
 def _c7_raised(p: Params, a: float) -> float:
@@ -118,19 +120,21 @@ def _c7_raised(p: Params, a: float) -> float:
     return min(max(raised, p.coherence_rg_min), ALMOST_ONE)
 
 
-def _c8_raised(p: Params, e: float, r0_lo: float) -> float:
-    """h_amb^min with b_perp,k + 2e <= c_k (r_0 - e) for every r_0 >= r0_lo (docstring)."""
+def _c8_raised(p: Params, e: float, r0_lo: float) -> tuple[float, float]:
+    """(h_amb^min, h_amb_ratio) with b_perp,k + 2e <= c_k (r_0 - e) for every r_0 >= r0_lo
+    (module docstring): the first rung exact, the ratio the least that covers the others."""
     if e == 0.0:
-        return p.h_amb_min
+        return p.h_amb_min, p.h_amb_ratio
     s = p.wavelength * math.sin(p.theta0)
-    need = p.h_amb_min
+    need = []
     for k in range(1, p.num_uavs):
         c = s / model.h_amb_min_of(p, k)
         c_new = c - (2.0 + c) * e / r0_lo
         if c_new <= 0.0:
-            return math.inf  # no baseline survives: C8 leaves nothing
-        need = max(need, s / (c_new * p.h_amb_ratio ** (k - 1)))
-    return need
+            return math.inf, p.h_amb_ratio  # no baseline survives: C8 leaves nothing
+        need.append(s / c_new)
+    ratio = max([p.h_amb_ratio] + [(h / need[0]) ** (1.0 / j) for j, h in enumerate(need) if j])
+    return need[0], ratio
 
 
 def relaxed(p: Params) -> Params:
