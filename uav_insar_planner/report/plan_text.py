@@ -85,9 +85,9 @@ def format_plan(plan: Plan) -> str:
 
 def robust_lines(plan: Plan) -> list[str]:
     """The worst case of a robust plan (nav_error_m > 0): sigma_h_worst_m and its gap."""
-    gap = (f"gap {plan.worst_gap:.2%} to {plan.worst_lower_bound_m:.6f} m, a relaxation's "
-           "certified optimum" if np.isfinite(plan.worst_gap) else "no lower bound for this "
-           "objective")
+    gap = (f"gap {plan.worst_gap:.2%} to {plan.worst_lower_bound_m:.6f} m, the larger of two "
+           "relaxations' certified bounds" if np.isfinite(plan.worst_gap)
+           else "no lower bound for this objective")
     return [f"worst case, nav error {plan.nav_error_m:g} m = {plan.sigma_h_worst_m:.6f} m "
             f"(certified upper bound of sigma_h with every UAV anywhere within "
             f"{plan.nav_error_m:g} m; {gap}; {plan.worst_certificate})"]
