@@ -167,3 +167,14 @@ def test_every_optimum_of_the_tightening_is_robust(name, scheme):
             held = robust_slacks(p, res.formation, res.p_com, scheme)
             assert all(c.ok for c in held.values()), (e, floor, held)
     assert solved >= 2
+
+
+def test_sweep_band_refuses_a_navigation_error_before_any_solve():
+    cli = [sys.executable, "-m", "uav_insar_planner.cli", "sweep", "nav_error_m", "0", "0.5",
+           "2", "--band", "--schemes", "proposed"]
+    proc = subprocess.run(cli, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2 and not proc.stdout
+    assert proc.stderr.strip() == (
+        "uav-insar: error: --band: not allowed with nav_error_m 0.5; expected nav_error_m 0 "
+        "(the band spreads sigma_h over the nominal bound's minimisers, a study of the nominal "
+        "problem)")

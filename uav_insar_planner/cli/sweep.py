@@ -18,7 +18,7 @@ from uav_insar_planner.cli.execution import add_execution_arguments, solving
 from uav_insar_planner.cli.output import whole_file
 from uav_insar_planner.cli.scenario import add_scenario_arguments, scenario_params
 from uav_insar_planner.exit_codes import EXIT_OK
-from uav_insar_planner.params import SCHEMES
+from uav_insar_planner.params import SCHEMES, ParamError
 
 HELP = "solve along one parameter for several schemes"
 
@@ -59,7 +59,12 @@ def main(args: argparse.Namespace) -> int:
         check_output_path("--plot", args.plot, image=True)
     values = np.linspace(args.start, args.stop, args.count)
     # every value is validated before the first solve
-    looks = max(with_value(params, *parse_sweep_name(args.name), float(v)).looks for v in values)
+    scenarios = [with_value(params, *parse_sweep_name(args.name), float(v)) for v in values]
+    looks = max(p.looks for p in scenarios)
+    if args.band and (error := max(p.nav_error_m for p in scenarios)) > 0:
+        raise ParamError([f"--band: not allowed with nav_error_m {error:g}; expected "
+                          "nav_error_m 0 (the band spreads sigma_h over the nominal bound's "
+                          "minimisers, a study of the nominal problem)"])
     mc = 0
     if args.montecarlo:
         from uav_insar_planner.cli.montecarlo import parse_samples
