@@ -126,6 +126,9 @@ def robust_plan(plan: Plan, params: Params, answer: robust.RobustAnswer) -> Plan
     held = robust_slacks(params, plan.formation, plan.p_com_w, plan.scheme)
     plan = replace(plan, sigma_h_worst_m=answer.worst.upper, robust_constraints=held,
                    worst_gap=(answer.worst.upper - answer.lower_bound) / answer.worst.upper)
+    if answer.worst.upper == float("inf"):
+        plan.message = (plan.message + "; " if plan.message else "") + (
+            "the worst case is unbounded: the error may take a pair's whole b_perp")
     failed = [n for n, c in held.items() if not c.ok]
     if failed:
         plan = replace(plan, feasible=False, blocking_constraints=failed, message=(

@@ -67,10 +67,10 @@ from uav_insar_planner.solver.problem import c7_sines, make_problem
 from uav_insar_planner.solver.result import SolverResult
 from uav_insar_planner.solver.worst_case import WorstCase, robust_slacks, worst_sigma
 
-# The master-range floors tried: this many on a grid, then as many between the best's
-# neighbours, up to FLOOR_SPAN times the least range.
+# The master-range floors tried: this many on a geometric grid up to the master interval's top
+# (at most FLOOR_SPAN times the least range), then as many between the best's neighbours.
 FLOOR_POINTS = 5
-FLOOR_SPAN = 0.6
+FLOOR_SPAN = 3.0
 SEARCH_TOL = 1e-2  # worst-case bound's tolerance while searching; WORST_TOL at the end
 ALMOST_ONE = 1.0 - 1e-12
 
@@ -175,8 +175,8 @@ def _floors(p: Params, scheme: str, objective: str) -> list[float]:
     pr = make_problem(tightened(p, scheme), scheme, objective)
     if pr.fixed_master or not pr.r0_lo < pr.r0_hi:
         return [0.0]
-    top = min(pr.r0_hi, pr.r0_lo * (1.0 + FLOOR_SPAN))
-    return [float(f) for f in np.linspace(pr.r0_lo, top, FLOOR_POINTS)]
+    top = min(pr.r0_hi, pr.r0_lo * FLOOR_SPAN)
+    return [float(f) for f in np.geomspace(pr.r0_lo, top, FLOOR_POINTS)]
 
 
 def solve(p: Params, scheme: str, objective: str, run: Backend) -> RobustAnswer:
