@@ -271,7 +271,7 @@ def per_uav_problems(clean: Mapping[str, Any], bad: set[str]) -> list[str]:
 def objective_problems(objective: Any, solver: Any) -> list[str]:
     """The objective's cross-field rule: each back end takes the objectives its declaration
     (`BACKENDS`) names; e.g. `multilook` runs on the global solver only."""
-    backend = BACKEND_BY_NAME.get(solver)
+    backend = BACKEND_BY_NAME.get(solver) if isinstance(solver, str) else None
     if backend is None or objective not in OBJECTIVES or objective in backend.objectives:
         return []
     others = [b.name for b in BACKENDS if objective in b.objectives]
@@ -283,7 +283,7 @@ def objective_problems(objective: Any, solver: Any) -> list[str]:
 def nav_error_problems(nav_error: Any, solver: Any) -> list[str]:
     """nav_error_m > 0 runs on the back ends that plan for it; the others' declaration
     (`Backend.nominal_only`) says why they refuse it."""
-    backend = BACKEND_BY_NAME.get(solver)
+    backend = BACKEND_BY_NAME.get(solver) if isinstance(solver, str) else None
     if backend is None or not backend.nominal_only or not isinstance(nav_error, float) \
             or nav_error == 0.0:
         return []
