@@ -178,3 +178,16 @@ def test_sweep_band_refuses_a_navigation_error_before_any_solve():
         "uav-insar: error: --band: not allowed with nav_error_m 0.5; expected nav_error_m 0 "
         "(the band spreads sigma_h over the nominal bound's minimisers, a study of the nominal "
         "problem)")
+
+
+def test_a_sweep_of_the_error_gains_the_worst_case_column(tmp_path):
+    from uav_insar_planner.study.sweep import csv_fields, run_sweep, write_csv
+
+    rows = run_sweep(default_params(), "nav_error_m", [0.0, 0.25], ["proposed"])
+    assert rows[0].sigma_h_worst_m == rows[0].sigma_h_m
+    assert rows[1].sigma_h_worst_m == solve(default_params().replace(
+        nav_error_m=0.25)).sigma_h_worst_m > rows[1].sigma_h_m
+    write_csv(rows, tmp_path / "s.csv", "nav_error_m")
+    assert "sigma_h_worst_m" in (tmp_path / "s.csv").read_text().splitlines()[1].split(",")
+    nominal = run_sweep(default_params(), "h_amb_min_m", [1.2], ["proposed"])
+    assert "sigma_h_worst_m" not in csv_fields(nominal)

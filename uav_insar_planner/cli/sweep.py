@@ -88,10 +88,12 @@ def main(args: argparse.Namespace) -> int:
 
 
 def _print_rows(rows: list, args: argparse.Namespace, mc: int) -> None:
-    from uav_insar_planner.study.sweep import gains
+    from uav_insar_planner.study.sweep import gains, has_worst
 
     extra = f" {'bound_opt':>10} {'band_lo':>9} {'band_hi':>9}" if args.band else ""
     extra += f" {'mc_sigma_h':>10} {'mc_amb_%':>8}" if mc else ""
+    worst = has_worst(rows)
+    extra += f" {'worst_m':>10}" if worst else ""
     print(f"{'value':>10}  {'scheme':<16} {'sigma_h_m':>10} {'bound_m':>10}{extra}  blocking")
     for r in rows:
         sh = f"{r.sigma_h_m:10.5f}" if r.feasible else f"{'infeas.':>10}"
@@ -102,6 +104,8 @@ def _print_rows(rows: list, args: argparse.Namespace, mc: int) -> None:
         if mc:
             bd += (f" {r.mc_sigma_h_m:10.5f} {100 * r.mc_ambiguity:8.2f}" if r.feasible
                    else " " * 20)
+        if worst:
+            bd += f" {r.sigma_h_worst_m:10.5f}" if r.feasible else " " * 11
         print(f"{r.value:10.4g}  {r.scheme:<16} {sh} {bd}  {r.blocking}")
     if "proposed" in args.schemes and len(args.schemes) > 1:
         for scheme, g in sorted(gains(rows).items()):
