@@ -170,3 +170,20 @@ def test_report_refuses_bad_bags_with_one_line(case, tmp_path):
     assert len(proc.stderr.strip().splitlines()) == 1, proc.stderr
     assert proc.stderr.startswith("uav-insar report: error: ")
     assert not (tmp_path / "bag_report").exists()
+
+
+def test_the_report_compares_the_flown_sigma_h_with_the_certified_worst_case(known_bag):
+    """With nav_error_m = e the report bounds the plan's worst case within e and says whether
+    the flown geometry stayed below it (uav1 flew 1.0 m off: beyond e = 0.5 m)."""
+    from uav_insar_planner.bag.reader import read_mission
+    from uav_insar_planner.report.recorded import mission_figures, report_table
+    from uav_insar_planner.solver.worst_case import worst_sigma
+
+    assert np.isnan(mission_figures(read_mission(known_bag), P).sigma_h_worst_m)
+    robust = P.replace(nav_error_m=0.5)
+    f = mission_figures(read_mission(known_bag), robust)
+    assert f.sigma_h_worst_m == worst_sigma(robust, PLANNED, "proposed").upper
+    assert f.sigma_h_worst_m > f.sigma_h_plan_m
+    held = "within it" if f.sigma_h_flown_m <= f.sigma_h_worst_m else "ABOVE it"
+    assert (f"sigma_h: certified worst case within nav_error_m = 0.5 m "
+            f"{f.sigma_h_worst_m:.4g} m; flown {held}") in report_table(f, robust)

@@ -174,3 +174,25 @@ def test_infeasible_plan_is_an_error_and_not_published(bringup):
     assert "blocked by C9, C10" in plan_status.message
     b.spin_until(lambda: False, 0.5)
     assert b.formations == [] and b.powers == []
+
+
+def test_planner_takes_nav_error_and_reports_the_worst_case(bringup):
+    """nav_error_m is a scenario parameter, so the planner takes it: it flies the robust plan
+    and puts the certified worst case on /diagnostics; a back end that plans nominal positions
+    refuses it at the set, naming the field."""
+    scenario = {**SCENARIO, "nav_error_m": 0.25}
+    plan = solve(load_params(overrides=scenario))
+    b = bringup(agents=False, scenario=scenario)
+    assert b.spin_until(lambda: b.formations and any(
+        "planner: plan" in statuses(d) for d in b.diagnostics), 30.0)
+    got = np.array([[p.position.x, p.position.z] for p in b.formations[0].poses])
+    assert np.allclose(got, plan.formation, rtol=1e-6, atol=1e-6)
+    status = next(statuses(d)["planner: plan"] for d in b.diagnostics
+                  if "planner: plan" in statuses(d))
+    values = {kv.key: kv.value for kv in status.values}
+    assert status.level == DiagnosticStatus.OK and "worst case" in status.message
+    assert float(values["nav_error_m"]) == 0.25
+    assert float(values["sigma_h_worst_m"]) == pytest.approx(plan.sigma_h_worst_m, rel=1e-5)
+    assert float(values["sigma_h_worst_m"]) > float(values["sigma_h_m"])
+    refused = b.planner.set_parameters([Parameter("solver", value="paper-ao")])[0]
+    assert not refused.successful and "nav_error_m" in refused.reason

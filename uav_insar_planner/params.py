@@ -91,6 +91,7 @@ class Params:
     looks: int
     tolerance: float
     master_fixed: tuple[float, float]
+    nav_error_m: float  # e: each UAV anywhere within e of its planned point (solver/robust.py)
     scheme: str
     objective: str
     solver: str
@@ -235,6 +236,7 @@ def validate(values: Mapping[str, Any]) -> tuple[dict[str, Any], list[str]]:
             f"allowed; expected less than slave_look_angle_max_deg "
             f"({clean['slave_look_angle_max_deg']!r})")
     problems += objective_problems(clean["objective"], clean["solver"])
+    problems += nav_error_problems(clean["nav_error_m"], clean["solver"])
     if not bad & {"swath_min_m", "look_angle_deg", "beamwidth_deg"}:
         c0 = math.cos(math.radians(clean["look_angle_deg"]))
         least = max(clean["z_min_m"] / c0 if c0 > 0 else math.inf,
@@ -269,13 +271,25 @@ def per_uav_problems(clean: Mapping[str, Any], bad: set[str]) -> list[str]:
 def objective_problems(objective: Any, solver: Any) -> list[str]:
     """The objective's cross-field rule: each back end takes the objectives its declaration
     (`BACKENDS`) names; e.g. `multilook` runs on the global solver only."""
-    backend = BACKEND_BY_NAME.get(solver)
+    backend = BACKEND_BY_NAME.get(solver) if isinstance(solver, str) else None
     if backend is None or objective not in OBJECTIVES or objective in backend.objectives:
         return []
     others = [b.name for b in BACKENDS if objective in b.objectives]
     return [f"objective: value {objective!r} is not allowed with solver {solver!r}; expected "
             f"{' or '.join(backend.objectives)} ({backend.why}), or solver "
             + " or ".join(others)]
+
+
+def nav_error_problems(nav_error: Any, solver: Any) -> list[str]:
+    """nav_error_m > 0 runs on the back ends that plan for it; the others' declaration
+    (`Backend.nominal_only`) says why they refuse it."""
+    backend = BACKEND_BY_NAME.get(solver) if isinstance(solver, str) else None
+    if backend is None or not backend.nominal_only or not isinstance(nav_error, float) \
+            or nav_error == 0.0:
+        return []
+    others = [b.name for b in BACKENDS if not b.nominal_only]
+    return [f"nav_error_m: value {shown(nav_error)} is not allowed with solver {solver!r}; "
+            f"expected 0 ({backend.nominal_only}), or solver " + " or ".join(others)]
 
 
 def params_from_mapping(values: Mapping[str, Any]) -> Params:

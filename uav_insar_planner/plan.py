@@ -68,6 +68,16 @@ class Plan:
     optimality_gap: float = float("nan")
     certificate: str = ""
     message: str = ""
+    #: Navigation error e (solver/robust.py): sigma_h_worst_m is a certified upper bound of
+    #: sigma_h with each UAV anywhere within e of its planned point (sigma_h_m at e = 0);
+    #: worst_lower_bound_m / worst_gap: a certified lower bound of the worst-case problem and
+    #: the gap to it; robust_constraints: each family's least slack over the error disks.
+    nav_error_m: float = 0.0
+    sigma_h_worst_m: float = float("nan")
+    worst_lower_bound_m: float = float("nan")
+    worst_gap: float = float("nan")
+    worst_certificate: str = ""
+    robust_constraints: dict[str, ConstraintStatus] = field(default_factory=dict)
 
     @property
     def num_uavs(self) -> int:
@@ -99,6 +109,15 @@ class Plan:
             "lower_bound_m": num(self.lower_bound_m),
             "optimality_gap": num(self.optimality_gap),
             "certificate": self.certificate,
+            "nav_error_m": float(self.nav_error_m),
+            "sigma_h_worst_m": num(self.sigma_h_worst_m),
+            "worst_lower_bound_m": num(self.worst_lower_bound_m),
+            "worst_gap": num(self.worst_gap),
+            "worst_certificate": self.worst_certificate,
+            "robust_constraints": {
+                name: {"ok": bool(c.ok), "slack": num(c.slack), "detail": c.detail}
+                for name, c in self.robust_constraints.items()
+            },
             "formation": formation,
             "p_com_w": [[float(watts) for watts in row] for row in self.p_com_w],
             "iterations": int(self.iterations),

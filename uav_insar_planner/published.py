@@ -83,6 +83,9 @@ def plan_status(plan: Plan) -> Status:
         ("sigma_h_bound_m", fmt(plan.sigma_h_bound_m)),
         ("lower_bound_m", fmt(plan.lower_bound_m)),
         ("optimality_gap", fmt(plan.optimality_gap)),
+        ("nav_error_m", fmt(plan.nav_error_m)),
+        ("sigma_h_worst_m", fmt(plan.sigma_h_worst_m)),
+        ("worst_gap", fmt(plan.worst_gap)),
     ]
     for name, pair in sorted(plan.metrics.get("pairs", {}).items()):
         values += [
@@ -98,8 +101,11 @@ def plan_status(plan: Plan) -> Status:
         ("blocking_constraints", ",".join(plan.blocking_constraints)),
     ]
     if plan.feasible:
+        worst = (f", worst case {plan.sigma_h_worst_m:.4g} m within {plan.nav_error_m:g} m"
+                 if plan.nav_error_m > 0 else "")
         message = (f"{plan.scheme} plan: sigma_h {plan.sigma_h_m:.4g} m "
-                   f"(bound {plan.sigma_h_bound_m:.4g} m), solved in {plan.solve_time_s:.3g} s")
+                   f"(bound {plan.sigma_h_bound_m:.4g} m{worst}), solved in "
+                   f"{plan.solve_time_s:.3g} s")
         return Status(OK, PLAN_STATUS_NAME, message, values)
     blocking = ", ".join(plan.blocking_constraints) or "unknown"
     message = f"{plan.scheme}: infeasible, blocked by {blocking}; not published"

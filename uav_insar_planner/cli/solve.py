@@ -50,7 +50,8 @@ def main(args: argparse.Namespace) -> int:
         d, j, k = closest
         print(f"uav-insar: warning: {uav_name(j)} and {uav_name(k)} are planned {d:.2f} m "
               f"apart, closer than {limit:g} m: with standard GNSS (1.5-3 m error) they may "
-              "collide; fly RTK or raise d_min_m", file=sys.stderr)
+              "collide; fly RTK, raise d_min_m, or plan for the error with nav_error_m",
+              file=sys.stderr)
     return EXIT_OK if plan.feasible else EXIT_INFEASIBLE
 
 

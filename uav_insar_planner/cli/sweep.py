@@ -18,7 +18,7 @@ from uav_insar_planner.cli.execution import add_execution_arguments, solving
 from uav_insar_planner.cli.output import whole_file
 from uav_insar_planner.cli.scenario import add_scenario_arguments, scenario_params
 from uav_insar_planner.exit_codes import EXIT_OK
-from uav_insar_planner.params import SCHEMES
+from uav_insar_planner.params import SCHEMES, ParamError
 
 HELP = "solve along one parameter for several schemes"
 
@@ -59,7 +59,12 @@ def main(args: argparse.Namespace) -> int:
         check_output_path("--plot", args.plot, image=True)
     values = np.linspace(args.start, args.stop, args.count)
     # every value is validated before the first solve
-    looks = max(with_value(params, *parse_sweep_name(args.name), float(v)).looks for v in values)
+    scenarios = [with_value(params, *parse_sweep_name(args.name), float(v)) for v in values]
+    looks = max(p.looks for p in scenarios)
+    if args.band and (error := max(p.nav_error_m for p in scenarios)) > 0:
+        raise ParamError([f"--band: not allowed with nav_error_m {error:g}; expected "
+                          "nav_error_m 0 (the band spreads sigma_h over the nominal bound's "
+                          "minimisers, a study of the nominal problem)"])
     mc = 0
     if args.montecarlo:
         from uav_insar_planner.cli.montecarlo import parse_samples
@@ -83,10 +88,12 @@ def main(args: argparse.Namespace) -> int:
 
 
 def _print_rows(rows: list, args: argparse.Namespace, mc: int) -> None:
-    from uav_insar_planner.study.sweep import gains
+    from uav_insar_planner.study.sweep import gains, has_worst
 
     extra = f" {'bound_opt':>10} {'band_lo':>9} {'band_hi':>9}" if args.band else ""
     extra += f" {'mc_sigma_h':>10} {'mc_amb_%':>8}" if mc else ""
+    worst = has_worst(rows)
+    extra += f" {'worst_m':>10}" if worst else ""
     print(f"{'value':>10}  {'scheme':<16} {'sigma_h_m':>10} {'bound_m':>10}{extra}  blocking")
     for r in rows:
         sh = f"{r.sigma_h_m:10.5f}" if r.feasible else f"{'infeas.':>10}"
@@ -97,6 +104,8 @@ def _print_rows(rows: list, args: argparse.Namespace, mc: int) -> None:
         if mc:
             bd += (f" {r.mc_sigma_h_m:10.5f} {100 * r.mc_ambiguity:8.2f}" if r.feasible
                    else " " * 20)
+        if worst:
+            bd += f" {r.sigma_h_worst_m:10.5f}" if r.feasible else " " * 11
         print(f"{r.value:10.4g}  {r.scheme:<16} {sh} {bd}  {r.blocking}")
     if "proposed" in args.schemes and len(args.schemes) > 1:
         for scheme, g in sorted(gains(rows).items()):

@@ -27,7 +27,9 @@ class Backend:
     (`solver.solve`), the objective rule (`params.objective_problems`) and the documentation's
     table of back ends all read `BACKENDS`. `entry` is "module:function" of its
     solve(params, scheme, objective) -> SolverResult, imported on first use (a lean install
-    lacks scipy and CVXPY); `why` says why the other objectives are not offered."""
+    lacks scipy and CVXPY); `why` says why the other objectives are not offered;
+    `nominal_only`, when set, is why it refuses nav_error_m > 0 (it plans nominal positions
+    only; solver/robust.py serves the back ends that take it)."""
 
     name: str
     entry: str
@@ -35,16 +37,19 @@ class Backend:
     certified: bool
     summary: str
     why: str = ""
+    nominal_only: str = ""
 
 
 BACKENDS = (
     Backend("global", "uav_insar_planner.solver.global_opt.optimum:solve_global", OBJECTIVES,
             True, "certified"),
     Backend("paper-ao", "uav_insar_planner.solver.ao.algorithm2:solve_ao", ("exact", "bound"),
-            False, "Algorithm 2", "paper-ao minimises Proposition 1's bound"),
+            False, "Algorithm 2", "paper-ao minimises Proposition 1's bound",
+            "paper-ao's convex sub-problems have no robust counterpart of the worst case"),
     Backend("evolution", "uav_insar_planner.solver.evolution.algorithm:solve_evolution",
             ("exact", "bound"), False, "differential evolution, no certificate",
-            "its baseline searches the Cramer-Rao objectives"),
+            "its baseline searches the Cramer-Rao objectives",
+            "its baseline has no certificate, so no certified worst case"),
 )
 SOLVERS = tuple(b.name for b in BACKENDS)
 BACKEND_BY_NAME = {b.name: b for b in BACKENDS}
@@ -162,6 +167,11 @@ PARAM_SPECS: tuple[ParamSpec, ...] = (
        0.0, 1.0, True),
     _f("master_fixed_xz_m", [-54.0, 74.0], "q0_fixed = (x_0, z_0) for the fixed-master scheme "
        "[m]", -LENGTH_MAX_M, LENGTH_MAX_M, length=2, why=_LENGTH_WHY, si_name="master_fixed"),
+    _f("nav_error_m", 0.0, "e, navigation error [m]: each UAV may fly anywhere within e of its "
+       "planned point in the across-track (x, z) plane; the plan keeps C1 and C3-C11 at every "
+       "such position with its own power schedule and minimises the worst-case sigma_h "
+       "(solver/robust.py); 0 plans the nominal points (the paper's)", 0.0, 100.0,
+       why="100 m at most, far beyond any GNSS error a formation flies with"),
     ParamSpec("scheme", str, "proposed", "which scheme to solve", choices=SCHEMES),
     ParamSpec("objective", str, "exact", "exact: minimise sigma_h; bound: Proposition 1; "
               "multilook: sigma_h with the exact multilook phase std", choices=OBJECTIVES),

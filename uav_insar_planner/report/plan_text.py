@@ -59,6 +59,8 @@ def format_plan(plan: Plan) -> str:
     if np.isfinite(plan.lower_bound_m):
         lines.append(f"certified lower bound           = {plan.lower_bound_m:.6f} m "
                      f"(gap {plan.optimality_gap:.2e}; {plan.certificate})")
+    if plan.nav_error_m > 0:
+        lines += robust_lines(plan)
     lines += ["", "interferometric pairs:",
               "  pair       b_m  b_perp_m  h_amb_m  coh_Rg  coh_SNR  coh_tot  SNR_0  SNR_k  "
               "sigma_hk_m"]
@@ -72,4 +74,20 @@ def format_plan(plan: Plan) -> str:
     for name, c in plan.constraints.items():
         lines.append(f"  {name:<4} {'ok  ' if c.ok else 'FAIL'}  slack {c.slack:12.6g}  "
                      f"[{c.detail}]  {CONSTRAINT_TEXT[name]}")
+    if plan.robust_constraints:
+        lines += ["", f"worst case over the error disks (every UAV within {plan.nav_error_m:g} m; "
+                  "least slack, exact or conservative):"]
+        for name, c in plan.robust_constraints.items():
+            lines.append(f"  {name:<4} {'ok  ' if c.ok else 'FAIL'}  slack {c.slack:12.6g}  "
+                         f"[{c.detail}]")
     return "\n".join(lines)
+
+
+def robust_lines(plan: Plan) -> list[str]:
+    """The worst case of a robust plan (nav_error_m > 0): sigma_h_worst_m and its gap."""
+    gap = (f"gap {plan.worst_gap:.2%} to {plan.worst_lower_bound_m:.6f} m, the larger of two "
+           "relaxations' certified bounds" if np.isfinite(plan.worst_gap)
+           else "no lower bound for this objective")
+    return [f"worst case, nav error {plan.nav_error_m:g} m = {plan.sigma_h_worst_m:.6f} m "
+            f"(certified upper bound of sigma_h with every UAV anywhere within "
+            f"{plan.nav_error_m:g} m; {gap}; {plan.worst_certificate})"]

@@ -7,12 +7,18 @@ CVXPY + Clarabel) and `evolution` (solver/evolution/, seeded differential evolut
 certificate). They never import each other; what they need (the statement of (P) in
 problem.py, the station disk in power.py, the start grid, the deletion filter in blocking.py,
 SolverResult) lives here in solver/.
+
+With nav_error_m = e > 0 (robust.py) the back end solves the certified tightening of (P); the
+plan then carries its certified worst-case sigma_h over the error disks
+(`Plan.sigma_h_worst_m`), the worst-case constraint slacks (`Plan.robust_constraints`) and the
+lower bound and gap of the worst-case problem. At e = 0 nothing of that path runs.
 """
 from __future__ import annotations
 
 import importlib
 import time
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 
@@ -24,10 +30,13 @@ from uav_insar_planner.params import (
     SOLVERS,
     ParamError,
     Params,
+    nav_error_problems,
     objective_problems,
 )
 from uav_insar_planner.plan import Plan
+from uav_insar_planner.solver import robust
 from uav_insar_planner.solver.result import SolverResult
+from uav_insar_planner.solver.worst_case import robust_slacks
 
 
 class SolverFailure(RuntimeError):
@@ -57,12 +66,18 @@ def solve(params: Params, scheme: str | None = None, objective: str | None = Non
         if value not in allowed:
             raise ParamError([f"{field}: value {value!r} is not allowed; expected one of "
                               + ", ".join(allowed)])
-    if problems := objective_problems(objective, solver):
+    if problems := (objective_problems(objective, solver)
+                    + nav_error_problems(params.nav_error_m, solver)):
         raise ParamError(problems)
     run = backend(solver)  # a lean install's ModuleNotFoundError is no solver bug
     start = time.perf_counter()
+    answer = None
     try:
-        result = run(params, scheme, objective)
+        if params.nav_error_m > 0.0:
+            answer = robust.solve(params, scheme, objective, run)
+            result = answer.result
+        else:
+            result = run(params, scheme, objective)
         elapsed = time.perf_counter() - start
         ev = evaluate(params, result.formation, result.p_com, scheme, objective) if np.isfinite(
             result.formation[0, 0]) else None
@@ -78,7 +93,7 @@ def solve(params: Params, scheme: str | None = None, objective: str | None = Non
         blocking = ev.violated
         message = (message + "; " if message else "") + "independent check failed: " + ", ".join(
             f"{n} (slack {ev.constraints[n].slack:.3g})" for n in ev.violated)
-    return Plan(
+    plan = Plan(
         feasible=feasible,
         scheme=scheme,
         objective=objective,
@@ -96,4 +111,27 @@ def solve(params: Params, scheme: str | None = None, objective: str | None = Non
         optimality_gap=result.gap,
         certificate=result.certificate,
         message=message,
+        sigma_h_worst_m=ev.sigma_h if ev else float("nan"),
     )
+    return plan if answer is None else robust_plan(plan, params, answer)
+
+
+def robust_plan(plan: Plan, params: Params, answer: robust.RobustAnswer) -> Plan:
+    """`plan` with the worst case of robust.solve's answer, checked over the error disks
+    (worst_case.robust_slacks); a plan failing that check is reported infeasible."""
+    plan = replace(plan, nav_error_m=params.nav_error_m, worst_lower_bound_m=answer.lower_bound,
+                   worst_certificate=answer.certificate)
+    if answer.worst is None or not plan.feasible:
+        return replace(plan, sigma_h_worst_m=float("nan"))
+    held = robust_slacks(params, plan.formation, plan.p_com_w, plan.scheme)
+    plan = replace(plan, sigma_h_worst_m=answer.worst.upper, robust_constraints=held,
+                   worst_gap=(answer.worst.upper - answer.lower_bound) / answer.worst.upper)
+    if answer.worst.upper == float("inf"):
+        plan.message = (plan.message + "; " if plan.message else "") + (
+            "the worst case is unbounded: the error may take a pair's whole b_perp")
+    failed = [n for n, c in held.items() if not c.ok]
+    if failed:
+        plan = replace(plan, feasible=False, blocking_constraints=failed, message=(
+            plan.message + "; " if plan.message else "") + "worst-case check failed: " + ", ".join(
+            f"{n} (slack {held[n].slack:.3g})" for n in failed))
+    return plan

@@ -38,6 +38,9 @@ class SweepRow:
     # its fused ambiguity rate without resolution (montecarlo.py); NaN when not run.
     mc_sigma_h_m: float = float("nan")
     mc_ambiguity: float = float("nan")
+    # The plan's certified worst-case sigma_h within nav_error_m (solver/robust.py; sigma_h_m
+    # at 0): a column only where some row planned for an error (`has_worst`).
+    sigma_h_worst_m: float = float("nan")
 
 
 def parse_sweep_name(text: str, field: str = "sweep NAME") -> tuple[str, int | None]:
@@ -111,7 +114,8 @@ def solve_point(p: Params, value: float, scheme: str, objective: str | None,
                     bound_opt, lo, hi, plan.optimality_gap, plan.solve_time_s,
                     " ".join(plan.blocking_constraints),
                     *(_montecarlo(p, plan, montecarlo) if montecarlo and plan.feasible
-                      else ()))
+                      else (float("nan"),) * 2),
+                    sigma_h_worst_m=plan.sigma_h_worst_m)
 
 
 def _montecarlo(p: Params, plan, samples: int) -> tuple[float, float]:
@@ -123,11 +127,19 @@ def _montecarlo(p: Params, plan, samples: int) -> tuple[float, float]:
 
 
 def csv_fields(rows: Sequence[SweepRow]) -> list[str]:
-    """The CSV columns of `rows`: every field, the Monte-Carlo ones only when they were run."""
+    """The CSV columns of `rows`: every field, the Monte-Carlo ones only when they were run, the
+    worst case only when a navigation error was planned for."""
     fields = list(asdict(rows[0]).keys()) if rows else ["value"]
     if not any(np.isfinite(r.mc_sigma_h_m) for r in rows):  # the default columns only
         fields = [f for f in fields if not f.startswith("mc_")]
+    if not has_worst(rows):
+        fields = [f for f in fields if f != "sigma_h_worst_m"]
     return fields
+
+
+def has_worst(rows: Sequence[SweepRow]) -> bool:
+    """Did some row plan for a navigation error (its worst case above its sigma_h)?"""
+    return any(r.feasible and r.sigma_h_worst_m != r.sigma_h_m for r in rows)
 
 
 def write_csv(rows: Sequence[SweepRow], path: str | Path, name: str) -> None:
