@@ -172,6 +172,10 @@ PARAM_SPECS: tuple[ParamSpec, ...] = (
        "such position with its own power schedule and minimises the worst-case sigma_h "
        "(solver/robust.py); 0 plans the nominal points (the paper's)", 0.0, 100.0,
        why="100 m at most, far beyond any GNSS error a formation flies with"),
+    _f("time_budget_s", 0.0, "seconds the global solver's search may take: past them it "
+       "returns the best feasible plan found with its proven gap and says the certificate is "
+       "incomplete; 0: no limit but the search's node limit", 0.0, 3600.0,
+       why="an hour at most: a plan is wanted before the flight"),
     ParamSpec("scheme", str, "proposed", "which scheme to solve", choices=SCHEMES),
     ParamSpec("objective", str, "exact", "exact: minimise sigma_h; bound: Proposition 1; "
               "multilook: sigma_h with the exact multilook phase std", choices=OBJECTIVES),

@@ -73,8 +73,11 @@ def solve_global(p: Params, scheme: str, objective: str,
     over C1..C11 for `scheme`, with a certificate: lower_bound <= optimum <= objective.
 
     A search that reaches its node limit or `time_budget_s` (seconds of branch and bound;
-    None: no limit but the nodes) returns the best feasible plan found with its proven lower
-    bound and gap, and its message says the certificate is incomplete."""
+    None: the scenario's `p.time_budget_s`, where 0 is no limit but the nodes) returns the best
+    feasible plan found with its proven lower bound and gap, and its message says the
+    certificate is incomplete."""
+    if time_budget_s is None and p.time_budget_s > 0.0:
+        time_budget_s = p.time_budget_s
     if scheme == "fixed-master" and not master_on_c2(p):
         return _nan_result(p, 0, blocking=["C2"], lower_bound=math.inf,
                            certificate="q0_fixed violates C2", message="q0_fixed is off the "
