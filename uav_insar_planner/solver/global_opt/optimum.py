@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -109,6 +110,8 @@ def solve_global(p: Params, scheme: str, objective: str,
                               keep_leaves=warm_start is not None)
     if res.point is None and (chain is None or chain[1] is None):
         return _no_point(p, scheme, sc, res, warm_start)
+    if start is not None and res.point is start[1]:
+        res = replace(res, refined=True)  # the refined warm point stood: no second SLSQP
     value, point, lower = _search_point(sc, res, chain)
     if warm_start is not None:
         warm.remember(warm_start, sc, point, res)
@@ -167,23 +170,30 @@ def _feasible(p: Params, scheme: str, sc: Problem, value: float, point, lower: f
 
 
 def warm_incumbent(p: Params, sc: Problem, state: warm.WarmStart):
-    """(value, point) of the previous sweep point's optimum at this point's parameters, or
-    None: its master range and angles (cut to the new domain) with their slave ranges solved
-    afresh on the ray model, accepted only when that finds them feasible and the independent
-    checker (evaluate.py) passes the formation."""
+    """(value, point) of the previous sweep point's optimum carried to this point's
+    parameters, or None. Its master range and angles (cut to the new domain) get their slave
+    ranges solved afresh on the ray model; unless that reproduces the previous point exactly,
+    SLSQP (local_refine) takes it to its local optimum here, from the previous ranges when the
+    fresh ones are infeasible (a tighter C8 rung), since box centres may miss the new optimum
+    by a percent where the feasible set is thin. Only a point the ray model accepts and whose
+    formation passes the independent checker (evaluate.py) is returned."""
     if state.point is None or len(state.point[1]) != len(sc.slaves):
         return None
     r0 = float(np.clip(state.point[0], sc.r0_lo, sc.r0_hi))
     th = np.clip(np.asarray(state.point[1], dtype=float), sc.th_lo, sc.th_hi)
     with np.errstate(all="ignore"):
         f, ranges = slave_sets.ranges_for(sc, np.array([r0]), th[None])
-    if not np.isfinite(f[0]):
+    value = float(f[0])
+    point = (r0, tuple(map(float, th)),
+             tuple(map(float, ranges[0])) if math.isfinite(value) else state.point[2])
+    if point != state.point or not math.isfinite(value):
+        value, point, _ = local_refine.refine(sc, point, value)
+    if not math.isfinite(value):
         return None
-    point = (r0, tuple(map(float, th)), tuple(map(float, ranges[0])))
     q = formation_of(sc, point)
     if not evaluate(p, q, power.schedules(p, q, sc.scheme), sc.scheme, sc.objective).feasible:
         return None
-    return float(f[0]), point
+    return value, point
 
 
 def _no_point(p: Params, scheme: str, sc: Problem, res: branch_bound.SearchResult,
