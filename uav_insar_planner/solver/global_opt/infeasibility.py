@@ -11,7 +11,10 @@ Two facts save trials, neither a guess: every superset of a family set proven in
 infeasible (so a trial that still holds a proven set needs no search: the previous sweep
 point's irreducible set, once proven again here, decides most trials of the filter), and a
 relaxation that makes the scenario feasible must drop a family of every infeasible set (so
-`blocking_sets` tries only the sets that meet the proven irreducible set).
+`blocking_sets` tries only the sets that meet the proven irreducible set). Along a sweep,
+`witnesses` keeps the feasible point each relaxation's search found; at the next point a
+witness that the ray model still accepts inside the new domain proves that relaxation feasible
+without a search (slave_sets.ranges_for, the search's own test of a feasible point).
 """
 from __future__ import annotations
 
@@ -23,7 +26,7 @@ import numpy as np
 from uav_insar_planner.params import Params
 from uav_insar_planner.solver import blocking
 from uav_insar_planner.solver.global_opt import branch_bound
-from uav_insar_planner.solver.problem import make_problem
+from uav_insar_planner.solver.problem import Problem, make_problem
 from uav_insar_planner.solver.start_grid import find_start
 
 # Boxes of the feasibility search before the start grid decides (a proof near a feasibility
@@ -31,16 +34,39 @@ from uav_insar_planner.solver.start_grid import find_start
 DECIDE_NODES = (2_000, 40_000)
 
 
-def feasible_without(p: Params, scheme: str, off: frozenset[str],
-                     max_nodes: int = 50_000) -> bool:
-    """True when a feasible point of (P) minus the families `off` is found."""
-    sc = make_problem(p, scheme, "bound", off)
-    res = branch_bound.search(sc, max_nodes=max_nodes, stop_when_feasible=True)
+Witnesses = dict[frozenset[str], tuple]
+
+
+def _witnessed(sc: Problem, witnesses: Witnesses | None) -> bool:
+    """Does the kept feasible point of the relaxation sc.off still hold for sc?"""
+    point = witnesses.get(sc.off) if witnesses is not None else None
+    if point is None or len(point[1]) != len(sc.slaves):
+        return False
+    th = np.asarray(point[1], dtype=float)
+    if not (sc.r0_lo <= point[0] <= sc.r0_hi and np.all((th >= sc.th_lo) & (th <= sc.th_hi))):
+        return False
+    with np.errstate(all="ignore"):
+        return bool(np.isfinite(branch_bound.point_value(sc, point)))
+
+
+def _found(sc: Problem, res: branch_bound.SearchResult, witnesses: Witnesses | None) -> bool:
+    if res.point is not None and witnesses is not None:
+        witnesses[sc.off] = res.point
     return res.point is not None
 
 
-def blocking_sets(p: Params, scheme: str, max_size: int = 3,
-                  within: Iterable[str] = ()) -> tuple[list[str], list[list[str]]]:
+def feasible_without(p: Params, scheme: str, off: frozenset[str], max_nodes: int = 50_000,
+                     witnesses: Witnesses | None = None) -> bool:
+    """True when a feasible point of (P) minus the families `off` is found."""
+    sc = make_problem(p, scheme, "bound", off)
+    if _witnessed(sc, witnesses):
+        return True
+    res = branch_bound.search(sc, max_nodes=max_nodes, stop_when_feasible=True)
+    return _found(sc, res, witnesses)
+
+
+def blocking_sets(p: Params, scheme: str, max_size: int = 3, within: Iterable[str] = (),
+                  witnesses: Witnesses | None = None) -> tuple[list[str], list[list[str]]]:
     """(first, all): smallest family sets whose removal makes the scenario feasible, in the
     order C1..C11; ([], []) when none of size <= max_size does. `within`: a family set proven
     infeasible (irreducible_set's, when proven): only sets meeting it are tried."""
@@ -49,40 +75,44 @@ def blocking_sets(p: Params, scheme: str, max_size: int = 3,
         for size in range(1, max_size + 1):
             found = [list(s) for s in combinations(blocking.FAMILIES, size)
                      if (not need or need & set(s))
-                     and feasible_without(p, scheme, frozenset(s))]
+                     and feasible_without(p, scheme, frozenset(s), witnesses=witnesses)]
             if found:
                 return found[0], found
     return [], []
 
 
-def decide_families(p: Params, scheme: str, on: frozenset[str]) -> tuple[bool, bool]:
+def decide_families(p: Params, scheme: str, on: frozenset[str],
+                    witnesses: Witnesses | None = None) -> tuple[bool, bool]:
     """(feasible, proven): is (P) with only the families `on` (plus C2) feasible? The branch
     and bound decides most cases in milliseconds, both ways, and a few near a feasibility edge
     with more boxes (DECIDE_NODES); when it runs out undecided (few families left make its box
     huge), the closed-form start grid decides, and an infeasible verdict is then not proven."""
     sc = make_problem(p, scheme, "bound", frozenset(blocking.FAMILIES) - on)
+    if _witnessed(sc, witnesses):
+        return True, True
     for max_nodes in DECIDE_NODES:
         with np.errstate(all="ignore"):
             res = branch_bound.search(sc, max_nodes=max_nodes, stop_when_feasible=True)
         if res.point is not None or res.exhausted:
-            return res.point is not None, True
+            return _found(sc, res, witnesses), True
     found = find_start(p, scheme, on | {"C2"}, first=True) is not None
     return found, found
 
 
-def irreducible_set(p: Params, scheme: str,
-                    hint: Iterable[str] = ()) -> tuple[list[str], bool]:
+def irreducible_set(p: Params, scheme: str, hint: Iterable[str] = (),
+                    witnesses: Witnesses | None = None) -> tuple[list[str], bool]:
     """(families, proven): the deletion filter over FAMILIES with `decide_families` as the
     test: families that cannot hold together, each needed for that; proven: their
     infeasibility is the branch and bound's proof, not the start grid's verdict. `hint` (the
     previous sweep point's set) saves the trials that hold it, once it is proven infeasible
-    here (module docstring); the result is the one without the hint."""
+    here (module docstring); the result is the one without the hint. `witnesses`: see the
+    module docstring."""
     proofs: dict[frozenset[str], bool] = {}
 
     def feasible(on: frozenset[str]) -> bool:
         if any(not ok and known <= on for known, ok in proofs.items()):
             return False  # holds a proven infeasible set
-        ok, proven = decide_families(p, scheme, on)
+        ok, proven = decide_families(p, scheme, on, witnesses)
         if proven:
             proofs[on] = ok
         return ok

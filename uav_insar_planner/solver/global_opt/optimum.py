@@ -201,8 +201,10 @@ def _no_point(p: Params, scheme: str, sc: Problem, res: branch_bound.SearchResul
     """The answer of a search that found no feasible point: infeasibility proven (every box
     empty) with an irreducible set of families, or not proven within its limit."""
     hint = state.blocking if state is not None else ()
-    block, proven = infeasibility.irreducible_set(p, scheme, hint)
-    _, fixes = infeasibility.blocking_sets(p, scheme, within=block if proven else ())
+    seen = state.witnesses if state is not None else None
+    block, proven = infeasibility.irreducible_set(p, scheme, hint, seen)
+    _, fixes = infeasibility.blocking_sets(p, scheme, within=block if proven else (),
+                                           witnesses=seen)
     if state is not None:
         state.used_blocking = bool(hint) and proven and tuple(block) == tuple(hint)
         warm.remember(state, sc, None, res, tuple(block) if proven else ())

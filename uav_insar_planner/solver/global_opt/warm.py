@@ -13,13 +13,15 @@ search and writes it after. Nothing of it is trusted at the new point:
   ordered region is no larger) and the new master-range and angle intervals inside the old
   ones (`start_boxes` cuts the boxes to them); every bound is computed afresh on them;
 - the previous irreducible infeasible set is a hint for the deletion filter only when the
-  branch and bound proves it infeasible at the new point (infeasibility.irreducible_set).
+  branch and bound proves it infeasible at the new point, and the feasible points found for
+  its relaxations (`witnesses`) count only where the new ray model accepts them
+  (infeasibility.py).
 
 So a warm solve certifies what a cold one does, to the same gap; only its route differs.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -41,6 +43,7 @@ class WarmStart:
     leaves: np.ndarray | None = None
     domain: tuple | None = None
     blocking: tuple[str, ...] = ()
+    witnesses: dict = field(default_factory=dict)
     used_incumbent: bool = False
     used_leaves: bool = False
     used_blocking: bool = False
