@@ -173,23 +173,21 @@ def warm_incumbent(p: Params, sc: Problem, state: warm.WarmStart):
     """(value, point) of the previous sweep point's optimum carried to this point's
     parameters, or None. Its master range and angles (cut to the new domain) get their slave
     ranges solved afresh on the ray model; unless that reproduces the previous point exactly,
-    SLSQP (local_refine) takes it to its local optimum here, from the previous ranges when the
-    fresh ones are infeasible (a tighter C8 rung), since box centres may miss the new optimum
-    by a percent where the feasible set is thin. Only a point the ray model accepts and whose
-    formation passes the independent checker (evaluate.py) is returned."""
+    SLSQP (local_refine) takes it to its local optimum here, since box centres may miss the new
+    optimum by a percent where the feasible set is thin. Only a point the ray model accepts and
+    whose formation passes the independent checker (evaluate.py) is returned. (SLSQP from a
+    point the ray model rejects was tried: it fails slowly where the new point is infeasible.)"""
     if state.point is None or len(state.point[1]) != len(sc.slaves):
         return None
     r0 = float(np.clip(state.point[0], sc.r0_lo, sc.r0_hi))
     th = np.clip(np.asarray(state.point[1], dtype=float), sc.th_lo, sc.th_hi)
     with np.errstate(all="ignore"):
         f, ranges = slave_sets.ranges_for(sc, np.array([r0]), th[None])
-    value = float(f[0])
-    point = (r0, tuple(map(float, th)),
-             tuple(map(float, ranges[0])) if math.isfinite(value) else state.point[2])
-    if point != state.point or not math.isfinite(value):
-        value, point, _ = local_refine.refine(sc, point, value)
-    if not math.isfinite(value):
+    if not np.isfinite(f[0]):
         return None
+    value, point = float(f[0]), (r0, tuple(map(float, th)), tuple(map(float, ranges[0])))
+    if point != state.point:
+        value, point, _ = local_refine.refine(sc, point, value)
     q = formation_of(sc, point)
     if not evaluate(p, q, power.schedules(p, q, sc.scheme), sc.scheme, sc.objective).feasible:
         return None
