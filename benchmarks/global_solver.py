@@ -63,7 +63,8 @@ def cold_sweep(name: str, index: int | None, values, base) -> tuple[float, list]
 
 def sweep(name: str, index: int | None, values, base):
     """(seconds, largest gap, table lines, largest relative sigma_h difference to the cold
-    solves, the cold solves' seconds) of the sweep through the sweep runner."""
+    solves (inf where the feasibility or the blocking constraints differ), the cold solves'
+    seconds) of the sweep through the sweep runner."""
     label = name if index is None else f"{name}[{index}]"
     start = time.perf_counter()
     rows = run_sweep(base, label, values, SCHEMES, objective="exact", solver="global",
@@ -75,8 +76,9 @@ def sweep(name: str, index: int | None, values, base):
         cells = []
         for row, plan in zip(rows[i * len(SCHEMES):(i + 1) * len(SCHEMES)],
                              plans[i * len(SCHEMES):(i + 1) * len(SCHEMES)], strict=True):
-            if row.feasible != plan.feasible:
-                diff = float("inf")
+            if (row.feasible, row.blocking) != (plan.feasible,
+                                                " ".join(plan.blocking_constraints)):
+                diff = float("inf")  # feasibility or blocking constraints differ
             if row.feasible:
                 worst_gap = max(worst_gap, row.optimality_gap)
                 diff = max(diff, abs(row.sigma_h_m / plan.sigma_h_m - 1.0))
