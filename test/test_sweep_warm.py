@@ -46,8 +46,10 @@ def test_the_sweep_runner_gives_the_cold_rows_through_an_infeasible_stretch() ->
     (the carried irreducible set and witnesses only save trials)."""
     base = default_params().replace(**FIG4)
     values = [16.5, 17.0, 17.5, 18.0]
+    ticks = []
     rows = run_sweep(base, "rate_min_mbps[1]", values, ["single-baseline", "static-power"],
-                     objective="exact", solver="global")
+                     objective="exact", solver="global", progress=lambda: ticks.append(1))
+    assert len(ticks) == 8  # once per solve, though a task is a chain of solves
     for row in rows:
         cold = solve(_rate(base, row.value), scheme=row.scheme, objective="exact",
                      solver="global")
