@@ -124,7 +124,8 @@ def solve(params: Params, scheme: str | None = None, objective: str | None = Non
 def new_warm_start(solver: str) -> object | None:
     """A fresh warm start for a sequence of solves with back end `solver` (None when it takes
     none); it is not shared between schemes or objectives."""
-    module, _, cls = BACKEND_BY_NAME[solver].warm_start.partition(":")
+    declared = BACKEND_BY_NAME.get(solver)  # an unknown name is solve's one-line error
+    module, _, cls = declared.warm_start.partition(":") if declared else ("", "", "")
     return getattr(importlib.import_module(module), cls)() if module else None
 
 
