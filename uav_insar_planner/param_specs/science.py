@@ -29,7 +29,9 @@ class Backend:
     solve(params, scheme, objective) -> SolverResult, imported on first use (a lean install
     lacks scipy and CVXPY); `why` says why the other objectives are not offered;
     `nominal_only`, when set, is why it refuses nav_error_m > 0 (it plans nominal positions
-    only; solver/robust.py serves the back ends that take it)."""
+    only; solver/robust.py serves the back ends that take it); `warm_start`, when set, is
+    "module:Class" of the state its solve function takes as keyword `warm_start` along a
+    sweep (a fresh instance per sequence of solves)."""
 
     name: str
     entry: str
@@ -38,11 +40,13 @@ class Backend:
     summary: str
     why: str = ""
     nominal_only: str = ""
+    warm_start: str = ""
 
 
 BACKENDS = (
     Backend("global", "uav_insar_planner.solver.global_opt.optimum:solve_global", OBJECTIVES,
-            True, "certified"),
+            True, "certified",
+            warm_start="uav_insar_planner.solver.global_opt.warm:WarmStart"),
     Backend("paper-ao", "uav_insar_planner.solver.ao.algorithm2:solve_ao", ("exact", "bound"),
             False, "Algorithm 2", "paper-ao minimises Proposition 1's bound",
             "paper-ao's convex sub-problems have no robust counterpart of the worst case"),
