@@ -18,6 +18,7 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from std_srvs.srv import Trigger
 
 from uav_insar_planner.demo.processes import stop_nodes
+from uav_insar_planner.ros.formation_start import RESTARTED_DELAY_S
 from uav_insar_sim.vehicle.simulator import SimVehicle
 
 pytestmark = pytest.mark.timeout(90)
@@ -137,7 +138,8 @@ def test_a_planner_killed_and_started_again_resumes_where_the_swarm_holds(watche
         again = procs("planner", "-p", "capture_radius_m:=0.0")
         assert w.spin_until(lambda: all(v.mode == "GUIDED" for v in swarm), 30.0,
                             [again, bridge]), [v.mode for v in swarm]
-        w.spin_until(lambda: False, 4.0)  # flying the pass again
+        # the resume waits for every bridge to find the new planner, then flies the pass again
+        w.spin_until(lambda: False, RESTARTED_DELAY_S + 4.0)
         flown = along() - held
     finally:
         watching.set()

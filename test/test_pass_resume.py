@@ -121,6 +121,7 @@ def test_every_uav_behind_resumes_the_pass_from_the_rearmost(watcher, procs):
                               [planner]), [s.frame_id for s in bridges.starts]
     resumed = next(s for s in bridges.starts if " at " in s.frame_id)
     plan_id, t_start, offset = decode_start(resumed, time.time())
+    watcher.spin_until(lambda: False, 1.0)  # its log line follows the start it sent
     codes = stop_nodes([planner])
     assert codes == [0]
     log = planner.stdout.read()

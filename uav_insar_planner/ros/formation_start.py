@@ -20,7 +20,8 @@ the instant, then fly on at v_y; never a catch-up to an old clock):
 - a planner started again finds the UAVs on their tracks past the start line (each fresh,
   within ON_TRACK_M across track and height of its line, before the end of the pass): the
   pass resumes from the rearmost UAV, at once if the swarm is still flying the dead planner's
-  clock (moving at more than half v_y), else after `start_delay_s`. Said in one line.
+  clock (moving at more than half v_y), else after `start_delay_s` and at least
+  RESTARTED_DELAY_S (every bridge must find the new planner first). Said in one line.
 - every flown UAV's bridge reports it `behind` on this planner's pass (held by a ground
   silence, too far behind its target to rejoin, e.g. this planner froze): the same resume.
 - some, not all, report it for longer than BEHIND_GRACE_S: each is declared lost
@@ -67,6 +68,11 @@ BEHIND_FRESH_S = 3.0
 # A swarm still flying is resumed on an instant this far in the past (more than the bridges'
 # trajectory.JOIN_GRACE_S): they take it as a running pass and do not ramp up from a hover.
 MOVING_BACKDATE_S = 1.0
+# A planner started again hears the UAVs' poses before every bridge has found it (DDS
+# discovers each direction on its own): a resume from the hover then starts no sooner than
+# this. A CI run at 10 % loss: a bridge heard the new planner's start 3.4 s after it was sent,
+# too late for start_delay_s 2 s, and its UAV, 6 m behind a target already moving, was lost.
+RESTARTED_DELAY_S = 5.0
 # A capture that takes longer than this is said, with who is missing and why, this often: a
 # copter's boot and climb take a minute, a vehicle that never arrives must not be silent.
 WAIT_LOG_PERIOD_S = 15.0
@@ -253,8 +259,8 @@ class FormationStart:
                 self._declare_lost(k, why)  # (the bridge's words: "... cannot keep the pass")
             return
         if rear is not None:
-            self._resume(rear, delay, "the UAVs are on their tracks past the start line "
-                                      "(this planner started again?)")
+            self._resume(rear, max(delay, RESTARTED_DELAY_S), "the UAVs are on their tracks "
+                         "past the start line (this planner started again?)")
             return
         with self._lock:
             if not all_captured(starts, self._poses, now, radius):
