@@ -279,7 +279,7 @@ def _cut(a: float, b: float, r0_best: float) -> list[tuple[float, float]]:
         return [(a, mid), (mid, b)]
     near = NEAR_CUT * (b - a)
     cuts = sorted({a, max(a, r0_best - near), min(b, r0_best + near), b})
-    return [(x, y) for x, y in zip(cuts, cuts[1:]) if y > x]
+    return [(x, y) for x, y in zip(cuts[:-1], cuts[1:], strict=True) if y > x]
 
 
 def chain_incumbent(sc: Problem):
