@@ -100,32 +100,38 @@ def _order(boxes: np.ndarray, pairs: list[tuple[int, int]]) -> np.ndarray:
 R0_WEIGHT_FEW, R0_WEIGHT_MANY = 2.0, 8.0
 
 
-def _split_dim(sc: Problem, b: np.ndarray) -> np.ndarray:
-    """Which coordinate to halve (0: r0, j + 1: slave j's angle): the one whose width most
-    loosens the bound. The objective's relative sensitivity is about 1/|tan(theta - theta_0)|
-    per radian of a slave angle (b_perp), plus the coherence terms; the bound's per relative
-    change of r0 is R0_WEIGHT_FEW or R0_WEIGHT_MANY (see there)."""
+def _split_scores(sc: Problem, b: np.ndarray) -> np.ndarray:
+    """(n, 1 + K): how much each coordinate's width loosens the bound (0: r0, j + 1: slave
+    j's angle); the widest by this measure is halved. The objective's relative sensitivity is
+    about 1/|tan(theta - theta_0)| per radian of a slave angle (b_perp), plus the coherence
+    terms; the bound's per relative change of r0 is R0_WEIGHT_FEW or R0_WEIGHT_MANY (see
+    there)."""
     weight = R0_WEIGHT_MANY if len(sc.slaves) >= 3 else R0_WEIGHT_FEW
     with np.errstate(divide="ignore"):  # a box from r0 = 0 is infinitely wide: split r0
         r0w = weight * (b[:, R0B] - b[:, R0A]) / b[:, R0A]
-    scores = [r0w]
-    for j in range(len(sc.slaves)):
-        a, z = slave_sets.angle_cols(j)
-        mid = 0.5 * (b[:, a] + b[:, z]) - sc.th0
-        sens = 1.0 / np.maximum(np.abs(np.tan(mid)), 0.02) + 3.0
-        scores.append((b[:, z] - b[:, a]) * sens)
-    return np.argmax(np.stack(scores), axis=0)
+    ta, tb = b[:, 2::2], b[:, 3::2]
+    sens = 1.0 / np.maximum(np.abs(np.tan(0.5 * (ta + tb) - sc.th0)), 0.02) + 3.0
+    return np.concatenate([r0w[:, None], (tb - ta) * sens], axis=1)
 
 
-def _split(sc: Problem, b: np.ndarray) -> np.ndarray:
-    lo_col = 2 * _split_dim(sc, b)
-    hi_col = lo_col + 1
-    rows = np.arange(len(b))
-    mid = 0.5 * (b[rows, lo_col] + b[rows, hi_col])
-    left, right = b.copy(), b.copy()
-    left[rows, hi_col] = mid
-    right[rows, lo_col] = mid
-    return np.concatenate([left, right])
+def _split(sc: Problem, b: np.ndarray, times: int = 1) -> np.ndarray:
+    """Each box halved `times` times, each time along its widest coordinate by _split_scores
+    (the children's scores taken as the parent's with the halved one halved: one evaluation
+    for all levels, unless a box still reaches r0 = 0)."""
+    scores = _split_scores(sc, b)
+    for _ in range(times):
+        dim = np.argmax(scores, axis=1)
+        rows = np.arange(len(b))
+        lo_col, hi_col = 2 * dim, 2 * dim + 1
+        mid = 0.5 * (b[rows, lo_col] + b[rows, hi_col])
+        left, right = b.copy(), b.copy()
+        left[rows, hi_col] = mid
+        right[rows, lo_col] = mid
+        scores[rows, dim] *= 0.5
+        b, scores = np.concatenate([left, right]), np.concatenate([scores, scores])
+        if np.isinf(scores[:, 0]).any():
+            scores = _split_scores(sc, b)
+    return b
 
 
 PROJECT_AFTER = 20_000
@@ -221,8 +227,11 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
     k_count = len(sc.slaves)
     pairs = interchangeable_pairs(sc)
     boxes = np.array([[sc.r0_lo, sc.r0_hi] + [sc.th_lo, sc.th_hi] * k_count])
-    for _ in range(_coarse_splits(k_count)):
-        boxes = _order(_split(sc, boxes), pairs)
+    if pairs:  # order after each split: fewer boxes
+        for _ in range(_coarse_splits(k_count)):
+            boxes = _order(_split(sc, boxes), pairs)
+    else:
+        boxes = _split(sc, boxes, _coarse_splits(k_count))
     best_val, best_pt, local = math.inf, None, _LocalSearch()
     closed_lb, nodes = math.inf, len(boxes)
     parked, parked_lb = boxes[:0], np.empty(0)
@@ -256,8 +265,8 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
             parked, parked_lb = boxes[:0], lb[:0]
         # Few open boxes: bisect each several times per round (the cost of a round is mostly
         # fixed numpy overhead, so fewer, fuller rounds are faster).
-        for _ in range(max(1, min(ROUND_SPLITS, int(math.log2(batch / ROUND_FILL / len(boxes)))))):
-            boxes = _split(sc, boxes)
+        boxes = _split(sc, boxes, max(1, min(ROUND_SPLITS,
+                                             int(math.log2(batch / ROUND_FILL / len(boxes))))))
         nodes += len(boxes)
     open_lb = float(lb.min()) if len(boxes) else math.inf
     lower = min(closed_lb, open_lb, best_val)
