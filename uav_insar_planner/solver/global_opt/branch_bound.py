@@ -172,6 +172,8 @@ MAX_RESCUES = 4
 STALL_ROUNDS = 8
 # Box centres tried for a better incumbent per round: those of the smallest lower bounds.
 INCUMBENT_BOXES = 64
+# With a landed first incumbent (search's `landed`), box centres every this many rounds.
+LANDED_EVERY = 3
 
 
 def _most_promising(boxes: np.ndarray, lb: np.ndarray) -> np.ndarray:
@@ -215,12 +217,15 @@ def _coarse_splits(k_count: int) -> int:
 
 def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: int = 4096,
            stop_when_feasible: bool = False, refine: bool = False,
-           time_budget_s: float | None = None) -> SearchResult:
+           time_budget_s: float | None = None,
+           landed: tuple[float, tuple] | None = None) -> SearchResult:
     """Best-first (in batches) branch and bound; see the module docstring. refine: take
     markedly better incumbents (up to MAX_REFINES) to their local optimum (local_refine),
     which the optimisation wants and a feasibility test does not. time_budget_s: stop after
     the round that passes it, as at the node limit (the open boxes keep the lower bound
-    valid, and `exhausted` is False)."""
+    valid, and `exhausted` is False). landed: (value, point) of a feasible point at a local
+    optimum (local_refine's), the first incumbent; the box centres are then tried every
+    LANDED_EVERY rounds only (they rarely beat a vertex, and cost as much as the bound)."""
     deadline = math.inf if time_budget_s is None else time.monotonic() + time_budget_s
     if sc.r0_lo > sc.r0_hi or sc.th_lo > sc.th_hi:
         return SearchResult(math.inf, None, math.inf, 0, True)
@@ -233,6 +238,10 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
     else:
         boxes = _split(sc, boxes, _coarse_splits(k_count))
     best_val, best_pt, local = math.inf, None, _LocalSearch()
+    if landed is not None:
+        best_val, best_pt = landed
+        local.last = best_pt
+    rounds = 0
     closed_lb, nodes = math.inf, len(boxes)
     parked, parked_lb = boxes[:0], np.empty(0)
     while True:
@@ -240,11 +249,13 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
         lb = slave_sets.box_lower_bound(sc, boxes, close_at=best_val * (1.0 - rel_gap))
         keep = np.isfinite(lb)
         boxes, lb = boxes[keep], lb[keep]
-        f, pt = _incumbent(sc, _most_promising(boxes, lb))
-        if refine:
-            f, pt = local.improve(sc, f, pt, best_val * (1.0 - rel_gap), boxes, lb)
-        if f < best_val:
-            best_val, best_pt = f, pt
+        rounds += 1
+        if landed is None or rounds % LANDED_EVERY == 0:
+            f, pt = _incumbent(sc, _most_promising(boxes, lb))
+            if refine:
+                f, pt = local.improve(sc, f, pt, best_val * (1.0 - rel_gap), boxes, lb)
+            if f < best_val:
+                best_val, best_pt = f, pt
         if stop_when_feasible and best_pt is not None:
             return SearchResult(best_val, best_pt, -math.inf, nodes, False)
         boxes, lb = np.concatenate([boxes, parked]), np.concatenate([lb, parked_lb])

@@ -283,11 +283,12 @@ def _cut(a: float, b: float, r0_best: float) -> list[tuple[float, float]]:
 
 
 def chain_incumbent(sc: Problem):
-    """(value, point) of the chain itself: the master at its smallest range, the slaves on
-    the C8 line (|b| = cap r0) d_min apart in u, on either side of theta_0, the first at the
-    look-angle limit or further out by up to CHAIN_STARTS_M (a station disk or the master's
-    hole may cut the line's start), their ranges from slave_sets.ranges_for at those angles
-    (feasible by construction), the best then through local_refine; (inf, None) when no
+    """(value, point, landed) of the chain itself: the master at its smallest range, the
+    slaves on the C8 line (|b| = cap r0) d_min apart in u, on either side of theta_0, the
+    first at the look-angle limit or further out by up to CHAIN_STARTS_M (a station disk or
+    the master's hole may cut the line's start), their ranges from slave_sets.ranges_for at
+    those angles (feasible by construction), the best then through local_refine (landed: its
+    SLSQP ended on the ray model's feasible set, a local optimum); (inf, None, False) when no
     start gives a feasible point."""
     r0, d, k_count = sc.r0_lo, sc.p.d_min, len(sc.slaves)
     cap_b = min(slave_ranges.c8_cap(sc, k) for k in sc.slaves) * r0
@@ -303,6 +304,5 @@ def chain_incumbent(sc: Problem):
         if np.isfinite(f[i]) and f[i] < best[0]:
             best = (float(f[i]), (r0, tuple(map(float, th[i])), tuple(map(float, ranges[i]))))
     if best[1] is None:
-        return best
-    value, point, _ = local_refine.refine(sc, best[1], best[0])
-    return value, point
+        return best + (False,)
+    return local_refine.refine(sc, best[1], best[0])
