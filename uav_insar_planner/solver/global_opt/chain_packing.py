@@ -282,22 +282,22 @@ def _cut(a: float, b: float, r0_best: float) -> list[tuple[float, float]]:
     return [(x, y) for x, y in zip(cuts[:-1], cuts[1:], strict=True) if y > x]
 
 
-def chain_incumbent(sc: Problem):
+def chain_incumbent(sc: Problem, starts: int = CHAIN_STARTS):
     """(value, point, landed) of the chain itself: the master at its smallest range, the
     slaves on the C8 line (|b| = cap r0) d_min apart in u, on either side of theta_0, the
     first at the look-angle limit or further out by up to CHAIN_STARTS_M (a station disk or
-    the master's hole may cut the line's start), their ranges from slave_sets.ranges_for at
-    those angles (feasible by construction), the best then through local_refine (landed: its
-    SLSQP ended on the ray model's feasible set, a local optimum); (inf, None, False) when no
-    start gives a feasible point."""
+    the master's hole may cut the line's start; `starts` of them), their ranges from
+    slave_sets.ranges_for at those angles (feasible by construction), the best then through
+    local_refine unless it already meets the KKT conditions (landed: a local optimum, or
+    SLSQP ended on the ray model's feasible set); (inf, None, False) when no start gives a
+    feasible point."""
     r0, d, k_count = sc.r0_lo, sc.p.d_min, len(sc.slaves)
     cap_b = min(slave_ranges.c8_cap(sc, k) for k in sc.slaves) * r0
     best: tuple[float, tuple | None] = (math.inf, None)
     for side, edge in ((1.0, sc.th_hi), (-1.0, sc.th_lo)):
         if side * (edge - sc.th0) <= 0:
             continue
-        first = cap_b / math.tan(abs(edge - sc.th0)) + np.linspace(0.0, CHAIN_STARTS_M,
-                                                                   CHAIN_STARTS)
+        first = cap_b / math.tan(abs(edge - sc.th0)) + np.linspace(0.0, CHAIN_STARTS_M, starts)
         th = sc.th0 + side * np.arctan2(cap_b, first[:, None] + d * np.arange(k_count))
         f, ranges = slave_sets.ranges_for(sc, np.full(len(first), r0), th)
         i = int(np.argmin(f))
@@ -305,4 +305,6 @@ def chain_incumbent(sc: Problem):
             best = (float(f[i]), (r0, tuple(map(float, th[i])), tuple(map(float, ranges[i]))))
     if best[1] is None:
         return best + (False,)
+    if local_refine.at_kkt(sc, best[1]):  # already a local optimum (Table I's chain is)
+        return best + (True,)
     return local_refine.refine(sc, best[1], best[0])

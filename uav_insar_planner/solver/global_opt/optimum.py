@@ -42,6 +42,9 @@ POLISH_STEP = 1e-3
 # slaves: the chain certifies K = 3..6 in about 0.1 s each, the branch and bound takes 0.06,
 # 0.35 and 0.8 s for K = 3, 4, 5.
 CHAIN_MIN_K = 4
+# Fewer slaves: the chain's point is only the search's first incumbent (the search finds its
+# own when the chain is not the optimum), from this many starts along the C8 line.
+LANDED_STARTS = 100
 
 
 def _nan_result(p: Params, nodes: int, **kw) -> SolverResult:
@@ -129,7 +132,7 @@ def _landed_start(sc: Problem, chain):
     C8 line d_min apart (Table I), which the search then only has to certify; None when
     there is no such point (the search finds its own)."""
     if chain is None and len(sc.slaves) >= 2 and chain_packing.applies(sc):
-        value, point, landed = chain_packing.chain_incumbent(sc)
+        value, point, landed = chain_packing.chain_incumbent(sc, LANDED_STARTS)
         chain = (value, point, None, None, None, landed)
     if chain is None or chain[1] is None or not chain[5]:
         return None
