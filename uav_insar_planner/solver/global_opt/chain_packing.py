@@ -60,8 +60,10 @@ NEAR_CUT = 0.125
 
 
 def applies(sc: Problem) -> bool:
-    """The bound needs C4 (the spacing), C8 (the cap) and a master range above 0."""
-    return sc.on("C4") and sc.on("C8") and sc.p.d_min > 0 and sc.r0_lo > 0
+    """The bound needs C4 (the spacing), C8 (the cap), a master range above 0 and a
+    non-empty domain (else the search proves infeasibility at once)."""
+    return (sc.on("C4") and sc.on("C8") and sc.p.d_min > 0 and 0 < sc.r0_lo <= sc.r0_hi
+            and sc.th_lo <= sc.th_hi)
 
 
 def relaxed(sc: Problem) -> tuple[Problem, int]:
