@@ -173,7 +173,7 @@ STALL_ROUNDS = 8
 # Box centres tried for a better incumbent per round: those of the smallest lower bounds.
 INCUMBENT_BOXES = 64
 # With a landed first incumbent (search's `landed`), box centres every this many rounds.
-LANDED_EVERY = 3
+LANDED_EVERY = 5
 
 
 def _most_promising(boxes: np.ndarray, lb: np.ndarray) -> np.ndarray:

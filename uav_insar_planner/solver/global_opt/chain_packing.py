@@ -295,18 +295,21 @@ def chain_incumbent(sc: Problem, starts: int = CHAIN_STARTS):
     feasible point."""
     r0, d, k_count = sc.r0_lo, sc.p.d_min, len(sc.slaves)
     cap_b = min(slave_ranges.c8_cap(sc, k) for k in sc.slaves) * r0
-    best: tuple[float, tuple | None] = (math.inf, None)
+    sides = []  # both sides' starts in one call, the upper side first (it wins ties)
     for side, edge in ((1.0, sc.th_hi), (-1.0, sc.th_lo)):
-        if side * (edge - sc.th0) <= 0:
-            continue
-        first = cap_b / math.tan(abs(edge - sc.th0)) + np.linspace(0.0, CHAIN_STARTS_M, starts)
-        th = sc.th0 + side * np.arctan2(cap_b, first[:, None] + d * np.arange(k_count))
-        f, ranges = slave_sets.ranges_for(sc, np.full(len(first), r0), th)
-        i = int(np.argmin(f))
-        if np.isfinite(f[i]) and f[i] < best[0]:
-            best = (float(f[i]), (r0, tuple(map(float, th[i])), tuple(map(float, ranges[i]))))
-    if best[1] is None:
-        return best + (False,)
-    if local_refine.at_kkt(sc, best[1]):  # already a local optimum (Table I's chain is)
-        return best + (True,)
-    return local_refine.refine(sc, best[1], best[0])
+        if side * (edge - sc.th0) > 0:
+            first = cap_b / math.tan(abs(edge - sc.th0)) + np.linspace(0.0, CHAIN_STARTS_M,
+                                                                       starts)
+            sides.append(sc.th0 + side * np.arctan2(cap_b, first[:, None]
+                                                    + d * np.arange(k_count)))
+    if not sides:
+        return math.inf, None, False
+    th = np.concatenate(sides)
+    f, ranges = slave_sets.ranges_for(sc, np.full(len(th), r0), th)
+    i = int(np.argmin(f))
+    if not np.isfinite(f[i]):
+        return math.inf, None, False
+    value, point = float(f[i]), (r0, tuple(map(float, th[i])), tuple(map(float, ranges[i])))
+    if local_refine.at_kkt(sc, point):  # already a local optimum (Table I's chain is)
+        return value, point, True
+    return local_refine.refine(sc, point, value)
