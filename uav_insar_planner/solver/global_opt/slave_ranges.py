@@ -122,18 +122,20 @@ def slave_box(sc: Problem, k: int | tuple[int, ...], r0a, r0b, ta, tb):
                           for i in k])
     else:
         disk_r2, b_lim = sc.disk_r2[k], rays.baseline_limit(sc, r0b, k)
-    abs_lo = np.where((ta <= 0) & (tb >= 0), 0.0, np.minimum(np.abs(ta), np.abs(tb)))
-    abs_hi = np.maximum(np.abs(ta), np.abs(tb))
-    dist = angle_between(_nearest(sc.station_angle, ta, tb), sc.station_angle)
-    lo, up = np.zeros_like(ta), np.full_like(ta, math.inf)
+    abs_a, abs_b = np.abs(ta), np.abs(tb)
+    abs_lo = np.where((ta <= 0) & (tb >= 0), 0.0, np.minimum(abs_a, abs_b))
+    cos_hi = np.cos(np.maximum(abs_a, abs_b))
     if np.any(np.asarray(disk_r2) != math.inf):  # an infinite disk gives (-inf, inf)
-        ra, rb = disk_at_psi(sc, disk_r2, dist)
-        lo, up = np.maximum(lo, ra), np.minimum(up, rb)
+        ra, rb = disk_at_psi(sc, disk_r2,
+                             angle_between(_nearest(sc.station_angle, ta, tb), sc.station_angle))
+        lo, up = np.maximum(ra, 0.0), rb
+    else:
+        lo, up = np.zeros_like(ta), np.full_like(ta, math.inf)
     if sc.on("C1"):
         lo = np.maximum(lo, p.z_min / np.cos(abs_lo))
-        up = np.minimum(up, p.z_max / np.cos(abs_hi))
+        up = np.minimum(up, p.z_max / cos_hi)
     if sc.on("C5"):
-        lo = np.maximum(lo, p.swath_min * np.cos(abs_hi) / p.beamwidth)
+        lo = np.maximum(lo, p.swath_min * cos_hi / p.beamwidth)
     up = np.minimum(up, rays.snr_limit(sc, r0a))
     smin, smax = _abs_sin_range(ta - sc.th0, tb - sc.th0)
     with np.errstate(divide="ignore", invalid="ignore"):
