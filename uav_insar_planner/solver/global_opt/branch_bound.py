@@ -119,6 +119,7 @@ def _split(sc: Problem, b: np.ndarray, times: int = 1) -> np.ndarray:
     (the children's scores taken as the parent's with the halved one halved: one evaluation
     for all levels, unless a box still reaches r0 = 0)."""
     scores = _split_scores(sc, b)
+    from_zero = sc.r0_lo <= 0.0  # only then can a box's r0 score be infinite
     for _ in range(times):
         dim = np.argmax(scores, axis=1)
         rows = np.arange(len(b))
@@ -129,7 +130,7 @@ def _split(sc: Problem, b: np.ndarray, times: int = 1) -> np.ndarray:
         right[rows, lo_col] = mid
         scores[rows, dim] *= 0.5
         b, scores = np.concatenate([left, right]), np.concatenate([scores, scores])
-        if np.isinf(scores[:, 0]).any():
+        if from_zero and np.isinf(scores[:, 0]).any():
             scores = _split_scores(sc, b)
     return b
 

@@ -238,6 +238,8 @@ def pair_weight_bound(sc: Problem, r0a, one, two, w_one, w_two,
     d2 = sc.p.d_min**2
     with np.errstate(invalid="ignore"):
         inside = up1 * up1 + up2 * up2 - 2.0 * c * up1 * up2 < d2
+        if not inside.any():  # the tops are d_min apart in every box
+            return w_top
         y = lower_crossing(up1, c, d2)
         x = lower_crossing(up2, c, d2)
         # slave 2 at y below slave 1's top, slave 1 at x below slave 2's: one call for both
