@@ -21,7 +21,7 @@ import time
 import numpy as np
 
 from uav_insar_planner.params import SCHEMES, default_params
-from uav_insar_planner.study.executors import process_pool, run_serial
+from uav_insar_planner.study.executors import process_pool, serial
 from uav_insar_planner.study.grid import map_params, run_map
 from uav_insar_planner.study.sweep import run_sweep
 
@@ -47,8 +47,9 @@ def grid(n: int):
 
 def timed(study, jobs: int, pin: bool) -> tuple[float, list]:
     start = time.perf_counter()
-    if jobs == 1:
-        rows = study(run_serial)
+    if jobs == 1:  # pinned to one thread as the workers (executors.serial), as --jobs 1 is
+        with serial() as run:
+            rows = study(run)
     else:
         with process_pool(jobs, pin_threads=pin) as run:
             rows = study(run)

@@ -163,7 +163,8 @@ def test_a_ground_heard_again_soon_is_rejoined_and_late_replans_the_uav_out(lab,
     """The radio to uav2 only (ground -> UAV) cut twice: its bridge holds on the silence
     while the planner still hears its poses (issue 27's third fault: it held to the end, and
     nothing was said). Back after a short cut it rejoins the pass; after a long one it says it
-    cannot keep the pass, and the planner re-plans without it while the others fly on."""
+    cannot keep the pass, and the planner re-plans without it (on that word, or on the silence
+    of its stalled writers, whichever comes first) while the others fly on."""
     swarm = start_swarm(lab, ros_domain, tmp_path, "subnet", num_slots=SILENT_SLOTS,
                         noise_std_m=0.0)
     out, cut = swarm.out, uav_name(UAVS[-1])
@@ -181,8 +182,12 @@ def test_a_ground_heard_again_soon_is_rejoined_and_late_replans_the_uav_out(lab,
     time.sleep(LONG_CUT_S)
     lab.switch(f"restore {cut} dir=out")
     planner = out["planner"]
-    assert wait_for(lambda: planner.first(rf"{cut} lost at slot .*cannot keep the pass",
-                                          long_at), 15.0, swarm.procs()), _story(swarm)
+    # Either the bridge's word reaches the planner first, or the silence does: a CI run's bag
+    # showed uav2's poses stop reaching the ground for 3.3 s of the one-way cut (DDS gets no
+    # acknowledgement back), past uav_timeout_s. Both re-plan the UAV out.
+    assert wait_for(lambda: planner.first(
+        rf"{cut} lost at slot \d+ \(.*(cannot keep the pass|no pose, rate or offload).*re-planned "
+        rf"from slot \d+ without {cut}", long_at), 15.0, swarm.procs()), _story(swarm)
     others = [k for k in UAVS if k != UAVS[-1]]
     assert wait_for(lambda: all(out[f"agent{k}"].first(r"mission complete") for k in others),
                     SILENT_SLOTS * SLOT_S + FINISH_S, swarm.procs()), _story(swarm)

@@ -105,3 +105,15 @@ def test_the_chain_bound_holds_at_random_feasible_formations():
                 a = max(sc.r0_lo, r0[i] * (1.0 - width))
                 lb = chain_packing.interval_bound(sc, a, r0[i] * (1.0 + width))
                 assert lb <= f[i] * (1.0 + 1e-12), (num_uavs, r0[i], width)
+
+
+def test_the_scenario_budget_reaches_the_solver_and_the_plan_says_so():
+    """time_budget_s is a scenario parameter (file, CLI, node): `solve` honours it and the
+    plan keeps the honest gap and the incomplete certificate in its message."""
+    from uav_insar_planner.solver import solve
+
+    plan = solve(swarm(10).replace(time_budget_s=0.01))
+    assert plan.feasible
+    assert "certificate incomplete: time budget reached" in plan.message
+    assert 0.0 < plan.optimality_gap < 0.05
+    assert solve(swarm(10)).optimality_gap <= 1e-4  # 0: no budget, certified

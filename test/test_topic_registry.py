@@ -100,7 +100,7 @@ def _qos_problems(w, node: str) -> list[str]:
     for role, infos_of in (("publishers", w.node.get_publishers_info_by_topic),
                            ("subscribers", w.node.get_subscriptions_info_by_topic)):
         for topic, spec in expected(node, role).items():
-            want = spec.profile()
+            want = spec.profile() if role == "publishers" else spec.reader_profile()
             mine = [i for i in infos_of(topic) if i.node_name == node]
             if not mine:
                 problems.append(f"{node}: no {role[:-1]} info on {topic}")
@@ -108,7 +108,8 @@ def _qos_problems(w, node: str) -> list[str]:
                 got = info.qos_profile
                 if (got.reliability, got.durability) != (want.reliability, want.durability):
                     problems.append(f"{node} {role[:-1]} {topic}: {got.reliability.name}, "
-                                    f"{got.durability.name}; registry {spec.qos}: "
+                                    f"{got.durability.name}; registry {spec.qos}"
+                                    f"{'/' + spec.reader_qos if spec.reader_qos else ''}: "
                                     f"{want.reliability.name}, {want.durability.name}")
     return problems
 

@@ -92,6 +92,7 @@ class Params:
     tolerance: float
     master_fixed: tuple[float, float]
     nav_error_m: float  # e: each UAV anywhere within e of its planned point (solver/robust.py)
+    time_budget_s: float  # the global search's budget; 0: none (optimum.solve_global)
     scheme: str
     objective: str
     solver: str

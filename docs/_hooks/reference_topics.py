@@ -26,10 +26,17 @@ def shown_name(spec: TopicSpec) -> str:
 
 
 def qos_text(spec: TopicSpec) -> str:
-    """Reliability, durability and history depth of the publishers' profile, and its name."""
-    q = spec.profile()
+    """Reliability, durability and history depth of the publishers' profile, and its name;
+    the subscribers' too where it differs."""
+    text = _profile_text(spec.profile(), spec.qos)
+    if spec.reader_qos:
+        text += "; read as " + _profile_text(spec.reader_profile(), spec.reader_qos)
+    return text
+
+
+def _profile_text(q, name: str) -> str:
     return (f"{q.reliability.name.lower()}, {q.durability.name.lower()}, depth {q.depth} "
-            f"(`{spec.qos}`)")
+            f"(`{name}`)")
 
 
 def _nodes(names: tuple[str, ...]) -> str:

@@ -29,7 +29,9 @@ class Backend:
     solve(params, scheme, objective) -> SolverResult, imported on first use (a lean install
     lacks scipy and CVXPY); `why` says why the other objectives are not offered;
     `nominal_only`, when set, is why it refuses nav_error_m > 0 (it plans nominal positions
-    only; solver/robust.py serves the back ends that take it)."""
+    only; solver/robust.py serves the back ends that take it); `warm_start`, when set, is
+    "module:Class" of the state its solve function takes as keyword `warm_start` along a
+    sweep (a fresh instance per sequence of solves)."""
 
     name: str
     entry: str
@@ -38,11 +40,13 @@ class Backend:
     summary: str
     why: str = ""
     nominal_only: str = ""
+    warm_start: str = ""
 
 
 BACKENDS = (
     Backend("global", "uav_insar_planner.solver.global_opt.optimum:solve_global", OBJECTIVES,
-            True, "certified"),
+            True, "certified",
+            warm_start="uav_insar_planner.solver.global_opt.warm:WarmStart"),
     Backend("paper-ao", "uav_insar_planner.solver.ao.algorithm2:solve_ao", ("exact", "bound"),
             False, "Algorithm 2", "paper-ao minimises Proposition 1's bound",
             "paper-ao's convex sub-problems have no robust counterpart of the worst case"),
@@ -172,6 +176,10 @@ PARAM_SPECS: tuple[ParamSpec, ...] = (
        "such position with its own power schedule and minimises the worst-case sigma_h "
        "(solver/robust.py); 0 plans the nominal points (the paper's)", 0.0, 100.0,
        why="100 m at most, far beyond any GNSS error a formation flies with"),
+    _f("time_budget_s", 0.0, "seconds the global solver's search may take: past them it "
+       "returns the best feasible plan found with its proven gap and says the certificate is "
+       "incomplete; 0: no limit but the search's node limit", 0.0, 3600.0,
+       why="an hour at most: a plan is wanted before the flight"),
     ParamSpec("scheme", str, "proposed", "which scheme to solve", choices=SCHEMES),
     ParamSpec("objective", str, "exact", "exact: minimise sigma_h; bound: Proposition 1; "
               "multilook: sigma_h with the exact multilook phase std", choices=OBJECTIVES),

@@ -130,7 +130,8 @@ class PlannerNode(Node):
         what they say beyond the scenario's UAVs is not reported."""
         for k in range(self._watched, n):
             self.create_subscription(PoseStamped, topics.pose(k),
-                                     lambda msg, k=k: self._on_pose(k, msg), topics.DEPTH)
+                                     lambda msg, k=k: self._on_pose(k, msg),
+                                     topics.NEWEST_POSE)
             self.create_subscription(Float64, topics.achieved_rate(k),
                                      lambda msg, k=k: self._on_rate(k, msg), topics.RATE_DEPTH)
             self._plans.watch_uav(k)

@@ -47,10 +47,17 @@ GCS_HEARTBEAT_QOS = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
 # few seconds (a busy 2-core host, a planner restarting) still gets them all.
 RATE_DEPTH = 100
 DEPTH = 10
+# uavK/pose as the planner watches it (who is alive, where the markers go): best effort, so a
+# pose lost on a lossy radio is skipped, not waited for. A reliable reader delivers in order
+# and holds every later pose until the lost one is repaired: CI bags showed seconds-long gaps
+# at 30 % loss and during a one-way cut, past uav_timeout_s, while the UAV was flying.
+NEWEST_POSE = QoSProfile(depth=DEPTH, history=HistoryPolicy.KEEP_LAST,
+                         reliability=ReliabilityPolicy.BEST_EFFORT,
+                         durability=DurabilityPolicy.VOLATILE)
 #: The profiles INTERFACE names, under the names the nodes pass to rclpy (an int is rclpy's
 #: shorthand for a reliable, volatile, keep-last profile of that depth).
 QOS_PROFILES: dict[str, QoSProfile] = {
-    "LATCHED": LATCHED, "GCS_HEARTBEAT_QOS": GCS_HEARTBEAT_QOS,
+    "LATCHED": LATCHED, "GCS_HEARTBEAT_QOS": GCS_HEARTBEAT_QOS, "NEWEST_POSE": NEWEST_POSE,
     "DEPTH": QoSProfile(depth=DEPTH), "RATE_DEPTH": QoSProfile(depth=RATE_DEPTH)}
 def pose(k: int) -> str:
     """Agent k's actual position (INTERFACE has the type and QoS of this and the below)."""
@@ -92,7 +99,9 @@ class TopicSpec:
     a node's own, `{k}` for the UAV of a per-UAV topic (`uav{k}/pose`); `msg_type` as ROS
     spells it (`pkg/msg/Type`; `pkg/srv/Type` makes it a service); `qos` the key in
     QOS_PROFILES of the publishers' profile (empty for a service); `publishers` and
-    `subscribers` the executables that create them (for a service: servers and clients)."""
+    `subscribers` the executables that create them (for a service: servers and clients);
+    `reader_qos` the subscribers' profile where it is not the publishers' (a best-effort
+    reader of a reliable writer)."""
 
     name: str
     msg_type: str
@@ -100,6 +109,7 @@ class TopicSpec:
     publishers: tuple[str, ...]
     subscribers: tuple[str, ...]
     description: str
+    reader_qos: str = ""
 
     @property
     def is_service(self) -> bool:
@@ -112,6 +122,10 @@ class TopicSpec:
     def profile(self) -> QoSProfile | None:
         """The publishers' QoS profile (None for a service)."""
         return QOS_PROFILES[self.qos] if self.qos else None
+
+    def reader_profile(self) -> QoSProfile | None:
+        """The subscribers' QoS profile (None for a service)."""
+        return QOS_PROFILES[self.reader_qos or self.qos] if self.qos else None
 
     def names(self, uavs: Iterable[int]) -> tuple[str, ...]:
         """The names as created: one per UAV of `uavs` (e.g. swarm.uavs(params.num_uavs))
@@ -153,7 +167,7 @@ INTERFACE: tuple[TopicSpec, ...] = (
               _PLANNER, "the planner's plan, formation publishers, swarm and per-UAV statuses; "
               "the bridge's per-vehicle link statuses, which the planner's swarm watch reads"),
     TopicSpec("uav{k}/pose", "geometry_msgs/msg/PoseStamped", "DEPTH", _AGENT, _PLANNER,
-              "agent k's actual position, with its disturbance"),
+              "agent k's actual position, with its disturbance", reader_qos="NEWEST_POSE"),
     TopicSpec("uav{k}/achieved_rate", "std_msgs/msg/Float64", "RATE_DEPTH", _AGENT, _PLANNER,
               "bit/s agent k achieved in the slot just flown, one message per slot"),
     TopicSpec("uav{k}/offload", "std_msgs/msg/Float64MultiArray", "RATE_DEPTH", _AGENT,

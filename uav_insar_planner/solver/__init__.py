@@ -51,12 +51,15 @@ def backend(name: str) -> Callable[[Params, str, str], SolverResult]:
 
 
 def solve(params: Params, scheme: str | None = None, objective: str | None = None,
-          solver: str | None = None) -> Plan:
+          solver: str | None = None, *, warm_start: object | None = None) -> Plan:
     """Solve problem (P) for `scheme` (default: params.scheme) and return a checked Plan.
 
     The plan's metrics, sigma_h, bound and constraint report come from the independent
     evaluator (`evaluate`), not from the back end. A back end's "feasible" answer whose
     formation fails that check is reported infeasible, naming the violated constraints.
+
+    `warm_start`: the state a sweep hands from one solve to the next (`new_warm_start`), passed
+    to a back end that takes it (BACKENDS' warm_start) for a nominal solve, else unused.
     """
     scheme = scheme or params.scheme
     objective = objective or params.objective
@@ -76,6 +79,8 @@ def solve(params: Params, scheme: str | None = None, objective: str | None = Non
         if params.nav_error_m > 0.0:
             answer = robust.solve(params, scheme, objective, run)
             result = answer.result
+        elif warm_start is not None and BACKEND_BY_NAME[solver].warm_start:
+            result = run(params, scheme, objective, warm_start=warm_start)
         else:
             result = run(params, scheme, objective)
         elapsed = time.perf_counter() - start
@@ -114,6 +119,14 @@ def solve(params: Params, scheme: str | None = None, objective: str | None = Non
         sigma_h_worst_m=ev.sigma_h if ev else float("nan"),
     )
     return plan if answer is None else robust_plan(plan, params, answer)
+
+
+def new_warm_start(solver: str) -> object | None:
+    """A fresh warm start for a sequence of solves with back end `solver` (None when it takes
+    none); it is not shared between schemes or objectives."""
+    declared = BACKEND_BY_NAME.get(solver)  # an unknown name is solve's one-line error
+    module, _, cls = declared.warm_start.partition(":") if declared else ("", "", "")
+    return getattr(importlib.import_module(module), cls)() if module else None
 
 
 def robust_plan(plan: Plan, params: Params, answer: robust.RobustAnswer) -> Plan:

@@ -1,7 +1,8 @@
 """Solve on the grid of two parameters for several schemes: a parameter map.
 
-Each cell is a sweep point (sweep.solve_point) with both parameters set; the rows come in the
-order value1, then value2, then scheme, whichever runner (study/executors.py) solved them.
+Each cell is a sweep point (sweep.solve_point) with both parameters set, solved in chains along
+value2 (sweep.run_points); the rows come in the order value1, then value2, then scheme,
+whichever runner (study/executors.py) solved them.
 """
 from __future__ import annotations
 
@@ -16,8 +17,7 @@ from uav_insar_planner.study.sweep import (
     SweepRow,
     csv_fields,
     parse_sweep_name,
-    point_tasks,
-    solve_point,
+    run_points,
     with_value,
 )
 
@@ -45,9 +45,8 @@ def run_map(cells: Sequence[tuple[Params, float, float]], schemes: Sequence[str]
             progress: Callable[[], None] | None = None,
             run: Runner = run_serial) -> list[MapRow]:
     """Solve every cell of map_params for every scheme; `progress` is called once per solve."""
-    tasks = point_tasks([(p, v1) for p, v1, _ in cells], schemes, objective, solver,
-                        band=False, montecarlo=0)
-    points = run(solve_point, tasks, progress)
+    points = run_points([(p, v1) for p, v1, _ in cells], schemes, objective, solver,
+                        band=False, montecarlo=0, progress=progress, run=run)
     value2 = [v2 for _, _, v2 in cells for _ in schemes]
     return [MapRow(pt.value, v2, pt) for pt, v2 in zip(points, value2, strict=True)]
 

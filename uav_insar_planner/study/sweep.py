@@ -10,11 +10,15 @@ from pathlib import Path
 import numpy as np
 
 from uav_insar_planner.params import PARAM_SPECS, SPEC_BY_NAME, ParamError, Params, shown
-from uav_insar_planner.solver import solve
+from uav_insar_planner.solver import new_warm_start, solve
 from uav_insar_planner.study.executors import Runner, run_serial
 from uav_insar_planner.swarm import MAX_UAVS, count_problem, fit_to_swarm
 
 _INDEXED = re.compile(r"^(?P<name>[a-z_0-9]+)(?:\[(?P<index>\d+)\])?$")
+# A task solves up to this many consecutive points of one scheme, each warm-started from the
+# one before (solver.solve's warm_start); the chains are cut the same way whatever the runner,
+# so a parallel run gives the serial run's rows.
+CHAIN_POINTS = 16
 
 
 @dataclass
@@ -87,22 +91,55 @@ def run_sweep(params: Params, name: str, values: Iterable[float], schemes: Seque
     `run` (study/executors.py) runs the solves: here by default, or on worker processes."""
     base, index = parse_sweep_name(name)
     points = [(with_value(params, base, index, float(v)), float(v)) for v in values]
-    return run(solve_point, point_tasks(points, schemes, objective, solver, band, montecarlo),
-               progress)
+    return run_points(points, schemes, objective, solver, band, montecarlo, progress, run)
 
 
-def point_tasks(points: Sequence[tuple[Params, float]], schemes: Sequence[str],
-                objective: str | None, solver: str | None, band: bool,
-                montecarlo: int) -> list[tuple]:
-    """The arguments of solve_point for each (Params, value) of `points` and each scheme."""
-    return [(p, value, scheme, objective, solver, band, montecarlo)
-            for p, value in points for scheme in schemes]
+def run_points(points: Sequence[tuple[Params, float]], schemes: Sequence[str],
+               objective: str | None, solver: str | None, band: bool, montecarlo: int,
+               progress: Callable[[], None] | None, run: Runner) -> list[SweepRow]:
+    """Every (Params, value) of `points` for every scheme, rows in the order of the points,
+    then the schemes: each scheme's points in chains of CHAIN_POINTS (`solve_chain`)."""
+    chains = [(scheme, start) for scheme in schemes
+              for start in range(0, len(points), CHAIN_POINTS)]
+    tasks = [(points[start:start + CHAIN_POINTS], scheme, objective, solver, band, montecarlo)
+             for scheme, start in chains]
+    done = run(solve_chain, tasks, _per_solve(progress, len(points) * len(schemes), len(tasks)))
+    by = {(scheme, start + i): row for (scheme, start), rows in zip(chains, done, strict=True)
+          for i, row in enumerate(rows)}
+    return [by[(scheme, i)] for i in range(len(points)) for scheme in schemes]
+
+
+def _per_solve(progress: Callable[[], None] | None, solves: int, tasks: int):
+    """`progress` called once per solve in all, spread evenly over the finished chains (a
+    runner reports tasks, not which one finished)."""
+    if progress is None or not tasks:
+        return progress
+    state = {"tasks": 0, "solves": 0}
+
+    def step() -> None:
+        state["tasks"] += 1
+        upto = solves * state["tasks"] // tasks
+        for _ in range(upto - state["solves"]):
+            progress()
+        state["solves"] = upto
+    return step
+
+
+def solve_chain(points: Sequence[tuple[Params, float]], scheme: str, objective: str | None,
+                solver: str | None, band: bool, montecarlo: int) -> list[SweepRow]:
+    """Rows of consecutive points of one scheme (a task of any runner), each solve
+    warm-started from the one before (solver.new_warm_start; nothing when the back end
+    takes no warm start)."""
+    warm = new_warm_start(solver or points[0][0].solver) if points else None
+    return [solve_point(p, value, scheme, objective, solver, band, montecarlo, warm)
+            for p, value in points]
 
 
 def solve_point(p: Params, value: float, scheme: str, objective: str | None,
-                solver: str | None, band: bool, montecarlo: int) -> SweepRow:
-    """One row: `p` (already at `value`) solved for `scheme` (a task of any runner)."""
-    plan = solve(p, scheme=scheme, objective=objective, solver=solver)
+                solver: str | None, band: bool, montecarlo: int,
+                warm_start: object | None = None) -> SweepRow:
+    """One row: `p` (already at `value`) solved for `scheme`."""
+    plan = solve(p, scheme=scheme, objective=objective, solver=solver, warm_start=warm_start)
     bound_opt = lo = hi = float("nan")
     if band and plan.feasible:
         from uav_insar_planner.study.band import bound_minimizer_band

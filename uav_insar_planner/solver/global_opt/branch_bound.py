@@ -44,7 +44,9 @@ class SearchResult:
     angles and ranges one per slave of sc.slaves; lower_bound: proven bound on the optimum
     (+inf when infeasibility is proven); exhausted: every box was closed (the certificate is
     complete); refined: the point is local_refine's (no better box centre turned up);
-    stopped: why an unfinished search stopped ("node limit" or "time budget")."""
+    stopped: why an unfinished search stopped ("node limit" or "time budget"); leaves (with
+    keep_leaves): the boxes the search ended with, closed, proven empty or open, which cover
+    the searched domain (the next point of a sweep may start from them)."""
 
     value: float
     point: tuple[float, tuple[float, ...], tuple[float, ...]] | None
@@ -53,6 +55,7 @@ class SearchResult:
     exhausted: bool
     refined: bool = False
     stopped: str = ""
+    leaves: np.ndarray | None = None
 
 
 def interchangeable_pairs(sc: Problem) -> list[tuple[int, int]]:
@@ -218,40 +221,52 @@ def _coarse_splits(k_count: int) -> int:
 
 def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: int = 4096,
            stop_when_feasible: bool = False, refine: bool = False,
-           time_budget_s: float | None = None,
-           landed: tuple[float, tuple] | None = None) -> SearchResult:
+           time_budget_s: float | None = None, *, incumbent: tuple | None = None,
+           boxes: np.ndarray | None = None, keep_leaves: bool = False,
+           landed: bool = False) -> SearchResult:
     """Best-first (in batches) branch and bound; see the module docstring. refine: take
     markedly better incumbents (up to MAX_REFINES) to their local optimum (local_refine),
     which the optimisation wants and a feasibility test does not. time_budget_s: stop after
     the round that passes it, as at the node limit (the open boxes keep the lower bound
-    valid, and `exhausted` is False). landed: (value, point) of a feasible point at a local
-    optimum (local_refine's), the first incumbent; the box centres are then tried every
-    LANDED_EVERY rounds only (they rarely beat a vertex, and cost as much as the bound)."""
+    valid, and `exhausted` is False).
+
+    A warm start (solver/global_opt/warm.py, along a sweep): `incumbent`, (value, point) of
+    a point the caller has checked feasible for sc, is the first upper bound; `boxes`, which
+    must cover sc's domain, replace the coarse split of the root (every bound is computed
+    afresh on them); keep_leaves returns the final boxes in `leaves`. landed: the incumbent is
+    a local optimum (local_refine's); the box centres are then tried every LANDED_EVERY rounds
+    only (they rarely beat a vertex, and cost as much as the bound), and `refined` says
+    whether it stood."""
     deadline = math.inf if time_budget_s is None else time.monotonic() + time_budget_s
     if sc.r0_lo > sc.r0_hi or sc.th_lo > sc.th_hi:
         return SearchResult(math.inf, None, math.inf, 0, True)
     k_count = len(sc.slaves)
     pairs = interchangeable_pairs(sc)
-    boxes = np.array([[sc.r0_lo, sc.r0_hi] + [sc.th_lo, sc.th_hi] * k_count])
-    if pairs:  # order after each split: fewer boxes
-        for _ in range(_coarse_splits(k_count)):
-            boxes = _order(_split(sc, boxes), pairs)
-    else:
-        boxes = _split(sc, boxes, _coarse_splits(k_count))
+    if boxes is None:
+        boxes = np.array([[sc.r0_lo, sc.r0_hi] + [sc.th_lo, sc.th_hi] * k_count])
+        if pairs:  # order after each split: fewer boxes
+            for _ in range(_coarse_splits(k_count)):
+                boxes = _order(_split(sc, boxes), pairs)
+        else:
+            boxes = _split(sc, boxes, _coarse_splits(k_count))
     best_val, best_pt, local = math.inf, None, _LocalSearch()
-    if landed is not None:
-        best_val, best_pt = landed
-        local.last = best_pt
+    if incumbent is not None:
+        best_val, best_pt = incumbent
+        if landed:
+            local.last = best_pt
+    landed = landed and incumbent is not None
     rounds = 0
-    closed_lb, nodes = math.inf, len(boxes)
+    closed_lb, nodes, leaves = math.inf, len(boxes), []
     parked, parked_lb = boxes[:0], np.empty(0)
     while True:
         boxes = _order(boxes, pairs)
         lb = slave_sets.box_lower_bound(sc, boxes, close_at=best_val * (1.0 - rel_gap))
         keep = np.isfinite(lb)
+        if keep_leaves:
+            leaves.append(boxes[~keep])
         boxes, lb = boxes[keep], lb[keep]
         rounds += 1
-        if landed is None or rounds % LANDED_EVERY == 0:
+        if not landed or rounds % LANDED_EVERY == 0:
             f, pt = _incumbent(sc, _most_promising(boxes, lb))
             if refine:
                 f, pt = local.improve(sc, f, pt, best_val * (1.0 - rel_gap), boxes, lb)
@@ -263,6 +278,8 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
         done = lb >= best_val * (1.0 - rel_gap)
         if done.any():
             closed_lb = min(closed_lb, float(lb[done].min()))
+            if keep_leaves:
+                leaves.append(boxes[done])
         boxes, lb = boxes[~done], lb[~done]
         if not len(boxes) or nodes >= max_nodes or time.monotonic() > deadline:
             break
@@ -284,7 +301,8 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
     lower = min(closed_lb, open_lb, best_val)
     stopped = "" if not len(boxes) else "node limit" if nodes >= max_nodes else "time budget"
     return SearchResult(best_val, best_pt, lower, nodes, not len(boxes),
-                        refined=best_pt is not None and best_pt is local.last, stopped=stopped)
+                        refined=best_pt is not None and best_pt is local.last, stopped=stopped,
+                        leaves=np.concatenate(leaves + [boxes]) if keep_leaves else None)
 
 
 def polish(sc: Problem, point, steps, iterations: int = 80):

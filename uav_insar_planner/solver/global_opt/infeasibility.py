@@ -6,9 +6,19 @@ feasibility mode. `irreducible_set` gives the families that cannot hold together
 infeasible set: the deletion filter of solver/blocking.py), deciding each trial with the same
 search and falling back to the closed-form start grid (solver/start_grid.py) when few families
 are left and the search's box becomes huge. C2 is structural and never dropped (FAMILIES).
+
+Two facts save trials, neither a guess: every superset of a family set proven infeasible is
+infeasible (so a trial that still holds a proven set needs no search: the previous sweep
+point's irreducible set, once proven again here, decides most trials of the filter), and a
+relaxation that makes the scenario feasible must drop a family of every infeasible set (so
+`blocking_sets` tries only the sets that meet the proven irreducible set). Along a sweep,
+`witnesses` keeps the feasible point each relaxation's search found; at the next point a
+witness that the ray model still accepts inside the new domain proves that relaxation feasible
+without a search (slave_sets.ranges_for, the search's own test of a feasible point).
 """
 from __future__ import annotations
 
+from collections.abc import Iterable
 from itertools import combinations
 
 import numpy as np
@@ -16,47 +26,101 @@ import numpy as np
 from uav_insar_planner.params import Params
 from uav_insar_planner.solver import blocking
 from uav_insar_planner.solver.global_opt import branch_bound
-from uav_insar_planner.solver.problem import make_problem
+from uav_insar_planner.solver.problem import Problem, make_problem
 from uav_insar_planner.solver.start_grid import find_start
 
+# Boxes of the feasibility search before the start grid decides (a proof near a feasibility
+# edge, e.g. Figure 4 at 17.5 Mbit/s, takes some 30 000; the grid costs 0.2-0.4 s there).
+DECIDE_NODES = (2_000, 40_000)
 
-def feasible_without(p: Params, scheme: str, off: frozenset[str],
-                     max_nodes: int = 50_000) -> bool:
-    """True when a feasible point of (P) minus the families `off` is found."""
-    sc = make_problem(p, scheme, "bound", off)
-    res = branch_bound.search(sc, max_nodes=max_nodes, stop_when_feasible=True)
+
+Witnesses = dict[frozenset[str], tuple]
+
+
+def _witnessed(sc: Problem, witnesses: Witnesses | None) -> bool:
+    """Does the kept feasible point of the relaxation sc.off still hold for sc?"""
+    point = witnesses.get(sc.off) if witnesses is not None else None
+    if point is None or len(point[1]) != len(sc.slaves):
+        return False
+    th = np.asarray(point[1], dtype=float)
+    if not (sc.r0_lo <= point[0] <= sc.r0_hi and np.all((th >= sc.th_lo) & (th <= sc.th_hi))):
+        return False
+    with np.errstate(all="ignore"):
+        return bool(np.isfinite(branch_bound.point_value(sc, point)))
+
+
+def _found(sc: Problem, res: branch_bound.SearchResult, witnesses: Witnesses | None) -> bool:
+    if res.point is not None and witnesses is not None:
+        witnesses[sc.off] = res.point
     return res.point is not None
 
 
-def blocking_sets(p: Params, scheme: str, max_size: int = 3) -> tuple[list[str], list[list[str]]]:
+def feasible_without(p: Params, scheme: str, off: frozenset[str], max_nodes: int = 50_000,
+                     witnesses: Witnesses | None = None) -> bool:
+    """True when a feasible point of (P) minus the families `off` is found."""
+    sc = make_problem(p, scheme, "bound", off)
+    if _witnessed(sc, witnesses):
+        return True
+    res = branch_bound.search(sc, max_nodes=max_nodes, stop_when_feasible=True)
+    return _found(sc, res, witnesses)
+
+
+def blocking_sets(p: Params, scheme: str, max_size: int = 3, within: Iterable[str] = (),
+                  witnesses: Witnesses | None = None) -> tuple[list[str], list[list[str]]]:
     """(first, all): smallest family sets whose removal makes the scenario feasible, in the
-    order C1..C11; ([], []) when none of size <= max_size does."""
+    order C1..C11; ([], []) when none of size <= max_size does. `within`: a family set proven
+    infeasible (irreducible_set's, when proven): only sets meeting it are tried."""
+    need = frozenset(within)
     with np.errstate(all="ignore"):
         for size in range(1, max_size + 1):
             found = [list(s) for s in combinations(blocking.FAMILIES, size)
-                     if feasible_without(p, scheme, frozenset(s))]
+                     if (not need or need & set(s))
+                     and feasible_without(p, scheme, frozenset(s), witnesses=witnesses)]
             if found:
                 return found[0], found
     return [], []
 
 
-def feasible_families(p: Params, scheme: str, on: frozenset[str],
-                      max_nodes: int = 2_000) -> bool:
-    """Is (P) with only the families `on` (plus C2) feasible? The branch and bound decides
-    most cases in milliseconds, both ways; when its node budget runs out undecided (few
-    families left make its box huge), the closed-form start grid decides."""
+def decide_families(p: Params, scheme: str, on: frozenset[str],
+                    witnesses: Witnesses | None = None) -> tuple[bool, bool]:
+    """(feasible, proven): is (P) with only the families `on` (plus C2) feasible? The branch
+    and bound decides most cases in milliseconds, both ways, and a few near a feasibility edge
+    with more boxes (DECIDE_NODES); when it runs out undecided (few families left make its box
+    huge), the closed-form start grid decides, and an infeasible verdict is then not proven."""
     sc = make_problem(p, scheme, "bound", frozenset(blocking.FAMILIES) - on)
-    with np.errstate(all="ignore"):
-        res = branch_bound.search(sc, max_nodes=max_nodes, stop_when_feasible=True)
-    if res.point is not None:
-        return True
-    if res.exhausted:
-        return False
-    return find_start(p, scheme, on | {"C2"}, first=True) is not None
+    if _witnessed(sc, witnesses):
+        return True, True
+    for max_nodes in DECIDE_NODES:
+        with np.errstate(all="ignore"):
+            res = branch_bound.search(sc, max_nodes=max_nodes, stop_when_feasible=True)
+        if res.point is not None or res.exhausted:
+            return _found(sc, res, witnesses), True
+    found = find_start(p, scheme, on | {"C2"}, first=True) is not None
+    return found, found
 
 
-def irreducible_set(p: Params, scheme: str) -> list[str]:
-    """The deletion filter over FAMILIES with `feasible_families` as the test: families that
-    cannot hold together, each needed for that."""
-    return blocking.irreducible_set(
-        blocking.FAMILIES, lambda on: feasible_families(p, scheme, on))
+def irreducible_set(p: Params, scheme: str, hint: Iterable[str] = (),
+                    witnesses: Witnesses | None = None) -> tuple[list[str], bool]:
+    """(families, proven): the deletion filter over FAMILIES with `decide_families` as the
+    test: families that cannot hold together, each needed for that; proven: their
+    infeasibility is the branch and bound's proof, not the start grid's verdict. `hint` (the
+    previous sweep point's set) saves the trials that hold it, once it is proven infeasible
+    here (module docstring); the result is the one without the hint. `witnesses`: see the
+    module docstring."""
+    proofs: dict[frozenset[str], bool] = {}
+
+    def feasible(on: frozenset[str]) -> bool:
+        if any(not ok and known <= on for known, ok in proofs.items()):
+            return False  # holds a proven infeasible set
+        ok, proven = decide_families(p, scheme, on, witnesses)
+        if proven:
+            proofs[on] = ok
+        return ok
+
+    if (known := frozenset(hint)) and known <= set(blocking.FAMILIES):
+        feasible(known)
+    block = blocking.irreducible_set(blocking.FAMILIES, feasible)
+    key = frozenset(block)
+    if key not in proofs:
+        feasible(key)
+    return block, proofs.get(key) is False

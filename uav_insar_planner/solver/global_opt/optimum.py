@@ -15,10 +15,12 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import replace
 
 import numpy as np
 
 from uav_insar_planner import model
+from uav_insar_planner.evaluate import evaluate
 from uav_insar_planner.params import Params
 from uav_insar_planner.solver import power, rays
 from uav_insar_planner.solver.global_opt import (
@@ -26,6 +28,8 @@ from uav_insar_planner.solver.global_opt import (
     chain_packing,
     infeasibility,
     local_refine,
+    slave_sets,
+    warm,
 )
 from uav_insar_planner.solver.problem import Problem, make_problem
 from uav_insar_planner.solver.result import SolverResult
@@ -74,14 +78,23 @@ def formation_of(sc: Problem, point) -> np.ndarray:
 
 
 def solve_global(p: Params, scheme: str, objective: str,
-                 time_budget_s: float | None = None) -> SolverResult:
+                 time_budget_s: float | None = None, *,
+                 warm_start: warm.WarmStart | None = None) -> SolverResult:
     """Global minimum of sigma_h (`exact`, eq. 15), of Proposition 1's bound (`bound`) or of
     sigma_h with the exact multilook phase std (`multilook`, multilook.phase_std in eq. 13)
     over C1..C11 for `scheme`, with a certificate: lower_bound <= optimum <= objective.
 
     A search that reaches its node limit or `time_budget_s` (seconds of branch and bound;
-    None: no limit but the nodes) returns the best feasible plan found with its proven lower
-    bound and gap, and its message says the certificate is incomplete."""
+    None: the scenario's `p.time_budget_s`, where 0 is no limit but the nodes) returns the best
+    feasible plan found with its proven lower bound and gap, and its message says the
+    certificate is incomplete.
+
+    `warm_start` (a sweep's, warm.py): read for the first incumbent, the starting boxes and the
+    infeasibility hint, each re-checked here, and overwritten with this solve's."""
+    if time_budget_s is None and p.time_budget_s > 0.0:
+        time_budget_s = p.time_budget_s
+    if warm_start is not None:
+        warm_start.used_incumbent = warm_start.used_leaves = warm_start.used_blocking = False
     if scheme == "fixed-master" and not master_on_c2(p):
         return _nan_result(p, 0, blocking=["C2"], lower_bound=math.inf,
                            certificate="q0_fixed violates C2", message="q0_fixed is off the "
@@ -91,17 +104,31 @@ def solve_global(p: Params, scheme: str, objective: str,
     chain = _chain_first(sc, time_budget_s)
     if chain is not None and chain[3]:
         value, point, lower, _, intervals, _ = chain
+        if warm_start is not None:
+            warm.remember(warm_start, sc, point, None)
         return _feasible(p, scheme, sc, value, point, lower, "", (
             f"chain packing bound (solver/global_opt/chain_packing.py) over {intervals} "
             "master-range intervals, all closed"), intervals)
-    landed = _landed_start(sc, chain)
+    start = boxes = None
+    if warm_start is not None:
+        start, boxes = warm_incumbent(p, sc, warm_start), warm.start_boxes(sc, warm_start)
+        warm_start.used_incumbent, warm_start.used_leaves = start is not None, boxes is not None
+    landed = False
+    if start is None:  # no warm point: the chain's, when SLSQP or the KKT check landed it
+        start = _landed_start(sc, chain)
+        landed = start is not None
     left = None if time_budget_s is None else max(0.0, time_budget_s - (time.monotonic() - clock))
     # Two slaves or fewer: the exact inner solve already makes the incumbents good.
     res = branch_bound.search(sc, rel_gap=REL_GAP, refine=len(sc.slaves) > 2,
-                              time_budget_s=left, landed=landed)
+                              time_budget_s=left, incumbent=start, boxes=boxes,
+                              keep_leaves=warm_start is not None, landed=landed)
     if res.point is None and (chain is None or chain[1] is None):
-        return _no_point(p, scheme, sc, res)
+        return _no_point(p, scheme, sc, res, warm_start)
+    if start is not None and res.point is start[1]:
+        res = replace(res, refined=True)  # the refined warm point stood: no second SLSQP
     value, point, lower = _search_point(sc, res, chain)
+    if warm_start is not None:
+        warm.remember(warm_start, sc, point, res)
     gap = (value - lower) / value
     dims = ", ".join(["r0"] + [f"theta{k}" for k in sc.slaves])
     return _feasible(p, scheme, sc, value, point, lower, "" if res.exhausted else (
@@ -170,11 +197,43 @@ def _feasible(p: Params, scheme: str, sc: Problem, value: float, point, lower: f
         certificate=certificate, message=message)
 
 
-def _no_point(p: Params, scheme: str, sc: Problem, res: branch_bound.SearchResult):
+def warm_incumbent(p: Params, sc: Problem, state: warm.WarmStart):
+    """(value, point) of the previous sweep point's optimum carried to this point's
+    parameters, or None. Its master range and angles (cut to the new domain) get their slave
+    ranges solved afresh on the ray model; unless that reproduces the previous point exactly,
+    SLSQP (local_refine) takes it to its local optimum here, since box centres may miss the new
+    optimum by a percent where the feasible set is thin. Only a point the ray model accepts and
+    whose formation passes the independent checker (evaluate.py) is returned. (SLSQP from a
+    point the ray model rejects was tried: it fails slowly where the new point is infeasible.)"""
+    if state.point is None or len(state.point[1]) != len(sc.slaves):
+        return None
+    r0 = float(np.clip(state.point[0], sc.r0_lo, sc.r0_hi))
+    th = np.clip(np.asarray(state.point[1], dtype=float), sc.th_lo, sc.th_hi)
+    with np.errstate(all="ignore"):
+        f, ranges = slave_sets.ranges_for(sc, np.array([r0]), th[None])
+    if not np.isfinite(f[0]):
+        return None
+    value, point = float(f[0]), (r0, tuple(map(float, th)), tuple(map(float, ranges[0])))
+    if point != state.point:
+        value, point, _ = local_refine.refine(sc, point, value)
+    q = formation_of(sc, point)
+    if not evaluate(p, q, power.schedules(p, q, sc.scheme), sc.scheme, sc.objective).feasible:
+        return None
+    return value, point
+
+
+def _no_point(p: Params, scheme: str, sc: Problem, res: branch_bound.SearchResult,
+              state: warm.WarmStart | None = None):
     """The answer of a search that found no feasible point: infeasibility proven (every box
     empty) with an irreducible set of families, or not proven within its limit."""
-    block = infeasibility.irreducible_set(p, scheme)
-    _, fixes = infeasibility.blocking_sets(p, scheme)
+    hint = state.blocking if state is not None else ()
+    seen = state.witnesses if state is not None else None
+    block, proven = infeasibility.irreducible_set(p, scheme, hint, seen)
+    _, fixes = infeasibility.blocking_sets(p, scheme, within=block if proven else (),
+                                           witnesses=seen)
+    if state is not None:
+        state.used_blocking = bool(hint) and proven and tuple(block) == tuple(hint)
+        warm.remember(state, sc, None, res, tuple(block) if proven else ())
     relax = ("; relaxing any of these alone makes it feasible: "
              + ", ".join("+".join(s) for s in fixes)) if fixes else ""
     together = " + ".join(block) + (" cannot hold together" if len(block) > 1

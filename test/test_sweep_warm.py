@@ -1,0 +1,116 @@
+"""Warm starts along a sweep (solver/global_opt/warm.py): the same certified answers as cold
+solves, and nothing carried is used without its re-check at the new point."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from uav_insar_planner.evaluate import evaluate
+from uav_insar_planner.params import default_params
+from uav_insar_planner.solver import new_warm_start, power, solve
+from uav_insar_planner.solver.global_opt import optimum, warm
+from uav_insar_planner.solver.problem import make_problem
+from uav_insar_planner.study.sweep import run_sweep
+
+FIG3 = {"master_fixed_xz_m": [-54.0, 74.0], "p_com_max_db": 10.1}
+FIG4 = {"master_fixed_xz_m": [-41.0, 61.0], "p_com_max_db": 9.0}
+
+
+def _rate(p, value: float):
+    items = list(p.raw["rate_min_mbps"])
+    items[1] = value
+    return p.replace(rate_min_mbps=items)
+
+
+@pytest.mark.parametrize("scheme", ["proposed", "fixed-master"])
+def test_a_warm_sweep_gives_the_cold_sigma_h_and_uses_what_it_carries(scheme: str) -> None:
+    base = default_params().replace(**FIG3)
+    state = new_warm_start("global")
+    used = []
+    for h in (1.0, 1.1, 1.2, 1.3):
+        p = base.replace(h_amb_min_m=h)
+        hot = solve(p, scheme=scheme, objective="exact", solver="global", warm_start=state)
+        used.append(state.used_incumbent or state.used_leaves)
+        cold = solve(p, scheme=scheme, objective="exact", solver="global")
+        assert hot.feasible and cold.feasible
+        assert hot.optimality_gap <= 1e-4 and "incomplete" not in hot.message
+        # both certified: each sigma_h within the gap of the other's lower bound
+        assert hot.sigma_h_m <= cold.lower_bound_m / (1.0 - 1e-4)
+        assert cold.sigma_h_m <= hot.lower_bound_m / (1.0 - 1e-4)
+        assert hot.sigma_h_m == pytest.approx(cold.sigma_h_m, rel=1e-4)
+    assert used == [False, True, True, True]  # the first point has nothing to start from
+
+
+def test_the_sweep_runner_gives_the_cold_rows_through_an_infeasible_stretch() -> None:
+    """Figure 4's top: feasible, then infeasible points; the blocking sets are the cold ones
+    (the carried irreducible set and witnesses only save trials)."""
+    base = default_params().replace(**FIG4)
+    values = [16.5, 17.0, 17.5, 18.0]
+    ticks = []
+    rows = run_sweep(base, "rate_min_mbps[1]", values, ["single-baseline", "static-power"],
+                     objective="exact", solver="global", progress=lambda: ticks.append(1))
+    assert len(ticks) == 8  # once per solve, though a task is a chain of solves
+    for row in rows:
+        cold = solve(_rate(base, row.value), scheme=row.scheme, objective="exact",
+                     solver="global")
+        assert row.feasible == cold.feasible
+        assert row.blocking == " ".join(cold.blocking_constraints)
+        if row.feasible:
+            assert row.sigma_h_m == pytest.approx(cold.sigma_h_m, rel=1e-4)
+    assert [r.feasible for r in rows] == [True, True, True, True, False, False, False, False]
+
+
+def test_a_carried_point_infeasible_at_the_new_point_is_not_the_incumbent() -> None:
+    """The optimum at h_amb_min 0.5 m has baselines far too long for 2 m (C8 at every slave
+    range its angles allow): the independent checker agrees, and the warm solve does not take
+    it, yet returns the cold answer."""
+    base = default_params().replace(**FIG3)
+    state = new_warm_start("global")
+    solve(base.replace(h_amb_min_m=0.5), scheme="proposed", objective="exact", solver="global",
+          warm_start=state)
+    carried = state.point
+    p = base.replace(h_amb_min_m=2.0)
+    sc = make_problem(p, "proposed", "exact")
+    q = optimum.formation_of(sc, carried)
+    assert not evaluate(p, q, power.schedules(p, q, "proposed"), "proposed").feasible
+    assert optimum.warm_incumbent(p, sc, state) is None
+    hot = solve(p, scheme="proposed", objective="exact", solver="global", warm_start=state)
+    assert not state.used_incumbent
+    cold = solve(p, scheme="proposed", objective="exact", solver="global")
+    assert hot.sigma_h_m == pytest.approx(cold.sigma_h_m, rel=1e-4)
+    assert hot.optimality_gap <= 1e-4
+
+
+def test_carried_boxes_that_do_not_cover_the_new_domain_are_dropped() -> None:
+    """Boxes of a narrower look-angle domain (C3's theta_max lowered) cannot start a search over a
+    wider one; the other way round they are cut to it."""
+    base = default_params()
+    narrow = make_problem(base.replace(slave_look_angle_max_deg=44.0), "proposed", "exact")
+    wide = make_problem(base, "proposed", "exact")
+    assert wide.th_hi > narrow.th_hi
+    for sc_from, sc_to, usable in ((narrow, wide, False), (wide, narrow, True)):
+        state = warm.WarmStart()
+        leaves = np.array([[sc_from.r0_lo, sc_from.r0_hi] + [sc_from.th_lo, sc_from.th_hi] * 2])
+        state.leaves, state.domain = leaves, warm.domain_of(sc_from)
+        boxes = warm.start_boxes(sc_to, state)
+        assert (boxes is not None) == usable
+        if usable:
+            assert boxes[0, 3] == sc_to.th_hi and boxes[0, 1] == sc_to.r0_hi
+
+
+def test_a_carried_point_the_independent_checker_rejects_is_not_the_incumbent(monkeypatch) -> None:
+    """Fault injected: the checker (evaluate.py) made to reject every formation, so the ray
+    model's acceptance alone must not make the carried point the incumbent."""
+    base = default_params().replace(**FIG4)
+    state = new_warm_start("global")
+    solve(_rate(base, 12.0), scheme="proposed", objective="exact", solver="global",
+          warm_start=state)
+    p = _rate(base, 12.5)
+    sc = make_problem(p, "proposed", "exact")
+    assert optimum.warm_incumbent(p, sc, state) is not None
+
+    class Rejected:
+        feasible = False
+
+    monkeypatch.setattr(optimum, "evaluate", lambda *args, **kw: Rejected())
+    assert optimum.warm_incumbent(p, sc, state) is None
