@@ -219,6 +219,18 @@ def _coarse_splits(k_count: int) -> int:
     return 7 if k_count == 1 else 10 if k_count == 2 else 12
 
 
+def _root_boxes(sc: Problem, pairs: list[tuple[int, int]]) -> np.ndarray:
+    """The domain split _coarse_splits times (ordered after each split when slaves are
+    interchangeable: fewer boxes)."""
+    k_count = len(sc.slaves)
+    boxes = np.array([[sc.r0_lo, sc.r0_hi] + [sc.th_lo, sc.th_hi] * k_count])
+    if not pairs:
+        return _split(sc, boxes, _coarse_splits(k_count))
+    for _ in range(_coarse_splits(k_count)):
+        boxes = _order(_split(sc, boxes), pairs)
+    return boxes
+
+
 def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: int = 4096,
            stop_when_feasible: bool = False, refine: bool = False,
            time_budget_s: float | None = None, *, incumbent: tuple | None = None,
@@ -243,12 +255,7 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
     k_count = len(sc.slaves)
     pairs = interchangeable_pairs(sc)
     if boxes is None:
-        boxes = np.array([[sc.r0_lo, sc.r0_hi] + [sc.th_lo, sc.th_hi] * k_count])
-        if pairs:  # order after each split: fewer boxes
-            for _ in range(_coarse_splits(k_count)):
-                boxes = _order(_split(sc, boxes), pairs)
-        else:
-            boxes = _split(sc, boxes, _coarse_splits(k_count))
+        boxes = _root_boxes(sc, pairs)
     best_val, best_pt, local = math.inf, None, _LocalSearch()
     if incumbent is not None:
         best_val, best_pt = incumbent
