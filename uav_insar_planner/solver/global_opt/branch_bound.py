@@ -103,32 +103,39 @@ def _order(boxes: np.ndarray, pairs: list[tuple[int, int]]) -> np.ndarray:
 R0_WEIGHT_FEW, R0_WEIGHT_MANY = 2.0, 8.0
 
 
-def _split_dim(sc: Problem, b: np.ndarray) -> np.ndarray:
-    """Which coordinate to halve (0: r0, j + 1: slave j's angle): the one whose width most
-    loosens the bound. The objective's relative sensitivity is about 1/|tan(theta - theta_0)|
-    per radian of a slave angle (b_perp), plus the coherence terms; the bound's per relative
-    change of r0 is R0_WEIGHT_FEW or R0_WEIGHT_MANY (see there)."""
+def _split_scores(sc: Problem, b: np.ndarray) -> np.ndarray:
+    """(n, 1 + K): how much each coordinate's width loosens the bound (0: r0, j + 1: slave
+    j's angle); the widest by this measure is halved. The objective's relative sensitivity is
+    about 1/|tan(theta - theta_0)| per radian of a slave angle (b_perp), plus the coherence
+    terms; the bound's per relative change of r0 is R0_WEIGHT_FEW or R0_WEIGHT_MANY (see
+    there)."""
     weight = R0_WEIGHT_MANY if len(sc.slaves) >= 3 else R0_WEIGHT_FEW
     with np.errstate(divide="ignore"):  # a box from r0 = 0 is infinitely wide: split r0
         r0w = weight * (b[:, R0B] - b[:, R0A]) / b[:, R0A]
-    scores = [r0w]
-    for j in range(len(sc.slaves)):
-        a, z = slave_sets.angle_cols(j)
-        mid = 0.5 * (b[:, a] + b[:, z]) - sc.th0
-        sens = 1.0 / np.maximum(np.abs(np.tan(mid)), 0.02) + 3.0
-        scores.append((b[:, z] - b[:, a]) * sens)
-    return np.argmax(np.stack(scores), axis=0)
+    ta, tb = b[:, 2::2], b[:, 3::2]
+    sens = 1.0 / np.maximum(np.abs(np.tan(0.5 * (ta + tb) - sc.th0)), 0.02) + 3.0
+    return np.concatenate([r0w[:, None], (tb - ta) * sens], axis=1)
 
 
-def _split(sc: Problem, b: np.ndarray) -> np.ndarray:
-    lo_col = 2 * _split_dim(sc, b)
-    hi_col = lo_col + 1
-    rows = np.arange(len(b))
-    mid = 0.5 * (b[rows, lo_col] + b[rows, hi_col])
-    left, right = b.copy(), b.copy()
-    left[rows, hi_col] = mid
-    right[rows, lo_col] = mid
-    return np.concatenate([left, right])
+def _split(sc: Problem, b: np.ndarray, times: int = 1) -> np.ndarray:
+    """Each box halved `times` times, each time along its widest coordinate by _split_scores
+    (the children's scores taken as the parent's with the halved one halved: one evaluation
+    for all levels, unless a box still reaches r0 = 0)."""
+    scores = _split_scores(sc, b)
+    from_zero = sc.r0_lo <= 0.0  # only then can a box's r0 score be infinite
+    for _ in range(times):
+        dim = np.argmax(scores, axis=1)
+        rows = np.arange(len(b))
+        lo_col, hi_col = 2 * dim, 2 * dim + 1
+        mid = 0.5 * (b[rows, lo_col] + b[rows, hi_col])
+        left, right = b.copy(), b.copy()
+        left[rows, hi_col] = mid
+        right[rows, lo_col] = mid
+        scores[rows, dim] *= 0.5
+        b, scores = np.concatenate([left, right]), np.concatenate([scores, scores])
+        if from_zero and np.isinf(scores[:, 0]).any():
+            scores = _split_scores(sc, b)
+    return b
 
 
 PROJECT_AFTER = 20_000
@@ -169,6 +176,8 @@ MAX_RESCUES = 4
 STALL_ROUNDS = 8
 # Box centres tried for a better incumbent per round: those of the smallest lower bounds.
 INCUMBENT_BOXES = 64
+# With a landed first incumbent (search's `landed`), box centres every this many rounds.
+LANDED_EVERY = 5
 
 
 def _most_promising(boxes: np.ndarray, lb: np.ndarray) -> np.ndarray:
@@ -210,10 +219,23 @@ def _coarse_splits(k_count: int) -> int:
     return 7 if k_count == 1 else 10 if k_count == 2 else 12
 
 
+def _root_boxes(sc: Problem, pairs: list[tuple[int, int]]) -> np.ndarray:
+    """The domain split _coarse_splits times (ordered after each split when slaves are
+    interchangeable: fewer boxes)."""
+    k_count = len(sc.slaves)
+    boxes = np.array([[sc.r0_lo, sc.r0_hi] + [sc.th_lo, sc.th_hi] * k_count])
+    if not pairs:
+        return _split(sc, boxes, _coarse_splits(k_count))
+    for _ in range(_coarse_splits(k_count)):
+        boxes = _order(_split(sc, boxes), pairs)
+    return boxes
+
+
 def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: int = 4096,
            stop_when_feasible: bool = False, refine: bool = False,
            time_budget_s: float | None = None, *, incumbent: tuple | None = None,
-           boxes: np.ndarray | None = None, keep_leaves: bool = False) -> SearchResult:
+           boxes: np.ndarray | None = None, keep_leaves: bool = False,
+           landed: bool = False) -> SearchResult:
     """Best-first (in batches) branch and bound; see the module docstring. refine: take
     markedly better incumbents (up to MAX_REFINES) to their local optimum (local_refine),
     which the optimisation wants and a feasibility test does not. time_budget_s: stop after
@@ -223,19 +245,24 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
     A warm start (solver/global_opt/warm.py, along a sweep): `incumbent`, (value, point) of
     a point the caller has checked feasible for sc, is the first upper bound; `boxes`, which
     must cover sc's domain, replace the coarse split of the root (every bound is computed
-    afresh on them); keep_leaves returns the final boxes in `leaves`."""
+    afresh on them); keep_leaves returns the final boxes in `leaves`. landed: the incumbent is
+    a local optimum (local_refine's); the box centres are then tried every LANDED_EVERY rounds
+    only (they rarely beat a vertex, and cost as much as the bound), and `refined` says
+    whether it stood."""
     deadline = math.inf if time_budget_s is None else time.monotonic() + time_budget_s
     if sc.r0_lo > sc.r0_hi or sc.th_lo > sc.th_hi:
         return SearchResult(math.inf, None, math.inf, 0, True)
     k_count = len(sc.slaves)
     pairs = interchangeable_pairs(sc)
     if boxes is None:
-        boxes = np.array([[sc.r0_lo, sc.r0_hi] + [sc.th_lo, sc.th_hi] * k_count])
-        for _ in range(_coarse_splits(k_count)):
-            boxes = _order(_split(sc, boxes), pairs)
+        boxes = _root_boxes(sc, pairs)
     best_val, best_pt, local = math.inf, None, _LocalSearch()
     if incumbent is not None:
         best_val, best_pt = incumbent
+        if landed:
+            local.last = best_pt
+    landed = landed and incumbent is not None
+    rounds = 0
     closed_lb, nodes, leaves = math.inf, len(boxes), []
     parked, parked_lb = boxes[:0], np.empty(0)
     while True:
@@ -245,11 +272,13 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
         if keep_leaves:
             leaves.append(boxes[~keep])
         boxes, lb = boxes[keep], lb[keep]
-        f, pt = _incumbent(sc, _most_promising(boxes, lb))
-        if refine:
-            f, pt = local.improve(sc, f, pt, best_val * (1.0 - rel_gap), boxes, lb)
-        if f < best_val:
-            best_val, best_pt = f, pt
+        rounds += 1
+        if not landed or rounds % LANDED_EVERY == 0:
+            f, pt = _incumbent(sc, _most_promising(boxes, lb))
+            if refine:
+                f, pt = local.improve(sc, f, pt, best_val * (1.0 - rel_gap), boxes, lb)
+            if f < best_val:
+                best_val, best_pt = f, pt
         if stop_when_feasible and best_pt is not None:
             return SearchResult(best_val, best_pt, -math.inf, nodes, False)
         boxes, lb = np.concatenate([boxes, parked]), np.concatenate([lb, parked_lb])
@@ -272,8 +301,8 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
             parked, parked_lb = boxes[:0], lb[:0]
         # Few open boxes: bisect each several times per round (the cost of a round is mostly
         # fixed numpy overhead, so fewer, fuller rounds are faster).
-        for _ in range(max(1, min(ROUND_SPLITS, int(math.log2(batch / ROUND_FILL / len(boxes)))))):
-            boxes = _split(sc, boxes)
+        boxes = _split(sc, boxes, max(1, min(ROUND_SPLITS,
+                                             int(math.log2(batch / ROUND_FILL / len(boxes))))))
         nodes += len(boxes)
     open_lb = float(lb.min()) if len(boxes) else math.inf
     lower = min(closed_lb, open_lb, best_val)

@@ -31,6 +31,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+from collections.abc import Callable
 
 import numpy as np
 
@@ -42,6 +43,7 @@ from uav_insar_planner.solver.problem import Problem
 CELL_M = 0.01       # column width along the master's line of sight
 REST_CELL_M = 0.1   # the rest's cells: this wide and REST_ROW_M high
 REST_ROW_M = 0.25
+REST_COARSEN = 4  # the rest first on cells this many times larger each way
 COARSE_CELL_M = 0.05  # a first, cheaper pass of each master interval
 SUB_ROWS = 10       # rows of a strip's column for its weight bound
 STRIP_M = 0.1       # strip width below the C8 cap (as a fraction of d_min at most STRIP_FRAC)
@@ -49,11 +51,19 @@ STRIP_FRAC = 0.2
 NOT_TIGHT = 1e-3
 CHAIN_STARTS, CHAIN_STARTS_M = 400, 100.0  # where the incumbent's chain may start
 MAX_INTERVALS = 256  # master intervals evaluated per certificate (then the search takes over)
+# certify: fine columns only within FINE_WITHIN of closing; an interval holding the
+# incumbent's r0 is cut NEAR_CUT of its width either side of it.
+FINE_WITHIN = 2e-4
+# The fine columns: those of the heaviest REFINE_SPANS chain lengths of coarse columns.
+REFINE_SPANS = 2
+NEAR_CUT = 0.125
 
 
 def applies(sc: Problem) -> bool:
-    """The bound needs C4 (the spacing), C8 (the cap) and a master range above 0."""
-    return sc.on("C4") and sc.on("C8") and sc.p.d_min > 0 and sc.r0_lo > 0
+    """The bound needs C4 (the spacing), C8 (the cap), a master range above 0 and a
+    non-empty domain (else the search proves infeasibility at once)."""
+    return (sc.on("C4") and sc.on("C8") and sc.p.d_min > 0 and 0 < sc.r0_lo <= sc.r0_hi
+            and sc.th_lo <= sc.th_hi)
 
 
 def relaxed(sc: Problem) -> tuple[Problem, int]:
@@ -94,11 +104,32 @@ def _grid_cells(sc: Problem, k: int, r0a: float, r0b: float, u_edges, b_edges):
     return w.reshape(len(u_edges) - 1, len(b_edges) - 1)
 
 
-def _strip_weights(sc: Problem, k: int, r0a: float, r0b: float, u_edges, b_lo, b_hi):
-    """W(c) of a strip's columns: the largest bound over SUB_ROWS rows of each, so that
-    every row's angles stay narrow (gamma_Rg and the theta limits are taken per row)."""
-    return np.max(_grid_cells(sc, k, r0a, r0b, u_edges,
-                              np.linspace(b_lo, b_hi, SUB_ROWS + 1)), axis=1)
+def _strip_weights(sc: Problem, k: int, r0a: float, r0b: float, ua, ub, b_lo, b_hi):
+    """W(c) of a strip's columns [ua, ub]: the largest bound over SUB_ROWS rows of each, so
+    that every row's angles stay narrow (gamma_Rg and the theta limits are taken per row)."""
+    b_edges = np.linspace(b_lo, b_hi, SUB_ROWS + 1)
+    c, r = np.meshgrid(np.arange(len(ua)), np.arange(SUB_ROWS), indexing="ij")
+    c, r = c.ravel(), r.ravel()
+    w = _cells(sc, k, r0a, r0b, ua[c], ub[c], b_edges[r], b_edges[r + 1])
+    return np.max(w.reshape(len(ua), SUB_ROWS), axis=1)
+
+
+def _refined_strip(sc: Problem, k: int, r0a: float, r0b: float, edges, w, keep: int,
+                   cell_m: float, b_lo: float, b_hi: float):
+    """(W, widest column) on columns about cell_m wide: the `keep` heaviest columns of
+    `edges` (weights w) each cut into columns of their own, every other fine column bounded
+    by its coarse column's weight (a valid bound: the coarse cell contains it)."""
+    n_sub = max(1, round((edges[1] - edges[0]) / cell_m)) if len(edges) > 1 else 1
+    frac = np.arange(n_sub + 1) / n_sub
+    fine = edges[:-1, None] + (edges[1:] - edges[:-1])[:, None] * frac  # (columns, n_sub + 1)
+    out = np.repeat(w[:, None], n_sub, axis=1)
+    pick = np.argsort(w)[::-1][:keep]
+    pick = pick[np.isfinite(w[pick])]
+    if len(pick):
+        ua, ub = fine[pick, :-1].ravel(), fine[pick, 1:].ravel()
+        w_fine = _strip_weights(sc, k, r0a, r0b, ua, ub, b_lo, b_hi).reshape(len(pick), n_sub)
+        out[pick] = np.minimum(w_fine, w[pick, None])
+    return out.ravel(), float(np.max(fine[:, 1:] - fine[:, :-1])) if len(fine) else cell_m
 
 
 def _strip_sums(w: np.ndarray, gap: int, m: int) -> np.ndarray:
@@ -119,10 +150,15 @@ def _strip_sums(w: np.ndarray, gap: int, m: int) -> np.ndarray:
 
 
 def group_weight_bound(sc: Problem, group: tuple[int, ...], r0a: float, r0b: float,
-                       cell_m: float = CELL_M) -> float:
+                       cell_m: float = CELL_M,
+                       refine_if: Callable[[float], bool] | None = None) -> float:
     """Upper bound on sum_{k in group} w_k / r0^2 over every feasible point with r0 in
     [r0a, r0b] (module docstring) with columns cell_m wide; -inf when the group provably has
-    no feasible placement."""
+    no feasible placement.
+
+    Columns finer than COARSE_CELL_M: the strips are bounded on COARSE_CELL_M columns first,
+    and then (unless refine_if says no, given that total) the heaviest REFINE_SPANS chain
+    lengths of coarse columns per strip are cut to cell_m (the chain sits in the heaviest)."""
     k, m, d = group[0], len(group), sc.p.d_min
     cap_b = slave_ranges.c8_cap(sc, k) * r0b
     delta = min(STRIP_M, STRIP_FRAC * d, cap_b)
@@ -131,90 +167,149 @@ def group_weight_bound(sc: Problem, group: tuple[int, ...], r0a: float, r0b: flo
     if not lo_all[0] <= up_all[0] or not math.isfinite(up_all[0]):
         return -math.inf if lo_all[0] > up_all[0] else math.inf
     u_lo = lo_all[0] * math.cos(max(abs(sc.th_lo - sc.th0), abs(sc.th_hi - sc.th0)))
-    edges = np.arange(u_lo, up_all[0] + cell_m, cell_m)
-    gap = math.ceil(math.sqrt(d * d - delta * delta) / cell_m) - 1
-    sums = []
+    coarse = max(cell_m, COARSE_CELL_M)
+    edges = np.arange(u_lo, up_all[0] + coarse, coarse)
+    d_strip = math.sqrt(d * d - delta * delta)
+    strips = []
     for lo_b, far in ((cap_b - delta, sc.th_hi - sc.th0), (-cap_b, sc.th0 - sc.th_lo)):
         # the strip lies beyond u = (cap_b - delta) / tan(the side's widest look angle)
         start = (cap_b - delta) / math.tan(far) if far > 0 else math.inf
         cols = edges[max(0, np.searchsorted(edges, start) - 1):]
-        w = (_strip_weights(sc, k, r0a, r0b, cols, lo_b, lo_b + delta) if len(cols) > 1
-             else np.empty(0))
-        sums.append(_strip_sums(w, gap, m))
-    cols = np.arange(u_lo, up_all[0] + REST_CELL_M, REST_CELL_M)
-    rows = np.linspace(delta - cap_b, cap_b - delta,
-                       max(2, math.ceil(2 * cap_b / REST_ROW_M)) + 1)
+        w = (_strip_weights(sc, k, r0a, r0b, cols[:-1], cols[1:], lo_b, lo_b + delta)
+             if len(cols) > 1 else np.empty(0))
+        strips.append((cols, w, lo_b))
+    sums = [_strip_sums(w, math.ceil(d_strip / coarse) - 1, m) for _, w, _ in strips]
+    w_rest = _rest_weight(sc, k, r0a, r0b, u_lo, up_all[0], cap_b - delta, REST_COARSEN)
+    best, uses_rest = _combine(sums, w_rest, m)
+    if uses_rest:  # the coarse cells of the rest count: bound them on the fine ones
+        w_rest = _rest_weight(sc, k, r0a, r0b, u_lo, up_all[0], cap_b - delta, 1)
+        best, _ = _combine(sums, w_rest, m)
+    if cell_m >= coarse or (refine_if is not None and not refine_if(best)):
+        return best
+    keep = REFINE_SPANS * m * math.ceil(d_strip / coarse)
+    sums = []
+    for cols, w, lo_b in strips:
+        if len(w):
+            w, width = _refined_strip(sc, k, r0a, r0b, cols, w, keep, cell_m, lo_b, lo_b + delta)
+            sums.append(_strip_sums(w, math.ceil(d_strip / width) - 1, m))
+        else:
+            sums.append(_strip_sums(w, 1, m))
+    return min(best, _combine(sums, w_rest, m)[0])
+
+
+def _rest_weight(sc: Problem, k: int, r0a: float, r0b: float, u_lo: float, u_hi: float,
+                 b_top: float, coarsen: int) -> float:
+    """W_rest: the largest cell bound over |b| <= b_top, on cells `coarsen` times
+    REST_CELL_M x REST_ROW_M."""
+    cols = np.arange(u_lo, u_hi + coarsen * REST_CELL_M, coarsen * REST_CELL_M)
+    rows = np.linspace(-b_top, b_top, max(2, math.ceil(2 * b_top / (coarsen * REST_ROW_M))) + 1)
     rest = _grid_cells(sc, k, r0a, r0b, cols, rows)
-    w_rest = float(np.max(rest)) if len(rest) else -math.inf
-    best = -math.inf
+    return float(np.max(rest)) if rest.size else -math.inf
+
+
+def _combine(sums: list[np.ndarray], w_rest: float, m: int) -> tuple[float, bool]:
+    """(max over m1 + m2 + m3 = m of F+_m1 + F-_m2 + m3 W_rest (module docstring), whether
+    W_rest is in it: a maximiser has m3 > 0)."""
+    best, uses_rest = -math.inf, False
     for m1 in range(m + 1):
         for m2 in range(m + 1 - m1):
             m3 = m - m1 - m2
             total = sums[0][m1] + sums[1][m2] + (m3 * w_rest if m3 else 0.0)
-            best = max(best, total)
-    return best
+            if total > best or (total == best and m3):
+                best, uses_rest = total, m3 > 0
+    return best, uses_rest
 
 
-def interval_bound(sc: Problem, r0a: float, r0b: float, cell_m: float = CELL_M) -> float:
+def interval_bound(sc: Problem, r0a: float, r0b: float, cell_m: float = CELL_M,
+                   close_at: float | None = None) -> float:
     """Lower bound on the objective over every feasible point with r0 in [r0a, r0b] (+inf:
-    none there), with columns cell_m wide: the group bound of the relaxation (`relaxed`)."""
+    none there), with columns cell_m wide: the group bound of the relaxation (`relaxed`).
+    close_at: the fine columns are spent only when the coarse bound is below close_at by at
+    most FINE_WITHIN (see certify)."""
     loose, k = relaxed(sc)
-    total = group_weight_bound(loose, (k,) * len(sc.slaves), r0a, r0b, cell_m)
-    if total == -math.inf:
-        return math.inf
-    return float(objective_from_normalised(sc, total)) if total < math.inf else 0.0
+
+    def objective(total: float) -> float:
+        if total == -math.inf:
+            return math.inf
+        return float(objective_from_normalised(sc, total)) if total < math.inf else 0.0
+
+    refine_if = None if close_at is None else (
+        lambda total: close_at * (1.0 - FINE_WITHIN) <= objective(total) < close_at)
+    return objective(group_weight_bound(loose, (k,) * len(sc.slaves), r0a, r0b, cell_m,
+                                        refine_if))
 
 
 def certify(sc: Problem, value: float, r0_best: float, rel_gap: float,
             deadline: float = math.inf) -> tuple[float, bool, int]:
     """(lower bound on the optimum, every master interval closed, intervals evaluated):
-    bisection over r0, an interval closed when its bound is within rel_gap of `value` (a
+    a search over r0, an interval closed when its bound is within rel_gap of `value` (a
     feasible objective at master range r0_best). When even the point interval at r0_best
     stays open, the relaxation is not tight there (a slave's own disk or rung binds, or the
-    optimum is no chain) and the bisection is not tried: by NOT_TIGHT, as a bound's columns
-    fall differently on each interval (a few 1e-5 either way)."""
-    if interval_bound(sc, r0_best, r0_best * (1.0 + 1e-12)) < value * (1.0 - NOT_TIGHT):
+    optimum is no chain) and the search is not tried: by NOT_TIGHT, as a bound's columns
+    fall differently on each interval (a few 1e-5 either way).
+
+    Each interval gets the coarse columns first and the fine ones only when the coarse bound
+    is within FINE_WITHIN of closing (the fine columns gain some 1e-5; far from closing the
+    interval has to be cut anyway). An interval holding r0_best is cut NEAR_CUT of its width
+    either side of r0_best (the bound is loosest there and needs the narrowest interval), any
+    other one is halved."""
+    if interval_bound(sc, r0_best, r0_best * (1.0 + 1e-12),
+                      close_at=value * (1.0 - NOT_TIGHT)) < (
+            value * (1.0 - NOT_TIGHT)):
         return 0.0, False, 1
     open_iv = [(sc.r0_lo, sc.r0_hi, 0.0)]  # (r0a, r0b, a lower bound on it)
     closed_lb, evaluated = math.inf, 1
+    close_at = value * (1.0 - rel_gap)
     while open_iv and evaluated < MAX_INTERVALS and time.monotonic() < deadline:
         nxt = []
         for a, b, _ in open_iv:
-            lb = interval_bound(sc, a, b, COARSE_CELL_M)
-            if lb < value * (1.0 - rel_gap):
-                lb = max(lb, interval_bound(sc, a, b))
+            lb = interval_bound(sc, a, b, close_at=close_at)
             evaluated += 1
-            if lb >= value * (1.0 - rel_gap):
+            if lb >= close_at:
                 closed_lb = min(closed_lb, lb)
             else:
-                mid = 0.5 * (a + b)
-                nxt += [(a, mid, lb), (mid, b, lb)]
+                nxt += [(x, y, lb) for x, y in _cut(a, b, r0_best)]
         open_iv = nxt
     lower = min([closed_lb, value] + [lb for _, _, lb in open_iv])
     return lower, not open_iv, evaluated
 
 
-def chain_incumbent(sc: Problem):
-    """(value, point) of the chain itself: the master at its smallest range, the slaves on
-    the C8 line (|b| = cap r0) d_min apart in u, on either side of theta_0, the first at the
-    look-angle limit or further out by up to CHAIN_STARTS_M (a station disk or the master's
-    hole may cut the line's start), their ranges from slave_sets.ranges_for at those angles
-    (feasible by construction), the best then through local_refine; (inf, None) when no
-    start gives a feasible point."""
+def _cut(a: float, b: float, r0_best: float) -> list[tuple[float, float]]:
+    """The pieces of an open master interval (see certify)."""
+    if not a <= r0_best <= b:
+        mid = 0.5 * (a + b)
+        return [(a, mid), (mid, b)]
+    near = NEAR_CUT * (b - a)
+    cuts = sorted({a, max(a, r0_best - near), min(b, r0_best + near), b})
+    return [(x, y) for x, y in zip(cuts[:-1], cuts[1:], strict=True) if y > x]
+
+
+def chain_incumbent(sc: Problem, starts: int = CHAIN_STARTS):
+    """(value, point, landed) of the chain itself: the master at its smallest range, the
+    slaves on the C8 line (|b| = cap r0) d_min apart in u, on either side of theta_0, the
+    first at the look-angle limit or further out by up to CHAIN_STARTS_M (a station disk or
+    the master's hole may cut the line's start; `starts` of them), their ranges from
+    slave_sets.ranges_for at those angles (feasible by construction), the best then through
+    local_refine unless it already meets the KKT conditions (landed: a local optimum, or
+    SLSQP ended on the ray model's feasible set); (inf, None, False) when no start gives a
+    feasible point."""
     r0, d, k_count = sc.r0_lo, sc.p.d_min, len(sc.slaves)
     cap_b = min(slave_ranges.c8_cap(sc, k) for k in sc.slaves) * r0
-    best: tuple[float, tuple | None] = (math.inf, None)
+    sides = []  # both sides' starts in one call, the upper side first (it wins ties)
     for side, edge in ((1.0, sc.th_hi), (-1.0, sc.th_lo)):
-        if side * (edge - sc.th0) <= 0:
-            continue
-        first = cap_b / math.tan(abs(edge - sc.th0)) + np.linspace(0.0, CHAIN_STARTS_M,
-                                                                   CHAIN_STARTS)
-        th = sc.th0 + side * np.arctan2(cap_b, first[:, None] + d * np.arange(k_count))
-        f, ranges = slave_sets.ranges_for(sc, np.full(len(first), r0), th)
-        i = int(np.argmin(f))
-        if np.isfinite(f[i]) and f[i] < best[0]:
-            best = (float(f[i]), (r0, tuple(map(float, th[i])), tuple(map(float, ranges[i]))))
-    if best[1] is None:
-        return best
-    value, point, _ = local_refine.refine(sc, best[1], best[0])
-    return value, point
+        if side * (edge - sc.th0) > 0:
+            first = cap_b / math.tan(abs(edge - sc.th0)) + np.linspace(0.0, CHAIN_STARTS_M,
+                                                                       starts)
+            sides.append(sc.th0 + side * np.arctan2(cap_b, first[:, None]
+                                                    + d * np.arange(k_count)))
+    if not sides:
+        return math.inf, None, False
+    th = np.concatenate(sides)
+    f, ranges = slave_sets.ranges_for(sc, np.full(len(th), r0), th)
+    i = int(np.argmin(f))
+    if not np.isfinite(f[i]):
+        return math.inf, None, False
+    value, point = float(f[i]), (r0, tuple(map(float, th[i])), tuple(map(float, ranges[i])))
+    if local_refine.at_kkt(sc, point):  # already a local optimum (Table I's chain is)
+        return value, point, True
+    return local_refine.refine(sc, point, value)

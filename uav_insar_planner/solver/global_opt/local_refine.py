@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.optimize import minimize
+from scipy.optimize import minimize, nnls
 
 from uav_insar_planner.solver import rays
 from uav_insar_planner.solver.global_opt import slave_sets
@@ -31,6 +31,10 @@ C4_SLACK = 1e-9
 # the C8 line), and rounding can leave that interval empty by a few ulps.
 RANGE_SLACK = 1e-10
 FD_STEP = 1e-7
+# at_kkt: a constraint or bound within KKT_ACTIVE metres of its limit is active; the gradient
+# must be matched to KKT_TOL of its norm (far above the forward differences' error).
+KKT_ACTIVE = 1e-6
+KKT_TOL = 1e-4
 
 
 def _split(sc: Problem, v: np.ndarray):
@@ -99,6 +103,35 @@ def refine(sc: Problem, point, value: float):
     if cand is not None and cand[0] < value:
         return cand[0], cand[1], True
     return value, point, cand is not None
+
+
+def at_kkt(sc: Problem, point) -> bool:
+    """Does the feasible search point (r0, angles, ranges) meet the first-order (KKT)
+    conditions of (P) in ray coordinates, to finite-difference accuracy? The gradient of the
+    objective must be a non-negative combination of the gradients of the constraints and
+    variable bounds active there (slack within KKT_ACTIVE metres): then SLSQP from it would
+    stop where it starts, and the point is taken as landed without running it."""
+    v = np.array([point[0], *point[1], *point[2]], dtype=float)
+    if not np.all(np.isfinite(v)) or v[0] <= 0:
+        return False
+    k_count = len(sc.slaves)
+    scale = np.array([1.0] + [v[0]] * k_count + [1.0] * k_count)  # as in refine: metres
+    with np.errstate(all="ignore"):
+        fg, dfg = _with_jacobian(lambda w: np.concatenate(
+            [_objective(sc, w), _constraints(sc, w)], axis=1), v)
+    if not np.all(np.isfinite(fg)) or not np.all(np.isfinite(dfg)):
+        return False
+    grad, g, jac = dfg[0] / scale, fg[1:], dfg[1:] / scale
+    lo = np.array([sc.r0_lo] + [sc.th_lo] * k_count) * scale[:1 + k_count]
+    hi = np.array([sc.r0_hi] + [sc.th_hi] * k_count) * scale[:1 + k_count]
+    x = (v * scale)[:1 + k_count]
+    eye = np.eye(len(v))[:1 + k_count]
+    cols = [jac[g <= KKT_ACTIVE], eye[x - lo <= KKT_ACTIVE], -eye[hi - x <= KKT_ACTIVE]]
+    active = np.concatenate(cols, axis=0)
+    if not len(active):
+        return bool(np.linalg.norm(grad) <= KKT_TOL * max(np.abs(grad).max(), 1e-300))
+    _, residual = nnls(active.T, grad)
+    return bool(residual <= KKT_TOL * np.linalg.norm(grad))
 
 
 def from_box(sc: Problem, box: np.ndarray):

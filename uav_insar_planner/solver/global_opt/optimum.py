@@ -4,8 +4,10 @@
 C2, and every other constraint an interval of slave ranges along each look-angle ray;
 slave_ranges.py: the slaves sit at the top of their feasible ranges, or one steps down to keep
 C4 between them) and runs the branch and bound of branch_bound.py, whose smallest open or closed
-box bound is a proven lower bound on the objective over the feasible set. An empty search (every
-box proven empty) proves infeasibility; the blocking constraint families are then an irreducible
+box bound is a proven lower bound on the objective over the feasible set. Its first incumbent,
+where there is one, is the chain of chain_packing.py taken to a local optimum by SLSQP: often
+the optimum itself, which the search then only has to certify. An empty search (every box
+proven empty) proves infeasibility; the blocking constraint families are then an irreducible
 infeasible set and the message adds the smallest sets whose removal alone makes it feasible
 (infeasibility.py).
 """
@@ -40,8 +42,13 @@ REL_GAP = 5e-5
 POLISH_STEP = 1e-3
 # From this many slaves the chain's incumbent and bound (chain_packing.py) come first; the
 # branch and bound runs only when they leave a gap (its box bound needs every slave's angle
-# box narrow, which takes exponentially many boxes in K).
-CHAIN_MIN_K = 6
+# box narrow, which takes exponentially many boxes in K). Measured on Table I grown to K
+# slaves: the chain certifies K = 3..6 in about 0.1 s each, the branch and bound takes 0.06,
+# 0.35 and 0.8 s for K = 3, 4, 5.
+CHAIN_MIN_K = 4
+# Fewer slaves: the chain's point is only the search's first incumbent (the search finds its
+# own when the chain is not the optimum), from this many starts along the C8 line.
+LANDED_STARTS = 100
 
 
 def _nan_result(p: Params, nodes: int, **kw) -> SolverResult:
@@ -96,21 +103,25 @@ def solve_global(p: Params, scheme: str, objective: str,
     clock = time.monotonic()
     chain = _chain_first(sc, time_budget_s)
     if chain is not None and chain[3]:
-        value, point, lower, _, intervals = chain
+        value, point, lower, _, intervals, _ = chain
         if warm_start is not None:
             warm.remember(warm_start, sc, point, None)
         return _feasible(p, scheme, sc, value, point, lower, "", (
             f"chain packing bound (solver/global_opt/chain_packing.py) over {intervals} "
             "master-range intervals, all closed"), intervals)
-    left = None if time_budget_s is None else max(0.0, time_budget_s - (time.monotonic() - clock))
-    # Two slaves or fewer: the exact inner solve already makes the incumbents good.
     start = boxes = None
     if warm_start is not None:
         start, boxes = warm_incumbent(p, sc, warm_start), warm.start_boxes(sc, warm_start)
         warm_start.used_incumbent, warm_start.used_leaves = start is not None, boxes is not None
+    landed = False
+    if start is None:  # no warm point: the chain's, when SLSQP or the KKT check landed it
+        start = _landed_start(sc, chain)
+        landed = start is not None
+    left = None if time_budget_s is None else max(0.0, time_budget_s - (time.monotonic() - clock))
+    # Two slaves or fewer: the exact inner solve already makes the incumbents good.
     res = branch_bound.search(sc, rel_gap=REL_GAP, refine=len(sc.slaves) > 2,
                               time_budget_s=left, incumbent=start, boxes=boxes,
-                              keep_leaves=warm_start is not None)
+                              keep_leaves=warm_start is not None, landed=landed)
     if res.point is None and (chain is None or chain[1] is None):
         return _no_point(p, scheme, sc, res, warm_start)
     if start is not None and res.point is start[1]:
@@ -129,16 +140,30 @@ def solve_global(p: Params, scheme: str, objective: str,
 
 
 def _chain_first(sc: Problem, time_budget_s: float | None):
-    """For CHAIN_MIN_K slaves or more: (value, point, lower, closed, intervals) of the chain's
-    incumbent and bound (chain_packing.py), None when it does not apply or finds no point."""
+    """For CHAIN_MIN_K slaves or more: (value, point, lower, closed, intervals, landed) of the
+    chain's incumbent and bound (chain_packing.py), None when it does not apply or finds no
+    point."""
     if len(sc.slaves) < CHAIN_MIN_K or not chain_packing.applies(sc):
         return None
     deadline = math.inf if time_budget_s is None else time.monotonic() + time_budget_s
-    value, point = chain_packing.chain_incumbent(sc)
+    value, point, landed = chain_packing.chain_incumbent(sc)
     if point is None:
         return None
     lower, closed, intervals = chain_packing.certify(sc, value, point[0], REL_GAP, deadline)
-    return value, point, lower, closed, intervals
+    return value, point, lower, closed, intervals, landed
+
+
+def _landed_start(sc: Problem, chain):
+    """The search's first incumbent, (value, point) of the chain (chain_packing.py) when
+    SLSQP landed it on a local optimum: the optimum itself whenever the slaves end up on the
+    C8 line d_min apart (Table I), which the search then only has to certify; None when
+    there is no such point (the search finds its own)."""
+    if chain is None and len(sc.slaves) >= 2 and chain_packing.applies(sc):
+        value, point, landed = chain_packing.chain_incumbent(sc, LANDED_STARTS)
+        chain = (value, point, None, None, None, landed)
+    if chain is None or chain[1] is None or not chain[5]:
+        return None
+    return chain[0], chain[1]
 
 
 def _search_point(sc: Problem, res: branch_bound.SearchResult, chain):

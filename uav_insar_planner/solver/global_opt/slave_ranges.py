@@ -108,28 +108,38 @@ def _abs_sin_range(dlo, dhi):
     return smin, smax
 
 
-def slave_box(sc: Problem, k: int, r0a, r0b, ta, tb):
+def slave_box(sc: Problem, k: int | tuple[int, ...], r0a, r0b, ta, tb):
     """Bounds for slave k over the box r0 in [r0a, r0b], theta in [ta, tb]: a lower bound on
     its range's lower limit, an upper bound on its upper limit, and the pieces of the weight
     bound (see weight_bound). Each limit is monotone in r0 and in |theta|, |theta - theta_0| or
-    the angle to the station (rays), so its extreme over the box sits at a known corner."""
+    the angle to the station (rays), so its extreme over the box sits at a known corner.
+
+    k a tuple of slaves: ta, tb (len(k), n), one row per slave, all rows in one pass."""
     p = sc.p
-    abs_lo = np.where((ta <= 0) & (tb >= 0), 0.0, np.minimum(np.abs(ta), np.abs(tb)))
-    abs_hi = np.maximum(np.abs(ta), np.abs(tb))
-    dist = angle_between(_nearest(sc.station_angle, ta, tb), sc.station_angle)
-    lo, up = np.zeros_like(ta), np.full_like(ta, math.inf)
-    if sc.disk_r2[k] != math.inf:
-        ra, rb = disk_at_psi(sc, sc.disk_r2[k], dist)
-        lo, up = np.maximum(lo, ra), np.minimum(up, rb)
+    if isinstance(k, tuple):
+        disk_r2 = np.array([sc.disk_r2[i] for i in k])[:, None]
+        b_lim = np.stack([np.broadcast_to(rays.baseline_limit(sc, r0b, i), np.shape(r0b))
+                          for i in k])
+    else:
+        disk_r2, b_lim = sc.disk_r2[k], rays.baseline_limit(sc, r0b, k)
+    abs_a, abs_b = np.abs(ta), np.abs(tb)
+    abs_lo = np.where((ta <= 0) & (tb >= 0), 0.0, np.minimum(abs_a, abs_b))
+    cos_hi = np.cos(np.maximum(abs_a, abs_b))
+    if np.any(np.asarray(disk_r2) != math.inf):  # an infinite disk gives (-inf, inf)
+        ra, rb = disk_at_psi(sc, disk_r2,
+                             angle_between(_nearest(sc.station_angle, ta, tb), sc.station_angle))
+        lo, up = np.maximum(ra, 0.0), rb
+    else:
+        lo, up = np.zeros_like(ta), np.full_like(ta, math.inf)
     if sc.on("C1"):
         lo = np.maximum(lo, p.z_min / np.cos(abs_lo))
-        up = np.minimum(up, p.z_max / np.cos(abs_hi))
+        up = np.minimum(up, p.z_max / cos_hi)
     if sc.on("C5"):
-        lo = np.maximum(lo, p.swath_min * np.cos(abs_hi) / p.beamwidth)
+        lo = np.maximum(lo, p.swath_min * cos_hi / p.beamwidth)
     up = np.minimum(up, rays.snr_limit(sc, r0a))
     smin, smax = _abs_sin_range(ta - sc.th0, tb - sc.th0)
     with np.errstate(divide="ignore", invalid="ignore"):
-        up = np.minimum(up, np.where(smin > 0, rays.baseline_limit(sc, r0b, k) / smin, math.inf))
+        up = np.minimum(up, np.where(smin > 0, b_lim / smin, math.inf))
     if sc.on("C4"):
         up = _below_master_hole(sc, r0a, r0b, ta, tb, lo, up)
     g_rg = rays.coherence_rg(sc, _nearest(sc.th0, ta, tb))
@@ -228,10 +238,13 @@ def pair_weight_bound(sc: Problem, r0a, one, two, w_one, w_two,
     d2 = sc.p.d_min**2
     with np.errstate(invalid="ignore"):
         inside = up1 * up1 + up2 * up2 - 2.0 * c * up1 * up2 < d2
+        if not inside.any():  # the tops are d_min apart in every box
+            return w_top
         y = lower_crossing(up1, c, d2)
         x = lower_crossing(up2, c, d2)
-        wa = np.where(y >= lo2, w_one + weight_bound(sc, r0a, np.maximum(y, 0.0), s2, g2, caps[1]),
-                      -np.inf)
-        wb = np.where(x >= lo1, weight_bound(sc, r0a, np.maximum(x, 0.0), s1, g1, caps[0]) + w_two,
-                      -np.inf)
+        # slave 2 at y below slave 1's top, slave 1 at x below slave 2's: one call for both
+        w_yx = weight_bound(sc, r0a, np.maximum(np.stack([y, x]), 0.0), np.stack([s2, s1]),
+                            np.stack([g2, g1]), np.array([[caps[1]], [caps[0]]]))
+        wa = np.where(y >= lo2, w_one + w_yx[0], -np.inf)
+        wb = np.where(x >= lo1, w_yx[1] + w_two, -np.inf)
     return np.where(inside, np.maximum(wa, wb), w_top)

@@ -42,23 +42,22 @@ def box_lower_bound(sc: Problem, boxes: np.ndarray, close_at: float = np.inf) ->
     provably holds none); see the module docstring. close_at: bounds at or above it close the
     box anyway, so the costlier forest bound is spent only on boxes below it."""
     r0a, r0b = boxes[:, 0], boxes[:, 1]
-    pieces, single = [], []
-    caps = [slave_ranges.c8_cap(sc, k) for k in sc.slaves]  # per slave: its own C8 rung
-    ok = np.ones(len(boxes), dtype=bool)
-    for j, k in enumerate(sc.slaves):
-        ta, tb = (boxes[:, c] for c in angle_cols(j))
-        lo, up, smax, g_rg = slave_ranges.slave_box(sc, k, r0a, r0b, ta, tb)
-        ok &= lo <= up
-        pieces.append((lo, up, smax, g_rg, ta, tb))
-        single.append(slave_ranges.weight_bound(sc, r0a, up, smax, g_rg, caps[j]))
+    ta, tb = boxes[:, 2::2].T, boxes[:, 3::2].T  # (K, n): one row per slave
+    lo, up, smax, g_rg = slave_ranges.slave_box(sc, tuple(sc.slaves), r0a, r0b, ta, tb)
+    caps = np.array([slave_ranges.c8_cap(sc, k) for k in sc.slaves])  # per slave: its rung
+    ok = np.all(lo <= up, axis=0)
+    single = slave_ranges.weight_bound(sc, r0a, up, smax, g_rg, caps[:, None])
     if len(single) == 1 or not sc.on("C4"):
         w = np.sum(single, axis=0)
     elif len(single) == 2:  # one matching: the pair (its bound never exceeds W_1 + W_2)
-        w = slave_ranges.pair_weight_bound(sc, r0a, *pieces, *single, caps=(caps[0], caps[1]))
+        pieces = [(lo[j], up[j], smax[j], g_rg[j], ta[j], tb[j]) for j in range(2)]
+        w = slave_ranges.pair_weight_bound(sc, r0a, *pieces, single[0], single[1],
+                                           caps=(caps[0], caps[1]))
     else:
-        holes = [slave_ranges.master_hole_box(sc, r0a, r0b, x[4], x[5]) for x in pieces]
-        stacked = np.stack([np.stack(x + h + (np.full_like(r0a, cap),))
-                            for x, h, cap in zip(pieces, holes, caps, strict=True)])
+        h1, h2 = slave_ranges.master_hole_box(sc, r0a, r0b, ta, tb)
+        stacked = np.stack([lo, up, smax, g_rg, ta, tb, np.broadcast_to(h1, ta.shape),
+                            np.broadcast_to(h2, ta.shape),
+                            np.broadcast_to(caps[:, None], ta.shape)], axis=1)
         w = chain_bound.chain_weight_bound(sc, r0a, stacked)
         if len(single) <= chain_bound.FOREST_MAX_K:
             # the forest keeps every pair and the master's hole: never looser than the chain
