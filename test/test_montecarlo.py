@@ -10,6 +10,7 @@ import pytest
 
 from uav_insar_planner import model
 from uav_insar_planner.montecarlo import multilook_phase, simulate, std_ci
+from uav_insar_planner.swarm import MAX_UAVS
 
 CLI = [sys.executable, "-m", "uav_insar_planner.cli"]
 
@@ -127,7 +128,9 @@ def run(*args):
     (("--seed", "-1"), "--seed"), (("--formation", "1,2,3"), "--formation"),
     (("--formation", "0,10,5,nan"), "--formation"), (("--formation", "0,10,5,-3"), "--formation"),
     (("--formation", "0,10,0,10"), "--formation"),
-    (("--formation", ",".join(["-30,40"] + [f"{-40 - k},50" for k in range(6)])), "--formation")])
+    # one UAV more than the largest swarm (swarm.MAX_UAVS)
+    (("--formation", ",".join(["-30,40"] + [f"{-40 - k},50" for k in range(MAX_UAVS)])),
+     "--formation")])
 def test_bad_input_is_one_line_exit_2(args, field):
     proc = run("montecarlo", *args)
     assert proc.returncode == 2 and proc.stdout == ""
