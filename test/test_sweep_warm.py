@@ -8,7 +8,7 @@ import pytest
 from uav_insar_planner.evaluate import evaluate
 from uav_insar_planner.params import default_params
 from uav_insar_planner.solver import new_warm_start, power, solve
-from uav_insar_planner.solver.global_opt import optimum, warm
+from uav_insar_planner.solver.global_opt import local_refine, optimum, slave_sets, warm
 from uav_insar_planner.solver.problem import make_problem
 from uav_insar_planner.study.sweep import run_sweep
 
@@ -92,8 +92,8 @@ def test_carried_boxes_that_do_not_cover_the_new_domain_are_dropped() -> None:
         state = warm.WarmStart()
         leaves = np.array([[sc_from.r0_lo, sc_from.r0_hi] + [sc_from.th_lo, sc_from.th_hi] * 2])
         state.leaves, state.domain = leaves, warm.domain_of(sc_from)
-        boxes = warm.start_boxes(sc_to, state)
-        assert (boxes is not None) == usable
+        boxes, bounds = warm.start_boxes(sc_to, state)
+        assert (boxes is not None) == usable and bounds is None  # no bounds carried
         if usable:
             assert boxes[0, 3] == sc_to.th_hi and boxes[0, 1] == sc_to.r0_hi
 
@@ -114,3 +114,71 @@ def test_a_carried_point_the_independent_checker_rejects_is_not_the_incumbent(mo
 
     monkeypatch.setattr(optimum, "evaluate", lambda *args, **kw: Rejected())
     assert optimum.warm_incumbent(p, sc, state) is None
+
+
+def _fig3(h: float):
+    return default_params().replace(**FIG3, h_amb_min_m=h)
+
+
+def test_only_a_raised_h_amb_min_or_rate_min_restricts_the_problem() -> None:
+    state = warm.WarmStart()
+    warm.remember(state, make_problem(_fig3(1.0), "proposed", "exact"), None, None)
+    assert warm.restricts(state, _fig3(1.1))
+    assert warm.restricts(state, _rate(_fig3(1.0), 17.0))  # R_min,1 16.95 -> 17 Mbit/s
+    assert not warm.restricts(state, _fig3(0.9))  # C8 relaxed
+    assert not warm.restricts(state, _rate(_fig3(1.0), 16.0))
+    assert not warm.restricts(state, _fig3(1.1).replace(d_min_m=2.0))  # not declared
+
+
+def test_carried_bounds_hold_at_a_restricted_point_and_are_dropped_at_a_relaxed_one() -> None:
+    """Every carried bound is at most the objective at feasible points sampled in its box at
+    the tighter point (the carried bounds are proven there, not merely plausible); a relaxed
+    point (h_amb_min lowered) gets no bounds, and both solves give the cold answer."""
+    state = new_warm_start("global")
+    solve(_fig3(1.2), scheme="proposed", objective="exact", solver="global", warm_start=state)
+    sc = make_problem(_fig3(1.3), "proposed", "exact")
+    boxes, bounds = warm.start_boxes(sc, state, warm.restricts(state, sc.p))
+    assert bounds is not None and np.isinf(bounds).any() and np.isfinite(bounds).any()
+    rng = np.random.default_rng(7)
+    for _ in range(40):
+        u = rng.random(boxes.shape[0] * 3).reshape(3, -1, 1)
+        pts = boxes[:, 0::2] + (boxes[:, 1::2] - boxes[:, 0::2]) * np.concatenate(
+            [u[0], u[1], u[2]], axis=1)
+        f, _ = slave_sets.ranges_for(sc, pts[:, 0], pts[:, 1:])
+        assert np.all(f >= bounds * (1.0 - 1e-12))
+    for h in (1.3, 1.0):  # tighter, then looser than the point before
+        p = _fig3(h)
+        hot = solve(p, scheme="proposed", objective="exact", solver="global", warm_start=state)
+        cold = solve(p, scheme="proposed", objective="exact", solver="global")
+        assert hot.sigma_h_m == pytest.approx(cold.sigma_h_m, rel=1e-4)
+        assert hot.optimality_gap <= 1e-4
+
+
+def test_a_proven_infeasibility_is_carried_up_a_tightening_sweep_and_not_down() -> None:
+    """Figure 4: infeasible from R_min,1 = 17.5 Mbit/s. At 18 the previous proof holds (a
+    tighter point) and the blocking set is the cold one; back at 17 (looser) it must not."""
+    base = default_params().replace(**FIG4)
+    state = new_warm_start("global")
+    for value, feasible, carried in ((17.5, False, False), (18.0, False, True),
+                                     (17.0, True, False)):
+        p = _rate(base, value)
+        hot = solve(p, scheme="fixed-master", objective="exact", solver="global",
+                    warm_start=state)
+        cold = solve(p, scheme="fixed-master", objective="exact", solver="global")
+        assert hot.feasible == cold.feasible == feasible
+        assert hot.blocking_constraints == cold.blocking_constraints
+        assert ("previous sweep point" in hot.certificate) == carried
+
+
+def test_the_previous_vertex_is_followed_to_the_next_point_without_slsqp() -> None:
+    """The optimum at h_amb_min 1.2 m, carried to 1.3 m by Newton on its active constraints
+    (local_refine.follow), is a KKT point there with the cold solve's sigma_h."""
+    state = new_warm_start("global")
+    solve(_fig3(1.2), scheme="fixed-master", objective="exact", solver="global",
+          warm_start=state)
+    sc = make_problem(_fig3(1.3), "fixed-master", "exact")
+    followed = local_refine.follow(state.problem, sc, state.point)
+    assert followed is not None and followed[1] != state.point
+    assert local_refine.at_kkt(sc, followed[1])
+    cold = solve(_fig3(1.3), scheme="fixed-master", objective="exact", solver="global")
+    assert followed[0] == pytest.approx(cold.sigma_h_m, rel=1e-9)

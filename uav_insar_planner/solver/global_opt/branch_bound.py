@@ -46,7 +46,8 @@ class SearchResult:
     complete); refined: the point is local_refine's (no better box centre turned up);
     stopped: why an unfinished search stopped ("node limit" or "time budget"); leaves (with
     keep_leaves): the boxes the search ended with, closed, proven empty or open, which cover
-    the searched domain (the next point of a sweep may start from them)."""
+    the searched domain (the next point of a sweep may start from them), and leaf_lb their
+    proven lower bounds (+inf: empty)."""
 
     value: float
     point: tuple[float, tuple[float, ...], tuple[float, ...]] | None
@@ -56,6 +57,7 @@ class SearchResult:
     refined: bool = False
     stopped: str = ""
     leaves: np.ndarray | None = None
+    leaf_lb: np.ndarray | None = None
 
 
 def interchangeable_pairs(sc: Problem) -> list[tuple[int, int]]:
@@ -73,8 +75,13 @@ def interchangeable_pairs(sc: Problem) -> list[tuple[int, int]]:
 
 def _order(boxes: np.ndarray, pairs: list[tuple[int, int]]) -> np.ndarray:
     """Cut the boxes to the ordered angles of the interchangeable slaves (module docstring)."""
+    return _ordered(boxes, pairs)[0]
+
+
+def _ordered(boxes: np.ndarray, pairs: list[tuple[int, int]]):
+    """(_order's boxes, the mask of the input boxes they come from)."""
     if not pairs:
-        return boxes
+        return boxes, np.ones(len(boxes), dtype=bool)
     boxes = boxes.copy()
     for seq in (pairs, pairs[::-1]):  # forward and back, so a chain's cuts propagate
         for i, j in seq:
@@ -86,7 +93,7 @@ def _order(boxes: np.ndarray, pairs: list[tuple[int, int]]) -> np.ndarray:
     for i, j in pairs:
         keep &= boxes[:, slave_sets.angle_cols(i)[0]] <= boxes[:, slave_sets.angle_cols(i)[1]]
         keep &= boxes[:, slave_sets.angle_cols(j)[0]] <= boxes[:, slave_sets.angle_cols(j)[1]]
-    return boxes[keep]
+    return boxes[keep], keep
 
 
 # Weight of a box's relative r0 width against its angle widths in _split_dim, by the number
@@ -234,8 +241,8 @@ def _root_boxes(sc: Problem, pairs: list[tuple[int, int]]) -> np.ndarray:
 def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: int = 4096,
            stop_when_feasible: bool = False, refine: bool = False,
            time_budget_s: float | None = None, *, incumbent: tuple | None = None,
-           boxes: np.ndarray | None = None, keep_leaves: bool = False,
-           landed: bool = False) -> SearchResult:
+           boxes: np.ndarray | None = None, box_lb: np.ndarray | None = None,
+           keep_leaves: bool = False, landed: bool = False) -> SearchResult:
     """Best-first (in batches) branch and bound; see the module docstring. refine: take
     markedly better incumbents (up to MAX_REFINES) to their local optimum (local_refine),
     which the optimisation wants and a feasibility test does not. time_budget_s: stop after
@@ -244,11 +251,12 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
 
     A warm start (solver/global_opt/warm.py, along a sweep): `incumbent`, (value, point) of
     a point the caller has checked feasible for sc, is the first upper bound; `boxes`, which
-    must cover sc's domain, replace the coarse split of the root (every bound is computed
-    afresh on them); keep_leaves returns the final boxes in `leaves`. landed: the incumbent is
-    a local optimum (local_refine's); the box centres are then tried every LANDED_EVERY rounds
-    only (they rarely beat a vertex, and cost as much as the bound), and `refined` says
-    whether it stood."""
+    must cover sc's domain, replace the coarse split of the root, with `box_lb` (if given)
+    proven lower bounds of sc's objective over them (_bounds); keep_leaves returns the final
+    boxes and their bounds (`leaves`, `leaf_lb`). landed: the incumbent is a local optimum
+    (local_refine's); the box centres are then tried every LANDED_EVERY rounds only (they
+    rarely beat a vertex, and cost as much as the bound), and `refined` says whether it
+    stood."""
     deadline = math.inf if time_budget_s is None else time.monotonic() + time_budget_s
     if sc.r0_lo > sc.r0_hi or sc.th_lo > sc.th_hi:
         return SearchResult(math.inf, None, math.inf, 0, True)
@@ -256,21 +264,19 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
     pairs = interchangeable_pairs(sc)
     if boxes is None:
         boxes = _root_boxes(sc, pairs)
-    best_val, best_pt, local = math.inf, None, _LocalSearch()
-    if incumbent is not None:
-        best_val, best_pt = incumbent
-        if landed:
-            local.last = best_pt
+    best_val, best_pt = incumbent if incumbent is not None else (math.inf, None)
     landed = landed and incumbent is not None
-    rounds = 0
-    closed_lb, nodes, leaves = math.inf, len(boxes), []
+    local = _LocalSearch(last=best_pt if landed else None)
+    rounds, closed_lb, nodes, leaves = 0, math.inf, len(boxes), []  # leaves: (boxes, bounds)
     parked, parked_lb = boxes[:0], np.empty(0)
     while True:
-        boxes = _order(boxes, pairs)
-        lb = slave_sets.box_lower_bound(sc, boxes, close_at=best_val * (1.0 - rel_gap))
+        boxes, kept = _ordered(boxes, pairs)
+        lb = _bounds(sc, boxes, best_val * (1.0 - rel_gap),
+                     None if box_lb is None else box_lb[kept])
+        box_lb = None  # given for the first round's boxes only
         keep = np.isfinite(lb)
         if keep_leaves:
-            leaves.append(boxes[~keep])
+            leaves.append((boxes[~keep], lb[~keep]))
         boxes, lb = boxes[keep], lb[keep]
         rounds += 1
         if not landed or rounds % LANDED_EVERY == 0:
@@ -286,7 +292,7 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
         if done.any():
             closed_lb = min(closed_lb, float(lb[done].min()))
             if keep_leaves:
-                leaves.append(boxes[done])
+                leaves.append((boxes[done], lb[done]))
         boxes, lb = boxes[~done], lb[~done]
         if not len(boxes) or nodes >= max_nodes or time.monotonic() > deadline:
             break
@@ -307,9 +313,24 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
     open_lb = float(lb.min()) if len(boxes) else math.inf
     lower = min(closed_lb, open_lb, best_val)
     stopped = "" if not len(boxes) else "node limit" if nodes >= max_nodes else "time budget"
+    kept = ([np.concatenate(part) for part in zip(*leaves, (boxes, lb), strict=True)]
+            if keep_leaves else ())
     return SearchResult(best_val, best_pt, lower, nodes, not len(boxes),
                         refined=best_pt is not None and best_pt is local.last, stopped=stopped,
-                        leaves=np.concatenate(leaves + [boxes]) if keep_leaves else None)
+                        leaves=kept[0] if kept else None, leaf_lb=kept[1] if kept else None)
+
+
+def _bounds(sc: Problem, boxes: np.ndarray, close_at: float, known: np.ndarray | None):
+    """box_lower_bound of the boxes, computed only where the `known` proven bounds (if any)
+    are below close_at; the larger of the two where both are known."""
+    if known is None:
+        return slave_sets.box_lower_bound(sc, boxes, close_at=close_at)
+    lb = known.copy()
+    fresh = known < close_at
+    if fresh.any():
+        lb[fresh] = np.maximum(known[fresh], slave_sets.box_lower_bound(
+            sc, boxes[fresh], close_at=close_at))
+    return lb
 
 
 def polish(sc: Problem, point, steps, iterations: int = 80):

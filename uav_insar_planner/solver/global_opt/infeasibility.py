@@ -14,7 +14,9 @@ relaxation that makes the scenario feasible must drop a family of every infeasib
 `blocking_sets` tries only the sets that meet the proven irreducible set). Along a sweep,
 `witnesses` keeps the feasible point each relaxation's search found; at the next point a
 witness that the ray model still accepts inside the new domain proves that relaxation feasible
-without a search (slave_sets.ranges_for, the search's own test of a feasible point).
+without a search (slave_sets.ranges_for, the search's own test of a feasible point). A
+relaxation the search proved infeasible is kept as None: it stays proven while the sweep only
+tightens (P) (warm.restricts), and warm.py drops it at any other step.
 """
 from __future__ import annotations
 
@@ -34,7 +36,13 @@ from uav_insar_planner.solver.start_grid import find_start
 DECIDE_NODES = (2_000, 40_000)
 
 
-Witnesses = dict[frozenset[str], tuple]
+# relaxation (the families off) -> a feasible point of it, or None: proven infeasible
+Witnesses = dict[frozenset[str], tuple | None]
+
+
+def _refuted(sc: Problem, witnesses: Witnesses | None) -> bool:
+    """Was the relaxation sc.off proven infeasible at a point whose problem holds sc's?"""
+    return witnesses is not None and sc.off in witnesses and witnesses[sc.off] is None
 
 
 def _witnessed(sc: Problem, witnesses: Witnesses | None) -> bool:
@@ -50,7 +58,7 @@ def _witnessed(sc: Problem, witnesses: Witnesses | None) -> bool:
 
 
 def _found(sc: Problem, res: branch_bound.SearchResult, witnesses: Witnesses | None) -> bool:
-    if res.point is not None and witnesses is not None:
+    if witnesses is not None and (res.point is not None or res.exhausted):
         witnesses[sc.off] = res.point
     return res.point is not None
 
@@ -59,8 +67,8 @@ def feasible_without(p: Params, scheme: str, off: frozenset[str], max_nodes: int
                      witnesses: Witnesses | None = None) -> bool:
     """True when a feasible point of (P) minus the families `off` is found."""
     sc = make_problem(p, scheme, "bound", off)
-    if _witnessed(sc, witnesses):
-        return True
+    if _witnessed(sc, witnesses) or _refuted(sc, witnesses):
+        return not _refuted(sc, witnesses)
     res = branch_bound.search(sc, max_nodes=max_nodes, stop_when_feasible=True)
     return _found(sc, res, witnesses)
 
@@ -88,8 +96,8 @@ def decide_families(p: Params, scheme: str, on: frozenset[str],
     with more boxes (DECIDE_NODES); when it runs out undecided (few families left make its box
     huge), the closed-form start grid decides, and an infeasible verdict is then not proven."""
     sc = make_problem(p, scheme, "bound", frozenset(blocking.FAMILIES) - on)
-    if _witnessed(sc, witnesses):
-        return True, True
+    if _witnessed(sc, witnesses) or _refuted(sc, witnesses):
+        return not _refuted(sc, witnesses), True
     for max_nodes in DECIDE_NODES:
         with np.errstate(all="ignore"):
             res = branch_bound.search(sc, max_nodes=max_nodes, stop_when_feasible=True)
@@ -100,13 +108,15 @@ def decide_families(p: Params, scheme: str, on: frozenset[str],
 
 
 def irreducible_set(p: Params, scheme: str, hint: Iterable[str] = (),
-                    witnesses: Witnesses | None = None) -> tuple[list[str], bool]:
+                    witnesses: Witnesses | None = None,
+                    hint_proven: bool = False) -> tuple[list[str], bool]:
     """(families, proven): the deletion filter over FAMILIES with `decide_families` as the
     test: families that cannot hold together, each needed for that; proven: their
     infeasibility is the branch and bound's proof, not the start grid's verdict. `hint` (the
     previous sweep point's set) saves the trials that hold it, once it is proven infeasible
-    here (module docstring); the result is the one without the hint. `witnesses`: see the
-    module docstring."""
+    here (module docstring), or already proven (hint_proven: the previous point's problem
+    held this one's, warm.restricts); the result is the one without the hint. `witnesses`:
+    see the module docstring."""
     proofs: dict[frozenset[str], bool] = {}
 
     def feasible(on: frozenset[str]) -> bool:
@@ -118,7 +128,10 @@ def irreducible_set(p: Params, scheme: str, hint: Iterable[str] = (),
         return ok
 
     if (known := frozenset(hint)) and known <= set(blocking.FAMILIES):
-        feasible(known)
+        if hint_proven:
+            proofs[known] = False
+        else:
+            feasible(known)
     block = blocking.irreducible_set(blocking.FAMILIES, feasible)
     key = frozenset(block)
     if key not in proofs:

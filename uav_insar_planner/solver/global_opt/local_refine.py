@@ -134,6 +134,57 @@ def at_kkt(sc: Problem, point) -> bool:
     return bool(residual <= KKT_TOL * np.linalg.norm(grad))
 
 
+# follow: Newton steps on the vertex equations, and their convergence in metres.
+FOLLOW_STEPS = 12
+FOLLOW_TOL = 1e-10
+
+
+def follow(before: Problem, sc: Problem, point):
+    """(value, point) of `point`'s vertex carried from problem `before` to sc, or None.
+
+    Along a sweep the optimum moves with the parameter but usually keeps its active set: the
+    same slaves on the C8 line, at a disk edge or d_min apart. The constraints and variable
+    bounds active at `point` in `before` (within KKT_ACTIVE) are solved as equations in sc by
+    Newton's method from `point`, with forward-difference Jacobians as at_kkt takes them.
+    None unless they are exactly as many as the variables (a vertex), Newton converges, the
+    ray model accepts the result (_checked) and it meets sc's KKT conditions (at_kkt): a local
+    optimum of sc found without SLSQP. A candidate only, as every result here."""
+    v = np.array([point[0], *point[1], *point[2]], dtype=float)
+    k_count = len(sc.slaves)
+    if not np.all(np.isfinite(v)) or v[0] <= 0 or len(v) != 1 + 2 * k_count:
+        return None
+    with np.errstate(all="ignore"):
+        g = _constraints(before, v[None])[0]
+        lo = np.array([before.r0_lo] + [before.th_lo] * k_count)
+        hi = np.array([before.r0_hi] + [before.th_hi] * k_count)
+        x = v[:1 + k_count]
+        scale = np.array([1.0] + [v[0]] * k_count)  # metres, as at_kkt measures them
+        at_lo, at_hi = (x - lo) * scale <= KKT_ACTIVE, (hi - x) * scale <= KKT_ACTIVE
+        rows = np.flatnonzero(g <= KKT_ACTIVE)
+        if len(rows) + int((at_lo | at_hi).sum()) != len(v):
+            return None
+        new_lo = np.array([sc.r0_lo] + [sc.th_lo] * k_count)
+        new_hi = np.array([sc.r0_hi] + [sc.th_hi] * k_count)
+        free = np.ones(len(v), dtype=bool)
+        free[:1 + k_count] = ~(at_lo | at_hi)
+        v[:1 + k_count] = np.where(at_lo, new_lo, np.where(at_hi, new_hi, x))
+        for _ in range(FOLLOW_STEPS):
+            gv, jac = _with_jacobian(lambda w: _constraints(sc, w), v)
+            res = gv[rows]
+            if not np.all(np.isfinite(res)) or not np.all(np.isfinite(jac[rows])):
+                return None
+            if np.max(np.abs(res)) <= FOLLOW_TOL:
+                break
+            step = np.linalg.lstsq(jac[rows][:, free], -res, rcond=None)[0]
+            v[free] += step
+        else:
+            return None
+    cand = _checked(sc, v)
+    if cand is None or not at_kkt(sc, cand[1]):
+        return None
+    return cand
+
+
 def from_box(sc: Problem, box: np.ndarray):
     """(value, point) of SLSQP started at the box's centre with every slave at the top of its
     ray (C4 ignored), or (inf, None) when it ends at no point the ray model accepts."""

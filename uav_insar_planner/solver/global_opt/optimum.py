@@ -109,19 +109,27 @@ def solve_global(p: Params, scheme: str, objective: str,
         return _feasible(p, scheme, sc, value, point, lower, "", (
             f"chain packing bound (solver/global_opt/chain_packing.py) over {intervals} "
             "master-range intervals, all closed"), intervals)
-    start = boxes = None
+    start = boxes = box_lb = None
     if warm_start is not None:
-        start, boxes = warm_incumbent(p, sc, warm_start), warm.start_boxes(sc, warm_start)
+        restricted = warm.restricts(warm_start, p)
+        if not restricted:
+            warm.forget_refuted(warm_start)
+        if restricted and warm_start.infeasible:
+            return _no_point(p, scheme, sc, branch_bound.SearchResult(
+                math.inf, None, math.inf, 0, True), warm_start, carried=True)
+        start = warm_incumbent(p, sc, warm_start)
+        boxes, box_lb = warm.start_boxes(sc, warm_start, restricted)
         warm_start.used_incumbent, warm_start.used_leaves = start is not None, boxes is not None
-    landed = False
+    landed = start is not None and start[2]
     if start is None:  # no warm point: the chain's, when SLSQP or the KKT check landed it
         start = _landed_start(sc, chain)
         landed = start is not None
+    start = None if start is None else start[:2]
     left = None if time_budget_s is None else max(0.0, time_budget_s - (time.monotonic() - clock))
     # Two slaves or fewer: the exact inner solve already makes the incumbents good.
     res = branch_bound.search(sc, rel_gap=REL_GAP, refine=len(sc.slaves) > 2,
                               time_budget_s=left, incumbent=start, boxes=boxes,
-                              keep_leaves=warm_start is not None, landed=landed)
+                              box_lb=box_lb, keep_leaves=warm_start is not None, landed=landed)
     if res.point is None and (chain is None or chain[1] is None):
         return _no_point(p, scheme, sc, res, warm_start)
     if start is not None and res.point is start[1]:
@@ -163,7 +171,7 @@ def _landed_start(sc: Problem, chain):
         chain = (value, point, None, None, None, landed)
     if chain is None or chain[1] is None or not chain[5]:
         return None
-    return chain[0], chain[1]
+    return chain[0], chain[1], True
 
 
 def _search_point(sc: Problem, res: branch_bound.SearchResult, chain):
@@ -198,37 +206,49 @@ def _feasible(p: Params, scheme: str, sc: Problem, value: float, point, lower: f
 
 
 def warm_incumbent(p: Params, sc: Problem, state: warm.WarmStart):
-    """(value, point) of the previous sweep point's optimum carried to this point's
-    parameters, or None. Its master range and angles (cut to the new domain) get their slave
-    ranges solved afresh on the ray model; unless that reproduces the previous point exactly,
-    SLSQP (local_refine) takes it to its local optimum here, since box centres may miss the new
+    """(value, point, landed) of the previous sweep point's optimum carried to this point's
+    parameters, or None; landed: a local optimum here (the search then tries fewer box
+    centres, branch_bound.search). Its vertex is followed to the new parameters first
+    (local_refine.follow: Newton on the same active constraints, accepted at a KKT point).
+    Failing that, its master range and angles (cut to the new domain) get their slave ranges
+    solved afresh on the ray model; unless that reproduces the previous point exactly, SLSQP
+    (local_refine) takes it to its local optimum here, since box centres may miss the new
     optimum by a percent where the feasible set is thin. Only a point the ray model accepts and
     whose formation passes the independent checker (evaluate.py) is returned. (SLSQP from a
     point the ray model rejects was tried: it fails slowly where the new point is infeasible.)"""
     if state.point is None or len(state.point[1]) != len(sc.slaves):
         return None
-    r0 = float(np.clip(state.point[0], sc.r0_lo, sc.r0_hi))
-    th = np.clip(np.asarray(state.point[1], dtype=float), sc.th_lo, sc.th_hi)
-    with np.errstate(all="ignore"):
-        f, ranges = slave_sets.ranges_for(sc, np.array([r0]), th[None])
-    if not np.isfinite(f[0]):
-        return None
-    value, point = float(f[0]), (r0, tuple(map(float, th)), tuple(map(float, ranges[0])))
-    if point != state.point:
-        value, point, _ = local_refine.refine(sc, point, value)
+    followed = None
+    if state.problem is not None and state.problem.slaves == sc.slaves:
+        followed = local_refine.follow(state.problem, sc, state.point)
+    if followed is not None:
+        (value, point), landed = followed, True
+    else:
+        r0 = float(np.clip(state.point[0], sc.r0_lo, sc.r0_hi))
+        th = np.clip(np.asarray(state.point[1], dtype=float), sc.th_lo, sc.th_hi)
+        with np.errstate(all="ignore"):
+            f, ranges = slave_sets.ranges_for(sc, np.array([r0]), th[None])
+        if not np.isfinite(f[0]):
+            return None
+        value, point = float(f[0]), (r0, tuple(map(float, th)), tuple(map(float, ranges[0])))
+        landed = point == state.point
+        if not landed:
+            value, point, landed = local_refine.refine(sc, point, value)
     q = formation_of(sc, point)
     if not evaluate(p, q, power.schedules(p, q, sc.scheme), sc.scheme, sc.objective).feasible:
         return None
-    return value, point
+    return value, point, landed
 
 
 def _no_point(p: Params, scheme: str, sc: Problem, res: branch_bound.SearchResult,
-              state: warm.WarmStart | None = None):
+              state: warm.WarmStart | None = None, carried: bool = False):
     """The answer of a search that found no feasible point: infeasibility proven (every box
-    empty) with an irreducible set of families, or not proven within its limit."""
+    empty) with an irreducible set of families, or not proven within its limit. carried: the
+    proof is the previous sweep point's, whose problem this one restricts (warm.restricts),
+    and so is the infeasibility of its irreducible set."""
     hint = state.blocking if state is not None else ()
     seen = state.witnesses if state is not None else None
-    block, proven = infeasibility.irreducible_set(p, scheme, hint, seen)
+    block, proven = infeasibility.irreducible_set(p, scheme, hint, seen, hint_proven=carried)
     _, fixes = infeasibility.blocking_sets(p, scheme, within=block if proven else (),
                                            witnesses=seen)
     if state is not None:
@@ -242,8 +262,10 @@ def _no_point(p: Params, scheme: str, sc: Problem, res: branch_bound.SearchResul
         return _nan_result(p, res.nodes, blocking=block, lower_bound=res.lower_bound,
                            message="no feasible point found and infeasibility not proven "
                            f"within {res.nodes} boxes ({res.stopped}); " + together)
+    how = ("the previous sweep point's proof holds: this point only tightens its "
+           + "/".join(warm.TIGHTER_AS_THEY_GROW) + ", where ") if carried else ""
     return _nan_result(p, res.nodes, blocking=block, lower_bound=math.inf,
-                       certificate="infeasible: every box of ("
+                       certificate="infeasible: " + how + "every box of ("
                        + ", ".join(["r0"] + [f"theta{k}" for k in sc.slaves])
                        + ") proven empty by interval bounds of the C1-C11 range limits",
                        message=together)

@@ -17,6 +17,15 @@ search and writes it after. Nothing of it is trusted at the new point:
   its relaxations (`witnesses`) count only where the new ray model accepts them
   (infeasibility.py).
 
+A step that only tightens (P) (`restricts`: the new point differs from the previous one only
+in parameters that bound the feasible set and do not enter the objective, each moved the
+tightening way) keeps more: the new feasible set lies inside the old one and the objective is
+the same function, so every lower bound proven over a box before still holds over it (the
+minimum over a subset is no smaller). The carried boxes keep their bounds (`leaf_lb`; +inf for
+a box proven empty), and the search computes a bound afresh only where the carried one no
+longer closes the box. An infeasibility proven before stays proven, and so does every family
+set proven infeasible (the previous irreducible set is infeasible here without a search).
+
 So a warm solve certifies what a cold one does, to the same gap; only its route differs.
 """
 from __future__ import annotations
@@ -25,9 +34,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from uav_insar_planner.params import Params
 from uav_insar_planner.solver.global_opt import branch_bound
 from uav_insar_planner.solver.problem import Problem
 
+# Parameters that only bound the feasible set of (P), tighter as they grow, and that the
+# objective (sigma_h, eqs. 13-15) does not read: h_amb_min_m is C8's b_perp,k <= lambda r_0
+# sin(theta_0) / (2 h_amb,k^min) (model.baseline_max) and nothing else; rate_min_mbps is C10's
+# R_k >= (1 + mu) R_min,k (schemes.planned_rate_bps: a smaller station disk) and nothing else
+# of the plan (the power schedule of a formation changes, not its feasibility otherwise).
+TIGHTER_AS_THEY_GROW = ("h_amb_min_m", "rate_min_mbps")
 # More final boxes than this are not carried to the next point: a hard point's fine partition
 # costs the next, easy point more than the coarse split of its root (measured on the
 # static-power points of Figure 3, 160 000 boxes).
@@ -41,7 +57,10 @@ class WarmStart:
 
     point: tuple | None = None
     leaves: np.ndarray | None = None
+    leaf_lb: np.ndarray | None = None
     domain: tuple | None = None
+    problem: Problem | None = None
+    infeasible: bool = False
     blocking: tuple[str, ...] = ()
     witnesses: dict = field(default_factory=dict)
     used_incumbent: bool = False
@@ -52,30 +71,63 @@ class WarmStart:
 def domain_of(sc: Problem) -> tuple:
     """What the validity of carried boxes depends on (module docstring)."""
     return (sc.slaves, frozenset(branch_bound.interchangeable_pairs(sc)),
-            sc.r0_lo, sc.r0_hi, sc.th_lo, sc.th_hi)
+            sc.r0_lo, sc.r0_hi, sc.th_lo, sc.th_hi, sc.scheme, sc.objective, sc.off)
 
 
-def start_boxes(sc: Problem, warm: WarmStart) -> np.ndarray | None:
-    """The previous final boxes cut to sc's domain when they cover it, else None."""
+def restricts(warm: WarmStart, p: Params) -> bool:
+    """Is p's problem a restriction of the previous point's with the same objective: every
+    parameter equal but those of TIGHTER_AS_THEY_GROW, each no smaller (element by element)?"""
+    before = None if warm.problem is None else warm.problem.p
+    if before is None or before.energy_budget_uav_j != p.energy_budget_uav_j:
+        return False
+    for key in set(before.raw) | set(p.raw):
+        old, new = before.raw.get(key), p.raw.get(key)
+        if old == new:
+            continue
+        if key not in TIGHTER_AS_THEY_GROW:
+            return False
+        old, new = np.atleast_1d(np.asarray(old, dtype=float)), np.atleast_1d(
+            np.asarray(new, dtype=float))
+        if old.shape != new.shape or not np.all(new >= old):
+            return False
+    return True
+
+
+def forget_refuted(warm: WarmStart) -> None:
+    """Drop the relaxations proven infeasible (infeasibility.Witnesses' None): they hold only
+    while each step restricts the one before."""
+    warm.witnesses = {off: point for off, point in warm.witnesses.items() if point is not None}
+
+
+def start_boxes(sc: Problem, warm: WarmStart,
+                restricted: bool = False) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """(boxes, lower bounds): the previous final boxes cut to sc's domain when they cover it,
+    else (None, None); their carried lower bounds when `restricted` (restricts), else None."""
     if warm.leaves is None or warm.domain is None:
-        return None
-    slaves, pairs, r0_lo, r0_hi, th_lo, th_hi = warm.domain
+        return None, None
+    slaves, pairs, r0_lo, r0_hi, th_lo, th_hi, *problem = warm.domain
     new = domain_of(sc)
     if (new[0] != slaves or not pairs <= new[1] or sc.r0_lo < r0_lo or sc.r0_hi > r0_hi
-            or sc.th_lo < th_lo or sc.th_hi > th_hi):
-        return None
+            or sc.th_lo < th_lo or sc.th_hi > th_hi or tuple(problem) != new[6:]):
+        return None, None
     boxes = warm.leaves.copy()
     boxes[:, 0::2] = np.maximum(boxes[:, 0::2], [sc.r0_lo] + [sc.th_lo] * len(sc.slaves))
     boxes[:, 1::2] = np.minimum(boxes[:, 1::2], [sc.r0_hi] + [sc.th_hi] * len(sc.slaves))
     keep = np.all(boxes[:, 0::2] <= boxes[:, 1::2], axis=1)
-    return boxes[keep] if keep.any() else None
+    if not keep.any():
+        return None, None
+    lb = warm.leaf_lb[keep] if restricted and warm.leaf_lb is not None else None
+    return boxes[keep], lb
 
 
 def remember(warm: WarmStart, sc: Problem, point, res: branch_bound.SearchResult | None,
              blocking: tuple[str, ...] = ()) -> None:
-    """Keep this solve's optimum (None: infeasible), final boxes and proven blocking set."""
-    warm.point, warm.blocking = point, blocking
+    """Keep this solve's optimum (None: infeasible; `infeasible` when the search proved it),
+    final boxes with their bounds, parameters and proven blocking set."""
+    warm.point, warm.blocking, warm.problem = point, blocking, sc
+    warm.infeasible = point is None and res is not None and res.exhausted
     leaves = None if res is None else res.leaves
     keep = leaves is not None and 0 < len(leaves) <= LEAVES_MAX
     warm.leaves = leaves if keep else None
+    warm.leaf_lb = res.leaf_lb if keep else None
     warm.domain = domain_of(sc) if keep else None
