@@ -12,7 +12,7 @@ from uav_insar_planner.evaluate import evaluate
 from uav_insar_planner.params import SCHEMES, default_params
 from uav_insar_planner.schemes import static_power_w
 from uav_insar_planner.solver import blocking, power, rays, solve
-from uav_insar_planner.solver.global_opt import infeasibility
+from uav_insar_planner.solver.global_opt import branch_bound, infeasibility
 from uav_insar_planner.solver.global_opt.kernel import slave_weight
 from uav_insar_planner.solver.global_opt.optimum import solve_global
 from uav_insar_planner.solver.power import schedules
@@ -155,6 +155,39 @@ def test_feasibility_edge_in_rate():
         assert fixes and infeasibility.feasible_without(p_hi, scheme, frozenset(fixes))
         # a local search on the original variables finds no feasible point above the edge
         assert _multistart(p_hi, scheme, 30, seed=3)[0] == math.inf
+
+
+def test_the_one_slave_set_spares_the_filter_its_proofs(monkeypatch):
+    """Figure 4's first infeasible point (R_min,1 17.5 Mbit/s): the deletion filter run on one
+    slave alone gives a set that (P)'s own search proves empty, and (P)'s filter, starting from
+    it, searches only its feasible trials (each decided by a found point), fewer than without
+    it, and ends with the same set."""
+    p = with_rate(default_params().replace(**FIG4), 1, 17.5)
+    for scheme in ("proposed", "fixed-master"):
+        alone = infeasibility.one_slave_set(p, scheme)
+        assert alone
+        sc = make_problem(p, scheme, "bound", frozenset(blocking.FAMILIES) - alone)
+        res = branch_bound.search(sc, stop_when_feasible=True)
+        assert res.exhausted and res.point is None
+        runs = {}
+        for name, one_slave in (("plain", lambda *a: None),
+                                ("hinted", infeasibility.one_slave_set)):
+            verdicts: list = []
+
+            def spy(*args, log=verdicts, decide=infeasibility.decide_families, **kw):
+                log.append(decide(*args, **kw))
+                return log[-1]
+
+            monkeypatch.setattr(infeasibility, "decide_families", spy)
+            monkeypatch.setattr(infeasibility, "one_slave_set", one_slave)
+            runs[name] = (infeasibility.irreducible_set(p, scheme), verdicts)
+            monkeypatch.undo()
+        (plain, proven), searched = runs["plain"]
+        assert proven and runs["hinted"][0] == (plain, True)
+        assert frozenset(plain) == alone
+        hinted = runs["hinted"][1]
+        assert all(ok for ok, _ in hinted) and len(hinted) < len(searched)
+        assert sum(not ok for ok, _ in searched) >= 3
 
 
 def test_infeasible_static_power_names_c9():

@@ -152,7 +152,7 @@ ROUND_FILL = 4
 ROUND_SPLITS = 4
 
 
-def _a_slave_is_blocked(sc: Problem) -> bool:
+def a_slave_is_blocked(sc: Problem) -> bool:
     """Is some slave alone (the others dropped, a relaxation) provably without a feasible
     position? Near a feasibility edge this 2-D proof is far cheaper than the full one, which
     would keep splitting the other slaves' angles."""
@@ -297,7 +297,7 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
         if not len(boxes) or nodes >= max_nodes or time.monotonic() > deadline:
             break
         if (k_count > 1 and best_pt is None and nodes >= PROJECT_AFTER
-                and _a_slave_is_blocked(sc)):
+                and a_slave_is_blocked(sc)):
             return SearchResult(math.inf, None, math.inf, nodes, True)
         if len(boxes) > batch:
             order = np.argpartition(lb, batch)
