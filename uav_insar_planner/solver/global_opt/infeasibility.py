@@ -32,7 +32,7 @@ import numpy as np
 
 from uav_insar_planner.params import Params
 from uav_insar_planner.solver import blocking
-from uav_insar_planner.solver.global_opt import branch_bound
+from uav_insar_planner.solver.global_opt import branch_bound, local_refine
 from uav_insar_planner.solver.problem import Problem, make_problem
 from uav_insar_planner.solver.start_grid import find_start
 
@@ -51,15 +51,28 @@ def _refuted(sc: Problem, witnesses: Witnesses | None) -> bool:
 
 
 def _witnessed(sc: Problem, witnesses: Witnesses | None) -> bool:
-    """Does the kept feasible point of the relaxation sc.off still hold for sc?"""
-    point = witnesses.get(sc.off) if witnesses is not None else None
-    if point is None or len(point[1]) != len(sc.slaves):
+    """Does a kept feasible point hold for sc: the one of the relaxation sc.off, else one of a
+    relaxation that held more families (frozenset(): a sweep point's optimum, which held
+    them all)? Any point the ray model accepts (local_refine.checked, the verdict the solver's
+    own plans get) proves sc feasible; these are only the likely ones: at the first infeasible
+    point of a sweep the previous optimum holds every relaxation that drops what the step
+    tightened (a trial without C10 in Figure 4), for a test of one point instead of a search.
+    The point accepted is kept as sc.off's witness."""
+    if witnesses is None:
         return False
-    th = np.asarray(point[1], dtype=float)
-    if not (sc.r0_lo <= point[0] <= sc.r0_hi and np.all((th >= sc.th_lo) & (th <= sc.th_hi))):
-        return False
-    with np.errstate(all="ignore"):
-        return bool(np.isfinite(branch_bound.point_value(sc, point)))
+    own = witnesses.get(sc.off)
+    points = [own] + [point for off, point in witnesses.items()
+                      if point is not None and point is not own and off <= sc.off]
+    for point in points:
+        if point is None or len(point[1]) != len(sc.slaves):
+            continue
+        with np.errstate(all="ignore"):
+            found = local_refine.checked(sc, np.array([point[0], *point[1], *point[2]],
+                                                      dtype=float))
+        if found is not None:
+            witnesses[sc.off] = found[1]
+            return True
+    return False
 
 
 def _found(sc: Problem, res: branch_bound.SearchResult, witnesses: Witnesses | None) -> bool:

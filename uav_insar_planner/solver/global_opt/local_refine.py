@@ -99,7 +99,7 @@ def refine(sc: Problem, point, value: float):
                        constraints=[{"type": "ineq", "fun": lambda u: parts(u)[2],
                                      "jac": lambda u: parts(u)[3]}],
                        options={"maxiter": 100, "ftol": 1e-12})
-    cand = _checked(sc, res.x / scale)
+    cand = checked(sc, res.x / scale)
     if cand is not None and cand[0] < value:
         return cand[0], cand[1], True
     return value, point, cand is not None
@@ -147,7 +147,7 @@ def follow(before: Problem, sc: Problem, point):
     bounds active at `point` in `before` (within KKT_ACTIVE) are solved as equations in sc by
     Newton's method from `point`, with forward-difference Jacobians as at_kkt takes them.
     None unless they are exactly as many as the variables (a vertex), Newton converges, the
-    ray model accepts the result (_checked) and it meets sc's KKT conditions (at_kkt): a local
+    ray model accepts the result (checked) and it meets sc's KKT conditions (at_kkt): a local
     optimum of sc found without SLSQP. A candidate only, as every result here."""
     v = np.array([point[0], *point[1], *point[2]], dtype=float)
     k_count = len(sc.slaves)
@@ -179,7 +179,7 @@ def follow(before: Problem, sc: Problem, point):
             v[free] += step
         else:
             return None
-    cand = _checked(sc, v)
+    cand = checked(sc, v)
     if cand is None or not at_kkt(sc, cand[1]):
         return None
     return cand
@@ -199,7 +199,7 @@ def from_box(sc: Problem, box: np.ndarray):
     return (value, point) if landed and math.isfinite(value) else (math.inf, None)
 
 
-def _checked(sc: Problem, v: np.ndarray):
+def checked(sc: Problem, v: np.ndarray):
     """The ray model's verdict on an SLSQP point: (value, point), the ranges cut to the
     ray's limits, or from the inner solve at its angles when that is better; None when
     neither is feasible."""

@@ -125,6 +125,10 @@ def remember(warm: WarmStart, sc: Problem, point, res: branch_bound.SearchResult
     """Keep this solve's optimum (None: infeasible; `infeasible` when the search proved it),
     final boxes with their bounds, parameters and proven blocking set."""
     warm.point, warm.blocking, warm.problem = point, blocking, sc
+    if point is not None:
+        # a feasible point of (P) itself, the relaxation with no family off: at the next
+        # point, should it be infeasible, a likely witness of each relaxation the filter tries
+        warm.witnesses[frozenset()] = point
     warm.infeasible = point is None and res is not None and res.exhausted
     leaves = None if res is None else res.leaves
     keep = leaves is not None and 0 < len(leaves) <= LEAVES_MAX
