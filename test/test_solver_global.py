@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -155,6 +156,22 @@ def test_feasibility_edge_in_rate():
         assert fixes and infeasibility.feasible_without(p_hi, scheme, frozenset(fixes))
         # a local search on the original variables finds no feasible point above the edge
         assert _multistart(p_hi, scheme, 30, seed=3)[0] == math.inf
+
+
+def test_a_search_near_the_edge_proves_emptiness_from_one_blocked_slave():
+    """Figure 4 at 17.5 Mbit/s: slave 1 alone has no feasible position, which the search
+    asks once it has no point after branch_bound.PROJECT_AFTER boxes, well before the 20 000
+    boxes the whole problem took to get there; at 17 Mbit/s nothing is blocked."""
+    base = default_params().replace(**FIG4)
+    calls = []
+    for rate, blocked in ((17.5, True), (17.0, False)):
+        sc = make_problem(with_rate(base, 1, rate), "proposed", "exact")
+        alone = [branch_bound.search(replace(sc, slaves=(k,)), stop_when_feasible=True)
+                 for k in sc.slaves]
+        assert [r.point is None and r.exhausted for r in alone] == [blocked, False]
+        calls.append(branch_bound.search(sc))
+    assert calls[0].exhausted and calls[0].point is None and calls[0].nodes < 10_000
+    assert calls[1].exhausted and calls[1].point is not None
 
 
 def test_the_one_slave_set_spares_the_filter_its_proofs(monkeypatch):

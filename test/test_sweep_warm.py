@@ -7,8 +7,15 @@ import pytest
 
 from uav_insar_planner.evaluate import evaluate
 from uav_insar_planner.params import default_params
-from uav_insar_planner.solver import new_warm_start, power, solve
-from uav_insar_planner.solver.global_opt import local_refine, optimum, slave_sets, warm
+from uav_insar_planner.solver import blocking, new_warm_start, power, solve
+from uav_insar_planner.solver.global_opt import (
+    branch_bound,
+    infeasibility,
+    local_refine,
+    optimum,
+    slave_sets,
+    warm,
+)
 from uav_insar_planner.solver.problem import make_problem
 from uav_insar_planner.study.sweep import run_sweep
 
@@ -182,3 +189,32 @@ def test_the_previous_vertex_is_followed_to_the_next_point_without_slsqp() -> No
     assert local_refine.at_kkt(sc, followed[1])
     cold = solve(_fig3(1.3), scheme="fixed-master", objective="exact", solver="global")
     assert followed[0] == pytest.approx(cold.sigma_h_m, rel=1e-9)
+
+
+@pytest.mark.parametrize("scheme", ["proposed", "single-baseline"])
+def test_the_last_optimum_decides_the_next_points_relaxations_that_drop_c10(
+        scheme: str, monkeypatch) -> None:
+    """Figure 4, 17 then 17.5 Mbit/s (the first infeasible point): R_min,1 only shrank slave
+    1's station disk, so the optimum at 17, carried, is a feasible point of each relaxation
+    without C10 at 17.5, found without a search and meeting every family the relaxation keeps
+    as the independent checker sees it; it decides nothing that keeps the new disk."""
+    base = default_params().replace(**FIG4)
+    state = new_warm_start("global")
+    assert solve(_rate(base, 17.0), scheme=scheme, objective="exact", solver="global",
+                 warm_start=state).feasible
+    assert state.witnesses[frozenset()] == state.point
+    p, seen, searches = _rate(base, 17.5), dict(state.witnesses), []
+
+    def counted(*args, search=branch_bound.search, **kw):
+        searches.append(1)
+        return search(*args, **kw)
+
+    monkeypatch.setattr(branch_bound, "search", counted)
+    off = frozenset({"C10", "C11"})
+    assert infeasibility.feasible_without(p, scheme, off, witnesses=seen) and not searches
+    q = optimum.formation_of(make_problem(p, scheme, "exact", off), seen[off])
+    ev = evaluate(p, q, power.schedules(p, q, scheme), scheme)
+    assert all(ev.constraints[c].ok for c in blocking.FAMILIES if c not in ("C9", "C10", "C11"))
+    assert not ev.constraints["C10"].ok or not ev.constraints["C9"].ok  # (P) is infeasible
+    assert infeasibility.feasible_without(p, scheme, frozenset({"C3"}), witnesses=seen)
+    assert searches  # the carried point is outside the new disk: a search found one

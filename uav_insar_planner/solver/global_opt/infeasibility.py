@@ -123,8 +123,8 @@ def decide_families(p: Params, scheme: str, on: frozenset[str],
                 return _found(sc, res, witnesses), True
             # Undecided: near a feasibility edge one slave alone is often provably blocked
             # in some 700 boxes, where the full proof takes 20 000 and more (Figure 4 at
-            # 17.5 Mbit/s: 1 ms against 15 ms a trial); the search itself tries that only
-            # after branch_bound.PROJECT_AFTER boxes.
+            # 17.5 Mbit/s: 1 ms against 15 ms a trial); asked here, before the longer stage
+            # (whose search would ask too, but only after redoing these boxes).
             if (max_nodes == DECIDE_NODES[0] and len(sc.slaves) > 1
                     and branch_bound.a_slave_is_blocked(sc)):
                 if witnesses is not None:
