@@ -14,7 +14,8 @@ relaxation that makes the scenario feasible must drop a family of every infeasib
 `blocking_sets` tries only the sets that meet the proven irreducible set). Along a sweep,
 `witnesses` keeps the feasible point each relaxation's search found; at the next point a
 witness that the ray model still accepts inside the new domain proves that relaxation feasible
-without a search (slave_sets.ranges_for, the search's own test of a feasible point). A
+without a search (local_refine.checked, the test the solver's own plans pass), and so does
+the previous point's optimum, kept as the witness of (P) itself (warm.remember). A
 relaxation the search proved infeasible is kept as None: it stays proven while the sweep only
 tightens (P) (warm.restricts), and warm.py drops it at any other step. Where there is no such
 set to start from (the first infeasible point of a sweep, a standalone solve), the filter's
@@ -58,7 +59,7 @@ def _witnessed(sc: Problem, witnesses: Witnesses | None) -> bool:
     point of a sweep the previous optimum holds every relaxation that drops what the step
     tightened (a trial without C10 in Figure 4), for a test of one point instead of a search.
     The point accepted is kept as sc.off's witness."""
-    if witnesses is None:
+    if witnesses is None or _refuted(sc, witnesses):
         return False
     own = witnesses.get(sc.off)
     points = [own] + [point for off, point in witnesses.items()

@@ -200,7 +200,8 @@ def from_box(sc: Problem, box: np.ndarray):
 
 
 def checked(sc: Problem, v: np.ndarray):
-    """The ray model's verdict on an SLSQP point: (value, point), the ranges cut to the
+    """The ray model's verdict on a point (an SLSQP result, a sweep's witness, both in ray
+    coordinates v = (r0, angles, ranges)): (value, point), the ranges cut to the
     ray's limits, or from the inner solve at its angles when that is better; None when
     neither is feasible."""
     k_count = len(sc.slaves)
