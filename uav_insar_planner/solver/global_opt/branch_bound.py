@@ -10,7 +10,9 @@ look angles in the C3/C7 domain. Each box gets
 - a lower bound (slave_sets.box_lower_bound): every factor of the objective is monotone in r0,
   in |theta - theta_0| or in the slave range, and every range limit is monotone in r0 and in
   an angle, so replacing each by its most favourable value over the box bounds the objective
-  from below over all feasible points of the box (+inf proves the box empty).
+  from below over all feasible points of the box (+inf proves the box empty). Once the search
+  keeps proving boxes empty late (angle_domain.CUT_FROM_ROUND), each box's angles are first
+  cut to the slave's provably feasible ones (angle_domain.py): every feasible point stays.
 
 Boxes whose lower bound is within `rel_gap` of the incumbent are closed; the smallest lower
 bound of the closed and the still open boxes is a lower bound on the global optimum.
@@ -32,7 +34,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from uav_insar_planner import model
-from uav_insar_planner.solver.global_opt import local_refine, slave_sets
+from uav_insar_planner.solver.global_opt import angle_domain, local_refine, slave_sets
 from uav_insar_planner.solver.problem import Problem
 
 R0A, R0B = 0, 1
@@ -263,7 +265,6 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
     deadline = math.inf if time_budget_s is None else time.monotonic() + time_budget_s
     if sc.r0_lo > sc.r0_hi or sc.th_lo > sc.th_hi:
         return SearchResult(math.inf, None, math.inf, 0, True)
-    k_count = len(sc.slaves)
     pairs = interchangeable_pairs(sc)
     if boxes is None:
         boxes = _root_boxes(sc, pairs)
@@ -271,17 +272,18 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
     landed = landed and incumbent is not None
     local = _LocalSearch(last=best_pt if landed else None)
     rounds, closed_lb, nodes, leaves = 0, math.inf, len(boxes), []  # leaves: (boxes, bounds)
-    parked, parked_lb, project_at = boxes[:0], np.empty(0), PROJECT_AFTER
+    parked, parked_lb, project_at, angles = boxes[:0], np.empty(0), PROJECT_AFTER, None
     while True:
         boxes, kept = _ordered(boxes, pairs)
         lb = _bounds(sc, boxes, best_val * (1.0 - rel_gap),
-                     None if box_lb is None else box_lb[kept])
+                     None if box_lb is None else box_lb[kept], angles)
         box_lb = None  # given for the first round's boxes only
         keep = np.isfinite(lb)
         if keep_leaves:
             leaves.append((boxes[~keep], lb[~keep]))
         boxes, lb = boxes[keep], lb[keep]
         rounds += 1
+        angles = angles or angle_domain.once_grinding(sc, rounds, keep.all())
         if not landed or rounds % LANDED_EVERY == 0:
             f, pt = _incumbent(sc, _most_promising(boxes, lb))
             if refine:
@@ -299,7 +301,7 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
         boxes, lb = boxes[~done], lb[~done]
         if not len(boxes) or nodes >= max_nodes or time.monotonic() > deadline:
             break
-        if k_count > 1 and best_pt is None and nodes >= project_at:
+        if len(sc.slaves) > 1 and best_pt is None and nodes >= project_at:
             if a_slave_is_blocked(sc):
                 return SearchResult(math.inf, None, math.inf, nodes, True)
             project_at = math.inf  # asked once: the answer depends on sc alone
@@ -324,16 +326,18 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
                         leaves=kept[0] if kept else None, leaf_lb=kept[1] if kept else None)
 
 
-def _bounds(sc: Problem, boxes: np.ndarray, close_at: float, known: np.ndarray | None):
-    """box_lower_bound of the boxes, computed only where the `known` proven bounds (if any)
-    are below close_at; the larger of the two where both are known."""
+def _bounds(sc: Problem, boxes: np.ndarray, close_at: float, known: np.ndarray | None,
+            angles: list[np.ndarray] | None = None):
+    """box_lower_bound of the boxes (with the angle cut, when `angles` is given), computed
+    only where the `known` proven bounds (if any) are below close_at; the larger of the two
+    where both are known."""
     if known is None:
-        return slave_sets.box_lower_bound(sc, boxes, close_at=close_at)
+        return slave_sets.box_lower_bound(sc, boxes, close_at=close_at, angles=angles)
     lb = known.copy()
     fresh = known < close_at
     if fresh.any():
         lb[fresh] = np.maximum(known[fresh], slave_sets.box_lower_bound(
-            sc, boxes[fresh], close_at=close_at))
+            sc, boxes[fresh], close_at=close_at, angles=angles))
     return lb
 
 
