@@ -10,7 +10,9 @@ look angles in the C3/C7 domain. Each box gets
 - a lower bound (slave_sets.box_lower_bound): every factor of the objective is monotone in r0,
   in |theta - theta_0| or in the slave range, and every range limit is monotone in r0 and in
   an angle, so replacing each by its most favourable value over the box bounds the objective
-  from below over all feasible points of the box (+inf proves the box empty).
+  from below over all feasible points of the box (+inf proves the box empty). Once the search
+  keeps proving boxes empty late (angle_domain.CUT_FROM_ROUND), each box's angles are first
+  cut to the slave's provably feasible ones (angle_domain.py): every feasible point stays.
 
 Boxes whose lower bound is within `rel_gap` of the incumbent are closed; the smallest lower
 bound of the closed and the still open boxes is a lower bound on the global optimum.
@@ -32,7 +34,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from uav_insar_planner import model
-from uav_insar_planner.solver.global_opt import local_refine, slave_sets
+from uav_insar_planner.solver.global_opt import angle_domain, local_refine, slave_sets
 from uav_insar_planner.solver.problem import Problem
 
 R0A, R0B = 0, 1
@@ -271,7 +273,6 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
     deadline = math.inf if time_budget_s is None else time.monotonic() + time_budget_s
     if sc.r0_lo > sc.r0_hi or sc.th_lo > sc.th_hi:
         return SearchResult(math.inf, None, math.inf, 0, True)
-    k_count = len(sc.slaves)
     pairs = interchangeable_pairs(sc)
     landed = landed and incumbent is not None
     if boxes is None:
@@ -280,17 +281,18 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
     gap = math.inf  # the last round's relative gap of the smallest bound to the incumbent
     local = _LocalSearch(last=best_pt if landed else None)
     rounds, closed_lb, nodes, leaves = 0, math.inf, len(boxes), []  # leaves: (boxes, bounds)
-    parked, parked_lb, project_at = boxes[:0], np.empty(0), PROJECT_AFTER
+    parked, parked_lb, project_at, angles = boxes[:0], np.empty(0), PROJECT_AFTER, None
     while True:
         boxes, kept = _ordered(boxes, pairs)
         lb = _bounds(sc, boxes, best_val * (1.0 - rel_gap),
-                     None if box_lb is None else box_lb[kept])
+                     None if box_lb is None else box_lb[kept], angles)
         box_lb = None  # given for the first round's boxes only
         keep = np.isfinite(lb)
         if keep_leaves:
             leaves.append((boxes[~keep], lb[~keep]))
         boxes, lb = boxes[keep], lb[keep]
         rounds += 1
+        angles = angles or angle_domain.once_grinding(sc, rounds, keep.all())
         seen, gap = gap, (best_val - float(lb.min())) / best_val if len(lb) else 0.0
         if not landed or rounds % LANDED_EVERY == 0 or gap > LANDED_SHRINK * seen:
             f, pt = _incumbent(sc, _most_promising(boxes, lb))
@@ -309,20 +311,11 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
         boxes, lb = boxes[~done], lb[~done]
         if not len(boxes) or nodes >= max_nodes or time.monotonic() > deadline:
             break
-        if k_count > 1 and best_pt is None and nodes >= project_at:
+        if len(sc.slaves) > 1 and best_pt is None and nodes >= project_at:
             if a_slave_is_blocked(sc):
                 return SearchResult(math.inf, None, math.inf, nodes, True)
             project_at = math.inf  # asked once: the answer depends on sc alone
-        if len(boxes) > batch:
-            order = np.argpartition(lb, batch)
-            parked, parked_lb = boxes[order[batch:]], lb[order[batch:]]
-            boxes = boxes[order[:batch]]
-        else:
-            parked, parked_lb = boxes[:0], lb[:0]
-        # Few open boxes: bisect each several times per round (the cost of a round is mostly
-        # fixed numpy overhead, so fewer, fuller rounds are faster).
-        boxes = _split(sc, boxes, max(1, min(ROUND_SPLITS,
-                                             int(math.log2(batch / ROUND_FILL / len(boxes))))))
+        boxes, parked, parked_lb = _next_round(sc, boxes, lb, batch)
         nodes += len(boxes)
     open_lb = float(lb.min()) if len(boxes) else math.inf
     lower = min(closed_lb, open_lb, best_val)
@@ -334,47 +327,31 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
                         leaves=kept[0] if kept else None, leaf_lb=kept[1] if kept else None)
 
 
-def _bounds(sc: Problem, boxes: np.ndarray, close_at: float, known: np.ndarray | None):
-    """box_lower_bound of the boxes, computed only where the `known` proven bounds (if any)
-    are below close_at; the larger of the two where both are known."""
+def _next_round(sc: Problem, boxes: np.ndarray, lb: np.ndarray, batch: int):
+    """(the next round's boxes, the parked boxes, their bounds): the `batch` open boxes of the
+    smallest bounds split, the rest parked."""
+    if len(boxes) > batch:
+        order = np.argpartition(lb, batch)
+        parked, parked_lb = boxes[order[batch:]], lb[order[batch:]]
+        boxes = boxes[order[:batch]]
+    else:
+        parked, parked_lb = boxes[:0], lb[:0]
+    # Few open boxes: bisect each several times per round (the cost of a round is mostly
+    # fixed numpy overhead, so fewer, fuller rounds are faster).
+    times = max(1, min(ROUND_SPLITS, int(math.log2(batch / ROUND_FILL / len(boxes)))))
+    return _split(sc, boxes, times), parked, parked_lb
+
+
+def _bounds(sc: Problem, boxes: np.ndarray, close_at: float, known: np.ndarray | None,
+            angles: list[np.ndarray] | None = None):
+    """box_lower_bound of the boxes (with the angle cut, when `angles` is given), computed
+    only where the `known` proven bounds (if any) are below close_at; the larger of the two
+    where both are known."""
     if known is None:
-        return slave_sets.box_lower_bound(sc, boxes, close_at=close_at)
+        return slave_sets.box_lower_bound(sc, boxes, close_at=close_at, angles=angles)
     lb = known.copy()
     fresh = known < close_at
     if fresh.any():
         lb[fresh] = np.maximum(known[fresh], slave_sets.box_lower_bound(
-            sc, boxes[fresh], close_at=close_at))
+            sc, boxes[fresh], close_at=close_at, angles=angles))
     return lb
-
-
-def polish(sc: Problem, point, steps, iterations: int = 80):
-    """Compass search from `point` on (r0, theta_1, ..., theta_K) with the inner ranges of
-    slave_sets.ranges_for: all 3^d stencil points at once, move to the best, halve the step
-    when none improves. It only ever returns feasible points no worse than `point` (the
-    certificate is unaffected)."""
-    k_count = len(sc.slaves)
-    lo = np.array([sc.r0_lo] + [sc.th_lo] * k_count)
-    hi = np.array([sc.r0_hi] + [sc.th_hi] * k_count)
-    x = np.array((point[0], *point[1]))
-    step = np.array(steps, dtype=float)
-    grid = np.array(np.meshgrid(*[[-1, 0, 1]] * x.size)).reshape(x.size, -1).T  # 3^d stencil
-    best = (point_value(sc, point), point)
-    for _ in range(iterations):
-        cand = np.clip(x + grid * step, lo, hi)
-        f, ranges = slave_sets.ranges_for(sc, cand[:, 0], cand[:, 1:])
-        i = int(np.argmin(f))
-        if f[i] < best[0]:
-            x = cand[i]
-            best = (float(f[i]), (float(x[0]), tuple(map(float, x[1:])),
-                                  tuple(map(float, ranges[i]))))
-        else:
-            step *= 0.5
-            if np.all(step <= 1e-12 * np.maximum(np.abs(x), 1.0)):
-                break
-    return best
-
-
-def point_value(sc: Problem, point) -> float:
-    """The objective of the search point (r0, angles, ranges) as its inner ranges give it."""
-    f, _ = slave_sets.ranges_for(sc, np.array([point[0]]), np.array([point[1]]))
-    return float(f[0])

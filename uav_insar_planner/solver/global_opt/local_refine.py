@@ -9,7 +9,10 @@ C4, C5, C6, C8 and C9-C11's station disk; C2, C3, C7 and the master's own limits
 variables' bounds), lands on such a vertex in a few iterations.
 
 The result is only a candidate: `refine` re-checks it against the ray model and returns it
-only when feasible there and better, so the certificate never depends on SLSQP.
+only when feasible there and better, so the certificate never depends on SLSQP. Two other
+local moves meet the same rule: `follow` carries a sweep's previous vertex to the next point
+(Newton on its active constraints), and `polish` is a compass search on the angles where
+SLSQP ends off the feasible set.
 """
 from __future__ import annotations
 
@@ -228,3 +231,36 @@ def checked(sc: Problem, v: np.ndarray):
     if best is None or f_direct < best[0]:
         best = (f_direct, (r0, tuple(map(float, th)), tuple(map(float, r))))
     return best
+
+
+def polish(sc: Problem, point, steps, iterations: int = 80):
+    """Compass search from `point` on (r0, theta_1, ..., theta_K) with the inner ranges of
+    slave_sets.ranges_for: all 3^d stencil points at once, move to the best, halve the step
+    when none improves. It only ever returns feasible points no worse than `point` (the
+    certificate is unaffected)."""
+    k_count = len(sc.slaves)
+    lo = np.array([sc.r0_lo] + [sc.th_lo] * k_count)
+    hi = np.array([sc.r0_hi] + [sc.th_hi] * k_count)
+    x = np.array((point[0], *point[1]))
+    step = np.array(steps, dtype=float)
+    grid = np.array(np.meshgrid(*[[-1, 0, 1]] * x.size)).reshape(x.size, -1).T  # 3^d stencil
+    best = (point_value(sc, point), point)
+    for _ in range(iterations):
+        cand = np.clip(x + grid * step, lo, hi)
+        f, ranges = slave_sets.ranges_for(sc, cand[:, 0], cand[:, 1:])
+        i = int(np.argmin(f))
+        if f[i] < best[0]:
+            x = cand[i]
+            best = (float(f[i]), (float(x[0]), tuple(map(float, x[1:])),
+                                  tuple(map(float, ranges[i]))))
+        else:
+            step *= 0.5
+            if np.all(step <= 1e-12 * np.maximum(np.abs(x), 1.0)):
+                break
+    return best
+
+
+def point_value(sc: Problem, point) -> float:
+    """The objective of the search point (r0, angles, ranges) as its inner ranges give it."""
+    f, _ = slave_sets.ranges_for(sc, np.array([point[0]]), np.array([point[1]]))
+    return float(f[0])

@@ -188,7 +188,7 @@ def _search_point(sc: Problem, res: branch_bound.SearchResult, chain):
             value, point, landed = local_refine.refine(sc, point, value)
         if not landed:
             widths = (sc.r0_hi - sc.r0_lo,) + (sc.th_hi - sc.th_lo,) * len(sc.slaves)
-            value, point = branch_bound.polish(sc, point, [POLISH_STEP * w for w in widths])
+            value, point = local_refine.polish(sc, point, [POLISH_STEP * w for w in widths])
     if chain is not None:
         if chain[0] < value:
             value, point = chain[0], chain[1]

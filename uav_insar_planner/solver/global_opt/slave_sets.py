@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from uav_insar_planner.solver.global_opt import chain_bound, slave_ranges
+from uav_insar_planner.solver.global_opt import angle_domain, chain_bound, slave_ranges
 from uav_insar_planner.solver.global_opt.kernel import (
     lower_crossing,
     objective_from_normalised,
@@ -37,15 +37,26 @@ def angle_cols(j: int) -> tuple[int, int]:
     return 2 + 2 * j, 3 + 2 * j
 
 
-def box_lower_bound(sc: Problem, boxes: np.ndarray, close_at: float = np.inf) -> np.ndarray:
+def box_lower_bound(sc: Problem, boxes: np.ndarray, close_at: float = np.inf,
+                    angles: list[np.ndarray] | None = None) -> np.ndarray:
     """Lower bound on the objective over every feasible point of each box (+inf: the box
     provably holds none); see the module docstring. close_at: bounds at or above it close the
-    box anyway, so the costlier forest bound is spent only on boxes below it."""
+    box anyway, so the costlier forest bound is spent only on boxes below it. angles: per
+    slave, angle_domain.feasible_angles' intervals; each box's angles are cut to their hull
+    first (every feasible point of the box lies in the cut box, so the bound of the cut box
+    bounds it; a box whose angles miss them is empty)."""
     r0a, r0b = boxes[:, 0], boxes[:, 1]
     ta, tb = boxes[:, 2::2].T, boxes[:, 3::2].T  # (K, n): one row per slave
+    if angles is not None:
+        cut = [angle_domain.clip_to_feasible(a, ta[j], tb[j]) for j, a in enumerate(angles)]
+        ca, cb = np.stack([c[0] for c in cut]), np.stack([c[1] for c in cut])
+        missed = ~np.all(ca <= cb, axis=0)  # the box is empty; its own angles keep the sums finite
+        ta, tb = np.where(missed, ta, ca), np.where(missed, tb, cb)
     lo, up, smax, g_rg = slave_ranges.slave_box(sc, tuple(sc.slaves), r0a, r0b, ta, tb)
     caps = np.array([slave_ranges.c8_cap(sc, k) for k in sc.slaves])  # per slave: its rung
     ok = np.all(lo <= up, axis=0)
+    if angles is not None:
+        ok &= ~missed
     single = slave_ranges.weight_bound(sc, r0a, up, smax, g_rg, caps[:, None])
     if len(single) == 1 or not sc.on("C4"):
         w = np.sum(single, axis=0)
