@@ -43,13 +43,15 @@ from uav_insar_planner.solver.problem import Problem
 FIRST_CELLS = 64
 SUBCELLS = 128
 MIN_WIDTH = 1e-8
-# From this round of the search on, the first round that proves a box empty switches the cut
-# on (`once_grinding`; proving the angles costs about a millisecond): the coarse split's first
-# rounds prove the bulk of the infeasible domain empty (Table I: 487, 75 and 20 boxes in rounds
-# 1-3, none after), while empty boxes turning up later are a search grinding along a slave's
-# feasibility edge (Figure 3's static-power points at h_amb_min 0.5-0.7 m: hundreds to
-# thousands in most rounds).
+# From this round of the search on, the first round that proves at least CUT_SHARE of its
+# boxes empty switches the cut on (`once_grinding`; proving the angles costs about a
+# millisecond): the coarse split's first rounds prove the bulk of the infeasible domain empty
+# (Table I from its 128 root boxes: 15, 86, 116 and 24 of 128, 368, 464 and 240 boxes in
+# rounds 1-4, none after), while a search grinding along a slave's feasibility edge proves
+# many empty in most rounds (Figure 3's static-power points at h_amb_min 0.5-0.9 m: 38-88 %
+# in round 4 or 5).
 CUT_FROM_ROUND = 4
+CUT_SHARE = 0.25
 
 
 def _empty(sc: Problem, ta: np.ndarray, tb: np.ndarray) -> np.ndarray:
@@ -98,10 +100,11 @@ def _merged(cells: np.ndarray) -> np.ndarray:
     return np.stack([cells[starts, 0], np.maximum.accumulate(cells[:, 1])[ends]], axis=1)
 
 
-def once_grinding(sc: Problem, rounds: int, none_empty: bool) -> list[np.ndarray] | None:
-    """feasible_angles(sc) when the search's round `rounds` (1-based) proved boxes empty
-    late (CUT_FROM_ROUND; none_empty: it proved none), else None."""
-    return None if none_empty or rounds < CUT_FROM_ROUND else feasible_angles(sc)
+def once_grinding(sc: Problem, rounds: int, empty_share: float) -> list[np.ndarray] | None:
+    """feasible_angles(sc) when the search's round `rounds` (1-based) proved many of its
+    boxes empty late (CUT_FROM_ROUND, CUT_SHARE; empty_share: the share it proved), else
+    None."""
+    return None if empty_share < CUT_SHARE or rounds < CUT_FROM_ROUND else feasible_angles(sc)
 
 
 def clip_to_feasible(intervals: np.ndarray, ta: np.ndarray, tb: np.ndarray):
