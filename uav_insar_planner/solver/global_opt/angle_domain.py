@@ -44,14 +44,16 @@ FIRST_CELLS = 64
 SUBCELLS = 128
 MIN_WIDTH = 1e-8
 # From this round of the search on, the first round that proves at least CUT_SHARE of its
-# boxes empty switches the cut on (`once_grinding`; proving the angles costs about a
+# boxes and at least CUT_MIN_EMPTY boxes empty switches the cut on (`once_grinding`; proving the angles costs about a
 # millisecond): the coarse split's first rounds prove the bulk of the infeasible domain empty
 # (Table I from its 128 root boxes: 15, 86, 116 and 24 of 128, 368, 464 and 240 boxes in
 # rounds 1-4, none after), while a search grinding along a slave's feasibility edge proves
 # many empty in most rounds (Figure 3's static-power points at h_amb_min 0.5-0.9 m: 38-88 %
-# in round 4 or 5).
+# in round 4 or 5, 79 to 760 boxes; a warm start's last rounds, a few dozen boxes, may prove
+# a quarter of them empty without grinding).
 CUT_FROM_ROUND = 4
 CUT_SHARE = 0.25
+CUT_MIN_EMPTY = 64
 
 
 def _empty(sc: Problem, ta: np.ndarray, tb: np.ndarray) -> np.ndarray:
@@ -100,11 +102,14 @@ def _merged(cells: np.ndarray) -> np.ndarray:
     return np.stack([cells[starts, 0], np.maximum.accumulate(cells[:, 1])[ends]], axis=1)
 
 
-def once_grinding(sc: Problem, rounds: int, empty_share: float) -> list[np.ndarray] | None:
+def once_grinding(sc: Problem, rounds: int, nonempty: np.ndarray) -> list[np.ndarray] | None:
     """feasible_angles(sc) when the search's round `rounds` (1-based) proved many of its
-    boxes empty late (CUT_FROM_ROUND, CUT_SHARE; empty_share: the share it proved), else
-    None."""
-    return None if empty_share < CUT_SHARE or rounds < CUT_FROM_ROUND else feasible_angles(sc)
+    boxes empty late (CUT_FROM_ROUND, CUT_SHARE, CUT_MIN_EMPTY; nonempty: the round's boxes
+    not proven empty), else None."""
+    empty = len(nonempty) - int(np.count_nonzero(nonempty))
+    if rounds < CUT_FROM_ROUND or empty < max(CUT_MIN_EMPTY, CUT_SHARE * len(nonempty)):
+        return None
+    return feasible_angles(sc)
 
 
 def clip_to_feasible(intervals: np.ndarray, ta: np.ndarray, tb: np.ndarray):

@@ -292,7 +292,7 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
             leaves.append((boxes[~keep], lb[~keep]))
         boxes, lb = boxes[keep], lb[keep]
         rounds += 1
-        angles = angles or angle_domain.once_grinding(sc, rounds, 1.0 - keep.mean())
+        angles = angles or angle_domain.once_grinding(sc, rounds, keep)
         seen, gap = gap, (best_val - float(lb.min())) / best_val if len(lb) else 0.0
         if not landed or rounds % LANDED_EVERY == 0 or gap > LANDED_SHRINK * seen:
             f, pt = _incumbent(sc, _most_promising(boxes, lb))
