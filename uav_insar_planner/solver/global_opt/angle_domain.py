@@ -44,8 +44,9 @@ FIRST_CELLS = 64
 SUBCELLS = 128
 MIN_WIDTH = 1e-8
 # From this round of the search on, the first round that proves at least CUT_SHARE of its
-# boxes and at least CUT_MIN_EMPTY boxes empty switches the cut on (`once_grinding`; proving the angles costs about a
-# millisecond): the coarse split's first rounds prove the bulk of the infeasible domain empty
+# boxes and at least CUT_MIN_EMPTY boxes empty switches the cut on (`once_grinding`; proving
+# the angles costs about a millisecond): the coarse split's first rounds prove the bulk of
+# the infeasible domain empty
 # (Table I from its 128 root boxes: 15, 86, 116 and 24 of 128, 368, 464 and 240 boxes in
 # rounds 1-4, none after), while a search grinding along a slave's feasibility edge proves
 # many empty in most rounds (Figure 3's static-power points at h_amb_min 0.5-0.9 m: 38-88 %
