@@ -130,11 +130,18 @@ def _fig3(h: float):
 def test_only_a_raised_h_amb_min_or_rate_min_restricts_the_problem() -> None:
     state = warm.WarmStart()
     warm.remember(state, make_problem(_fig3(1.0), "proposed", "exact"), None, None)
-    assert warm.restricts(state, _fig3(1.1))
-    assert warm.restricts(state, _rate(_fig3(1.0), 17.0))  # R_min,1 16.95 -> 17 Mbit/s
-    assert not warm.restricts(state, _fig3(0.9))  # C8 relaxed
-    assert not warm.restricts(state, _rate(_fig3(1.0), 16.0))
-    assert not warm.restricts(state, _fig3(1.1).replace(d_min_m=2.0))  # not declared
+
+    def restricts(p, scheme="proposed", objective="exact"):
+        return warm.restricts(state, make_problem(p, scheme, objective))
+
+    assert restricts(_fig3(1.1))
+    assert restricts(_rate(_fig3(1.0), 17.0))  # R_min,1 16.95 -> 17 Mbit/s
+    assert not restricts(_fig3(0.9))  # C8 relaxed
+    assert not restricts(_rate(_fig3(1.0), 16.0))
+    assert not restricts(_fig3(1.1).replace(d_min_m=2.0))  # not declared
+    # another scheme or objective is another problem, however the parameters move
+    assert not restricts(_fig3(1.1), scheme="static-power")
+    assert not restricts(_fig3(1.1), objective="bound")
 
 
 def test_carried_bounds_hold_at_a_restricted_point_and_are_dropped_at_a_relaxed_one() -> None:
@@ -144,7 +151,7 @@ def test_carried_bounds_hold_at_a_restricted_point_and_are_dropped_at_a_relaxed_
     state = new_warm_start("global")
     solve(_fig3(1.2), scheme="proposed", objective="exact", solver="global", warm_start=state)
     sc = make_problem(_fig3(1.3), "proposed", "exact")
-    boxes, bounds = warm.start_boxes(sc, state, warm.restricts(state, sc.p))
+    boxes, bounds = warm.start_boxes(sc, state, warm.restricts(state, sc))
     assert bounds is not None and np.isinf(bounds).any() and np.isfinite(bounds).any()
     rng = np.random.default_rng(7)
     for _ in range(40):

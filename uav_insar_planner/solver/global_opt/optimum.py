@@ -111,7 +111,7 @@ def solve_global(p: Params, scheme: str, objective: str,
             "master-range intervals, all closed"), intervals)
     start = boxes = box_lb = None
     if warm_start is not None:
-        restricted = warm.restricts(warm_start, p)
+        restricted = warm.restricts(warm_start, sc)
         if not restricted:
             warm.forget_refuted(warm_start)
         if restricted and warm_start.infeasible:

@@ -34,7 +34,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from uav_insar_planner.params import Params
 from uav_insar_planner.solver.global_opt import branch_bound
 from uav_insar_planner.solver.problem import Problem
 
@@ -74,11 +73,15 @@ def domain_of(sc: Problem) -> tuple:
             sc.r0_lo, sc.r0_hi, sc.th_lo, sc.th_hi, sc.scheme, sc.objective, sc.off)
 
 
-def restricts(warm: WarmStart, p: Params) -> bool:
-    """Is p's problem a restriction of the previous point's with the same objective: every
-    parameter equal but those of TIGHTER_AS_THEY_GROW, each no smaller (element by element)?"""
-    before = None if warm.problem is None else warm.problem.p
-    if before is None or before.energy_budget_uav_j != p.energy_budget_uav_j:
+def restricts(warm: WarmStart, sc: Problem) -> bool:
+    """Is sc a restriction of the previous point's problem with the same objective: the same
+    scheme, objective and families, every parameter equal but those of TIGHTER_AS_THEY_GROW,
+    each no smaller (element by element)?"""
+    if warm.problem is None or (warm.problem.scheme, warm.problem.objective,
+                                warm.problem.off) != (sc.scheme, sc.objective, sc.off):
+        return False
+    before, p = warm.problem.p, sc.p
+    if before.energy_budget_uav_j != p.energy_budget_uav_j:
         return False
     for key in set(before.raw) | set(p.raw):
         old, new = before.raw.get(key), p.raw.get(key)
