@@ -133,7 +133,7 @@ def test_demo_flies_one_stack_per_uav(demos):
     for m in vehicles.values():
         assert float(m[2]) < 0.5, m[0]
         assert float(m[4]) == pytest.approx(float(m[5]), abs=0.5), m[0]
-    assert re.search(r"demo: stopped planner, agents, vehicles, bridges \(exit codes "
+    assert re.search(r"demo: stopped agents, planner, vehicles, bridges \(exit codes "
                      r"\[(0, ){9}0\]\)", out), out[-500:]
     from test_bag_record import assert_both_readers_decode
 

@@ -85,3 +85,22 @@ def test_bad_agent_parameter_exits_2(procs, args, name):
     out, _ = agent.communicate(timeout=30)
     assert agent.returncode == 2, out
     assert f"]: {name}: " in out
+
+
+def test_a_node_prints_its_stacks_on_the_dump_signal_and_still_stops_cleanly(watcher, procs):
+    """STACK_DUMP_SIGNAL, which stop_nodes sends before SIGKILL, makes a spinning node print
+    every thread's stack (where it hung, had it hung) without stopping it; Ctrl-C then stops
+    it with code 0 as ever."""
+    from uav_insar_planner.demo.processes import STACK_DUMP_SIGNAL
+
+    agent = procs("agent", "--params-file", CONFIG, "-p", "uav_id:=1", "-r", "__node:=agent1")
+    from uav_insar_planner.ros import topics
+
+    assert watcher.spin_until(lambda: watcher.node.count_publishers(
+        "/" + topics.achieved_rate(1)), 20.0), "agent not discovered"
+    agent.send_signal(STACK_DUMP_SIGNAL)
+    watcher.spin_until(lambda: False, 1.0)
+    assert agent.poll() is None  # alive: the dump does not stop it
+    assert stop_node(agent) == 0
+    out = agent.stdout.read()
+    assert "most recent call first" in out and "in spin" in out, out[-2000:]

@@ -19,6 +19,10 @@ from collections.abc import Sequence
 from pathlib import Path
 
 STOP_TIMEOUT_S = 5.0
+# Sent before SIGKILL: a node run by ros/run.py prints every thread's stack on it, so one that
+# ignored SIGINT and SIGTERM leaves in its log where it hung.
+STACK_DUMP_SIGNAL = signal.SIGUSR1
+STACK_DUMP_S = 1.0
 MODULES = {"planner": "uav_insar_planner.ros.planner", "agent": "uav_insar_sim.agent_node",
            "mavlink_bridge": "uav_insar_planner.ros.mavlink_bridge",
            "uav-insar-vehicle": "uav_insar_sim.vehicle"}
@@ -70,18 +74,20 @@ def start_process(cmd: Sequence[str], env: dict[str, str],
 
 
 def stop_node(proc: subprocess.Popen, timeout: float = STOP_TIMEOUT_S) -> int:
-    """SIGINT (Ctrl-C), then SIGTERM, then SIGKILL, each given `timeout`; returns the exit code."""
+    """SIGINT (Ctrl-C), then SIGTERM, each given `timeout`, then SIGKILL (after a stack dump,
+    see `stop_nodes`); returns the exit code."""
     return stop_nodes([proc], timeout)[0]
 
 
 def stop_nodes(procs: Sequence[subprocess.Popen], timeout: float = STOP_TIMEOUT_S) -> list[int]:
     """`stop_node` for all of `procs` at once (each signal to all, then one shared wait), so
-    they shut down in parallel; returns their exit codes in order."""
-    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGKILL):
+    they shut down in parallel; returns their exit codes in order. Before SIGKILL, what is
+    still alive gets STACK_DUMP_SIGNAL and STACK_DUMP_S to print its stacks."""
+    for sig in (signal.SIGINT, signal.SIGTERM, STACK_DUMP_SIGNAL, signal.SIGKILL):
         alive = [p for p in procs if p.poll() is None]
         for proc in alive:
             proc.send_signal(sig)
-        end = time.monotonic() + timeout
+        end = time.monotonic() + (STACK_DUMP_S if sig == STACK_DUMP_SIGNAL else timeout)
         for proc in alive:
             try:
                 proc.wait(max(0.0, end - time.monotonic()))

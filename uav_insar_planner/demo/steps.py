@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 from uav_insar_planner.demo.kill import kill_agent
 from uav_insar_planner.demo.processes import (
     PRINT_LOCK,
+    STOP_TIMEOUT_S,
     executable,
     free_udp_ports,
     ros_env,
@@ -325,15 +326,28 @@ class Mission:
             if kill_lines:
                 print("\n".join(kill_lines), flush=True)
 
+    def _proc_names(self) -> list[str]:
+        """What each of `procs` is, in their order."""
+        names = [agent_name(k) for k in self.swarm] + ["planner"]
+        names += [f"vehicle{FIRST_SYSID + k}" for k in range(len(self.ports))]
+        if self.ports:
+            names += ([f"{uav_name(k)}/bridge" for k in range(len(self.ports))]
+                      if self.args.per_uav_stacks else ["bridge"])
+        return names
+
     def stop(self) -> None:
         """Stop every process (SIGINT first, as Ctrl-C would), the watcher, then the
         recorder, and say so."""
         codes = stop_nodes(self.procs)
         self.watcher.destroy()
-        what = ("planner and agents" if self.args.no_mavlink
-                else "planner, agents, vehicles, bridges" if self.args.per_uav_stacks
-                else "planner, agents, vehicles, bridge")
+        what = ("agents and planner" if self.args.no_mavlink
+                else "agents, planner, vehicles, bridges" if self.args.per_uav_stacks
+                else "agents, planner, vehicles, bridge")
         print(f"demo: stopped {what} (exit codes {codes})", flush=True)
+        for name, code in zip(self._proc_names(), codes, strict=False):  # an early stop
+            if code < 0:
+                print(f"demo: {name} did not stop within {2 * STOP_TIMEOUT_S:g} s of SIGINT "
+                      f"and SIGTERM; killed (exit code {code}, its stacks above)", flush=True)
         if self.recorder is not None:
             code, line = stop_recorder(self.recorder)
             print(f"demo: {line} (recorder exit code {code}); plot it with `uav-insar "

@@ -7,6 +7,7 @@ line on stderr, exit code 2 (EXIT_BAD_INPUT), nothing published.
 """
 from __future__ import annotations
 
+import faulthandler
 import os
 import signal
 import sys
@@ -20,6 +21,7 @@ from rclpy.executors import ExternalShutdownException
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 
+from uav_insar_planner.demo.processes import STACK_DUMP_SIGNAL
 from uav_insar_planner.exit_codes import EXIT_BAD_INPUT
 from uav_insar_planner.params_file import params_file_problems
 
@@ -112,6 +114,8 @@ def run_node(make_node: Callable[[], Node], default_name: str,
         _report(default_name, problems)
         return EXIT_BAD_INPUT
     signal.signal(signal.SIGTERM, _terminate)
+    # A node stuck past SIGINT and SIGTERM shows where (stop_nodes sends it before SIGKILL).
+    faulthandler.register(STACK_DUMP_SIGNAL, all_threads=True)
     # rcl logs its own "Failed to parse global arguments" before raising; ours says which.
     rclpy.logging.set_logger_level("rcl", rclpy.logging.LoggingSeverity.FATAL)
     try:
