@@ -91,7 +91,7 @@ def test_a_node_prints_its_stacks_on_the_dump_signal_and_still_stops_cleanly(wat
     """STACK_DUMP_SIGNAL, which stop_nodes sends before SIGKILL, makes a spinning node print
     every thread's stack (where it hung, had it hung) without stopping it; Ctrl-C then stops
     it with code 0 as ever."""
-    from uav_insar_planner.demo.processes import STACK_DUMP_SIGNAL
+    from uav_insar_planner.exit_codes import STACK_DUMP_SIGNAL
 
     agent = procs("agent", "--params-file", CONFIG, "-p", "uav_id:=1", "-r", "__node:=agent1")
     from uav_insar_planner.ros import topics

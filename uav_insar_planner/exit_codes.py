@@ -1,6 +1,9 @@
 """The exit codes every command and node of the suite returns, in one table (`EXIT_CODE_TABLE`,
-which the documentation's exit-codes page is generated from)."""
+which the documentation's exit-codes page is generated from), and the signal on which a node
+prints its stacks."""
 from __future__ import annotations
+
+import signal
 
 EXIT_OK = 0
 EXIT_CRASH = 1
@@ -34,6 +37,12 @@ EXIT_CODE_TABLE: tuple[tuple[str, int, str], ...] = (
 EXIT_CODES = {EXIT_OK: "done", EXIT_CRASH: "failed (crash, dead worker, not finished)",
               EXIT_BAD_INPUT: "bad input", EXIT_INFEASIBLE: "infeasible",
               EXIT_INTERRUPTED: "interrupted (Ctrl-C)"}
+
+
+# A node (ros/run.py) prints every thread's stack on this signal and runs on; the demo and the
+# tests send it before SIGKILL (demo/processes.py), so a node that ignored SIGINT and SIGTERM
+# leaves in its log where it hung.
+STACK_DUMP_SIGNAL = signal.SIGUSR1
 
 
 class CommandFailed(Exception):

@@ -18,11 +18,10 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
+from uav_insar_planner.exit_codes import STACK_DUMP_SIGNAL
+
 STOP_TIMEOUT_S = 5.0
-# Sent before SIGKILL: a node run by ros/run.py prints every thread's stack on it, so one that
-# ignored SIGINT and SIGTERM leaves in its log where it hung.
-STACK_DUMP_SIGNAL = signal.SIGUSR1
-STACK_DUMP_S = 1.0
+STACK_DUMP_S = 1.0  # for a node's stacks (STACK_DUMP_SIGNAL) before SIGKILL
 MODULES = {"planner": "uav_insar_planner.ros.planner", "agent": "uav_insar_sim.agent_node",
            "mavlink_bridge": "uav_insar_planner.ros.mavlink_bridge",
            "uav-insar-vehicle": "uav_insar_sim.vehicle"}

@@ -21,8 +21,7 @@ from rclpy.executors import ExternalShutdownException
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 
-from uav_insar_planner.demo.processes import STACK_DUMP_SIGNAL
-from uav_insar_planner.exit_codes import EXIT_BAD_INPUT
+from uav_insar_planner.exit_codes import EXIT_BAD_INPUT, STACK_DUMP_SIGNAL
 from uav_insar_planner.params_file import params_file_problems
 
 # Fast DDS derives its ports from the domain id; above 232 they pass 65535 and the process
