@@ -49,7 +49,8 @@ class SearchResult:
     stopped: why an unfinished search stopped ("node limit" or "time budget"); leaves (with
     keep_leaves): the boxes the search ended with, closed, proven empty or open, which cover
     the searched domain (the next point of a sweep may start from them), and leaf_lb their
-    proven lower bounds (+inf: empty)."""
+    proven lower bounds (+inf: empty); angles: the feasible angles the search used
+    (angle_domain.feasible_angles), if it used them."""
 
     value: float
     point: tuple[float, tuple[float, ...], tuple[float, ...]] | None
@@ -60,6 +61,7 @@ class SearchResult:
     stopped: str = ""
     leaves: np.ndarray | None = None
     leaf_lb: np.ndarray | None = None
+    angles: list[np.ndarray] | None = None
 
 
 def interchangeable_pairs(sc: Problem) -> list[tuple[int, int]]:
@@ -255,7 +257,8 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
            stop_when_feasible: bool = False, refine: bool = False,
            time_budget_s: float | None = None, *, incumbent: tuple | None = None,
            boxes: np.ndarray | None = None, box_lb: np.ndarray | None = None,
-           keep_leaves: bool = False, landed: bool = False) -> SearchResult:
+           keep_leaves: bool = False, landed: bool = False,
+           angles: list[np.ndarray] | None = None) -> SearchResult:
     """Best-first (in batches) branch and bound; see the module docstring. refine: take
     markedly better incumbents (up to MAX_REFINES) to their local optimum (local_refine),
     which the optimisation wants and a feasibility test does not. time_budget_s: stop after
@@ -269,7 +272,9 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
     boxes and their bounds (`leaves`, `leaf_lb`). landed: the incumbent is a local optimum
     (local_refine's); the box centres are then tried only when the bound stalls
     (LANDED_SHRINK, LANDED_EVERY: they rarely beat a vertex, and cost as much as the bound);
-    `refined`: whether it stood."""
+    `refined`: whether it stood. angles: per slave, intervals outside which it provably has
+    no feasible angle (a sweep's earlier feasible_angles, valid for sc when sc restricts that
+    point's problem: warm.restricts), used to cut the boxes from the first round on."""
     deadline = math.inf if time_budget_s is None else time.monotonic() + time_budget_s
     if sc.r0_lo > sc.r0_hi or sc.th_lo > sc.th_hi:
         return SearchResult(math.inf, None, math.inf, 0, True)
@@ -281,7 +286,7 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
     gap = math.inf  # the last round's relative gap of the smallest bound to the incumbent
     local = _LocalSearch(last=best_pt if landed else None)
     rounds, closed_lb, nodes, leaves = 0, math.inf, len(boxes), []  # leaves: (boxes, bounds)
-    parked, parked_lb, project_at, angles = boxes[:0], np.empty(0), PROJECT_AFTER, None
+    parked, parked_lb, project_at = boxes[:0], np.empty(0), PROJECT_AFTER
     while True:
         boxes, kept = _ordered(boxes, pairs)
         lb = _bounds(sc, boxes, best_val * (1.0 - rel_gap),
@@ -324,7 +329,8 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
             if keep_leaves else ())
     return SearchResult(best_val, best_pt, lower, nodes, not len(boxes),
                         refined=best_pt is not None and best_pt is local.last, stopped=stopped,
-                        leaves=kept[0] if kept else None, leaf_lb=kept[1] if kept else None)
+                        leaves=kept[0] if kept else None, leaf_lb=kept[1] if kept else None,
+                        angles=angles)
 
 
 def _next_round(sc: Problem, boxes: np.ndarray, lb: np.ndarray, batch: int):

@@ -109,7 +109,7 @@ def solve_global(p: Params, scheme: str, objective: str,
         return _feasible(p, scheme, sc, value, point, lower, "", (
             f"chain packing bound (solver/global_opt/chain_packing.py) over {intervals} "
             "master-range intervals, all closed"), intervals)
-    start = boxes = box_lb = None
+    start = boxes = box_lb = angles = None
     if warm_start is not None:
         restricted = warm.restricts(warm_start, sc)
         if not restricted:
@@ -119,6 +119,7 @@ def solve_global(p: Params, scheme: str, objective: str,
                 math.inf, None, math.inf, 0, True), warm_start, carried=True)
         start = warm_incumbent(p, sc, warm_start)
         boxes, box_lb = warm.start_boxes(sc, warm_start, restricted)
+        angles = warm_start.angles if restricted else None
         warm_start.used_incumbent, warm_start.used_leaves = start is not None, boxes is not None
     landed = start is not None and start[2]
     if start is None:  # no warm point: the chain's, when SLSQP or the KKT check landed it
@@ -129,7 +130,8 @@ def solve_global(p: Params, scheme: str, objective: str,
     # Two slaves or fewer: the exact inner solve already makes the incumbents good.
     res = branch_bound.search(sc, rel_gap=REL_GAP, refine=len(sc.slaves) > 2,
                               time_budget_s=left, incumbent=start, boxes=boxes,
-                              box_lb=box_lb, keep_leaves=warm_start is not None, landed=landed)
+                              box_lb=box_lb, keep_leaves=warm_start is not None, landed=landed,
+                              angles=angles)
     if res.point is None and (chain is None or chain[1] is None):
         return _no_point(p, scheme, sc, res, warm_start)
     if start is not None and res.point is start[1]:

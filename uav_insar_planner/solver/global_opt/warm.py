@@ -24,7 +24,9 @@ the same function, so every lower bound proven over a box before still holds ove
 minimum over a subset is no smaller). The carried boxes keep their bounds (`leaf_lb`; +inf for
 a box proven empty), and the search computes a bound afresh only where the carried one no
 longer closes the box. An infeasibility proven before stays proven, and so does every family
-set proven infeasible (the previous irreducible set is infeasible here without a search).
+set proven infeasible (the previous irreducible set is infeasible here without a search). The
+slaves' feasible angles proven before (angle_domain.py) contain the new ones, so the search
+cuts its boxes to them from its first round, without proving them again.
 
 So a warm solve certifies what a cold one does, to the same gap; only its route differs.
 """
@@ -62,6 +64,7 @@ class WarmStart:
     infeasible: bool = False
     blocking: tuple[str, ...] = ()
     witnesses: dict = field(default_factory=dict)
+    angles: list | None = None
     used_incumbent: bool = False
     used_leaves: bool = False
     used_blocking: bool = False
@@ -138,3 +141,4 @@ def remember(warm: WarmStart, sc: Problem, point, res: branch_bound.SearchResult
     warm.leaves = leaves if keep else None
     warm.leaf_lb = res.leaf_lb if keep else None
     warm.domain = domain_of(sc) if keep else None
+    warm.angles = None if res is None else res.angles
