@@ -9,6 +9,7 @@ from uav_insar_planner.evaluate import evaluate
 from uav_insar_planner.params import default_params
 from uav_insar_planner.solver import blocking, new_warm_start, power, solve
 from uav_insar_planner.solver.global_opt import (
+    angle_domain,
     branch_bound,
     infeasibility,
     local_refine,
@@ -182,6 +183,41 @@ def test_a_proven_infeasibility_is_carried_up_a_tightening_sweep_and_not_down() 
         assert hot.feasible == cold.feasible == feasible
         assert hot.blocking_constraints == cold.blocking_constraints
         assert ("previous sweep point" in hot.certificate) == carried
+
+
+def _inside(angles: np.ndarray, outer: np.ndarray) -> bool:
+    """Does the union of intervals `outer` cover every interval of `angles`?"""
+    return all(any(a >= lo and b <= hi for lo, hi in outer) for a, b in angles)
+
+
+@pytest.mark.parametrize("scheme, before, tighter", [
+    ("static-power", _fig3(0.5), _fig3(0.6)),
+    ("static-power", _rate(default_params().replace(**FIG4), 17.0),
+     _rate(default_params().replace(**FIG4), 17.5)),  # the first infeasible point
+    ("fixed-master", _rate(default_params().replace(**FIG4), 16.5),
+     _rate(default_params().replace(**FIG4), 17.0))])
+def test_feasible_angles_carry_up_a_tightening_sweep_and_hold_there(scheme, before,
+                                                                    tighter) -> None:
+    """These searches prove the slaves' feasible angles (they grind along a slave's
+    feasibility edge). At a tighter point (h_amb_min raised, or R_min,1 raised: a smaller
+    station disk) those angles contain that point's own, which is what makes cutting its
+    boxes to them sound; its answer is the cold one."""
+    state = new_warm_start("global")
+    solve(before, scheme=scheme, objective="exact", solver="global", warm_start=state)
+    carried = state.angles
+    assert carried is not None
+    sc = make_problem(tighter, scheme, "exact")
+    assert warm.restricts(state, sc)
+    own = angle_domain.feasible_angles(sc)
+    assert all(_inside(a, c) for a, c in zip(own, carried, strict=True))
+    hot = solve(tighter, scheme=scheme, objective="exact", solver="global",
+                warm_start=state)
+    cold = solve(tighter, scheme=scheme, objective="exact", solver="global")
+    assert hot.feasible == cold.feasible
+    assert hot.blocking_constraints == cold.blocking_constraints
+    if cold.feasible:
+        assert hot.sigma_h_m == pytest.approx(cold.sigma_h_m, rel=1e-4)
+        assert hot.optimality_gap <= 1e-4
 
 
 def test_the_previous_vertex_is_followed_to_the_next_point_without_slsqp() -> None:
