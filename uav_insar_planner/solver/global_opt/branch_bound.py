@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -183,6 +184,8 @@ def _incumbent(sc: Problem, boxes: np.ndarray):
     return float(f[i]), (float(r0[i]), tuple(map(float, th[i])), tuple(map(float, ranges[i])))
 
 
+# Rounds of box centres before a search without an incumbent asks its `fallback` for one.
+FALLBACK_ROUNDS = 2
 # Local solves (SLSQP, some milliseconds each) of new incumbents per search.
 MAX_REFINES = 4
 # SLSQP runs from the most promising box: while no feasible point is known, and every
@@ -218,6 +221,16 @@ class _LocalSearch:
     rescues: int = 0
     rounds: int = 0
     last: tuple | None = None
+    fallback: Callable[[], tuple | None] | None = None
+
+    def first_point(self, rounds: int) -> tuple | None:
+        """(value, point) from `fallback` (a costlier start, e.g. SLSQP's, checked feasible by
+        the caller), asked once when FALLBACK_ROUNDS rounds of box centres found no
+        incumbent; else None."""
+        if self.fallback is None or rounds < FALLBACK_ROUNDS:
+            return None
+        got, self.fallback = self.fallback(), None
+        return got
 
     def improve(self, sc: Problem, f: float, pt, close_below: float, boxes, lb):
         self.rounds += 1
@@ -258,23 +271,24 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
            time_budget_s: float | None = None, *, incumbent: tuple | None = None,
            boxes: np.ndarray | None = None, box_lb: np.ndarray | None = None,
            keep_leaves: bool = False, landed: bool = False,
-           angles: list[np.ndarray] | None = None) -> SearchResult:
+           angles: list[np.ndarray] | None = None,
+           fallback: Callable[[], tuple | None] | None = None) -> SearchResult:
     """Best-first (in batches) branch and bound; see the module docstring. refine: take
     markedly better incumbents (up to MAX_REFINES) to their local optimum (local_refine),
     which the optimisation wants and a feasibility test does not. time_budget_s: stop after
     the round that passes it, as at the node limit (the open boxes keep the lower bound
     valid, and `exhausted` is False).
 
-    A warm start (solver/global_opt/warm.py, along a sweep): `incumbent`, (value, point) of
-    a point the caller has checked feasible for sc, is the first upper bound; `boxes`, which
-    must cover sc's domain, replace the coarse split of the root, with `box_lb` (if given)
-    proven lower bounds of sc's objective over them (_bounds); keep_leaves returns the final
-    boxes and their bounds (`leaves`, `leaf_lb`). landed: the incumbent is a local optimum
-    (local_refine's); the box centres are then tried only when the bound stalls
-    (LANDED_SHRINK, LANDED_EVERY: they rarely beat a vertex, and cost as much as the bound);
-    `refined`: whether it stood. angles: per slave, intervals outside which it provably has
-    no feasible angle (a sweep's earlier feasible_angles, valid for sc when sc restricts that
-    point's problem: warm.restricts), used to cut the boxes from the first round on."""
+    A warm start (solver/global_opt/warm.py, along a sweep): `incumbent`, (value, point)
+    checked feasible for sc by the caller, is the first upper bound; `boxes`, which must cover
+    sc's domain, replace the root's coarse split, with `box_lb` (if given) proven lower bounds
+    of sc's objective over them (_bounds); keep_leaves returns the final boxes and bounds
+    (`leaves`, `leaf_lb`). landed: the incumbent is a local optimum (local_refine's); box
+    centres are then tried only when the bound stalls (LANDED_SHRINK, LANDED_EVERY: they
+    rarely beat a vertex, and cost as much as the bound); `refined`: whether it stood.
+    angles: per slave, intervals outside which it has no feasible angle (an earlier sweep
+    point's feasible_angles, valid where sc restricts its problem: warm.restricts), cutting
+    the boxes from the first round on. fallback: see _LocalSearch.first_point."""
     deadline = math.inf if time_budget_s is None else time.monotonic() + time_budget_s
     if sc.r0_lo > sc.r0_hi or sc.th_lo > sc.th_hi:
         return SearchResult(math.inf, None, math.inf, 0, True)
@@ -284,7 +298,7 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
         boxes = _root_boxes(sc, pairs, landed)
     best_val, best_pt = incumbent if incumbent is not None else (math.inf, None)
     gap = math.inf  # the last round's relative gap of the smallest bound to the incumbent
-    local = _LocalSearch(last=best_pt if landed else None)
+    local = _LocalSearch(last=best_pt if landed else None, fallback=fallback)
     rounds, closed_lb, nodes, leaves = 0, math.inf, len(boxes), []  # leaves: (boxes, bounds)
     parked, parked_lb, project_at = boxes[:0], np.empty(0), PROJECT_AFTER
     while True:
@@ -305,6 +319,8 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
                 f, pt = local.improve(sc, f, pt, best_val * (1.0 - rel_gap), boxes, lb)
             if f < best_val:
                 best_val, best_pt = f, pt
+        if best_pt is None and (got := local.first_point(rounds)) is not None:
+            best_val, best_pt = got
         if stop_when_feasible and best_pt is not None:
             return SearchResult(best_val, best_pt, -math.inf, nodes, False)
         boxes, lb = np.concatenate([boxes, parked]), np.concatenate([lb, parked_lb])
@@ -322,8 +338,7 @@ def search(sc: Problem, rel_gap: float = 5e-5, max_nodes: int = 400_000, batch: 
             project_at = math.inf  # asked once: the answer depends on sc alone
         boxes, parked, parked_lb = _next_round(sc, boxes, lb, batch)
         nodes += len(boxes)
-    open_lb = float(lb.min()) if len(boxes) else math.inf
-    lower = min(closed_lb, open_lb, best_val)
+    lower = min(closed_lb, float(lb.min()) if len(boxes) else math.inf, best_val)
     stopped = "" if not len(boxes) else "node limit" if nodes >= max_nodes else "time budget"
     kept = ([np.concatenate(part) for part in zip(*leaves, (boxes, lb), strict=True)]
             if keep_leaves else ())

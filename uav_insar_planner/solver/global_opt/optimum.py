@@ -122,16 +122,21 @@ def solve_global(p: Params, scheme: str, objective: str,
         angles = warm_start.angles if restricted else None
         warm_start.used_incumbent, warm_start.used_leaves = start is not None, boxes is not None
     landed = start is not None and start[2]
-    if start is None:  # no warm point: the chain's, when SLSQP or the KKT check landed it
+    fallback = None
+    if start is None and boxes is None:  # cold: the chain's, when SLSQP or the KKT check landed it
         start = _landed_start(sc, chain)
         landed = start is not None
+    elif start is None:  # the carried boxes' centres first: the chain's SLSQP costs more
+        def fallback():
+            got = _landed_start(sc, chain)
+            return None if got is None else got[:2]
     start = None if start is None else start[:2]
     left = None if time_budget_s is None else max(0.0, time_budget_s - (time.monotonic() - clock))
     # Two slaves or fewer: the exact inner solve already makes the incumbents good.
     res = branch_bound.search(sc, rel_gap=REL_GAP, refine=len(sc.slaves) > 2,
                               time_budget_s=left, incumbent=start, boxes=boxes,
                               box_lb=box_lb, keep_leaves=warm_start is not None, landed=landed,
-                              angles=angles)
+                              angles=angles, fallback=fallback)
     if res.point is None and (chain is None or chain[1] is None):
         return _no_point(p, scheme, sc, res, warm_start)
     if start is not None and res.point is start[1]:
