@@ -117,3 +117,33 @@ def test_the_scenario_budget_reaches_the_solver_and_the_plan_says_so():
     assert "certificate incomplete: time budget reached" in plan.message
     assert 0.0 < plan.optimality_gap < 0.05
     assert solve(swarm(10)).optimality_gap <= 1e-4  # 0: no budget, certified
+
+
+def test_strip_sums_when_no_two_columns_fit_the_gap():
+    """A gap wider than the columns leaves room for one strip, never two (this crashed the
+    chain bound of a five-UAV fixed-master swarm: below)."""
+    w = np.array([1.0, 3.0, 2.0, 0.5, 4.0, 1.0])
+    f = chain_packing._strip_sums(w, gap=8, m=3)
+    assert f[0] == 0.0 and f[1] == 4.0 and np.all(np.isneginf(f[2:]))
+    # two columns at least 3 apart: 3 + 4 (columns 1 and 4); three do not fit
+    np.testing.assert_array_equal(chain_packing._strip_sums(w, gap=3, m=3),
+                                  [0.0, 4.0, 7.0, -np.inf])
+
+
+def test_a_five_uav_fixed_master_swarm_whose_chain_strips_outgrow_its_columns():
+    """Found by random warm/cold sweeps: d_min 3.32 m, P_com^max 9.28 dB, h_amb_min 0.749 m,
+    Figure 4's master. It used to fail in chain_packing._strip_sums (a bug); now it is solved
+    and its plan passes the independent check."""
+    p = default_params().replace(
+        num_uavs=5, rate_min_mbps=[10.0, 16.95, 1.0, 1.0, 1.0], d_min_m=3.3191218004168364,
+        p_com_max_db=9.27660995707559, master_fixed_xz_m=[-41.0, 61.0],
+        h_amb_min_m=0.7492458568126803)
+    res = solve_global(p, "fixed-master", "multilook")
+    if res.feasible:
+        from uav_insar_planner.solver import power
+
+        assert res.gap <= 1e-4
+        assert evaluate(p, res.formation, power.schedules(p, res.formation, "fixed-master"),
+                        "fixed-master", "multilook").feasible
+    else:
+        assert res.blocking

@@ -144,7 +144,8 @@ def _strip_sums(w: np.ndarray, gap: int, m: int) -> np.ndarray:
             break
         run = np.maximum.accumulate(best)             # best sum of j ending at or before c
         shifted = np.full_like(w, -np.inf)
-        shifted[gap:] = run[:len(w) - gap]            # ... ending at least gap before c
+        if gap < len(w):  # else no second column fits after any first
+            shifted[gap:] = run[:len(w) - gap]        # ... ending at least gap before c
         best = w + shifted
     return f
 
