@@ -220,6 +220,29 @@ def test_feasible_angles_carry_up_a_tightening_sweep_and_hold_there(scheme, befo
         assert hot.optimality_gap <= 1e-4
 
 
+def test_an_optimum_the_tighter_point_still_accepts_is_kept_as_it_is() -> None:
+    """Figure 4 from R_min,1 12 to 12.5 Mbit/s: C10 is not active at the optimum, which stays
+    feasible, and so optimal (the previous bound holds). It is kept without Newton's method,
+    and the warm solve gives the cold answer. At Figure 3's raised h_amb_min the optimum sits
+    on C8 and breaks it, and is not kept."""
+    base = default_params().replace(**FIG4)
+    state = new_warm_start("global")
+    solve(_rate(base, 12.0), scheme="proposed", objective="exact", solver="global",
+          warm_start=state)
+    sc = make_problem(_rate(base, 12.5), "proposed", "exact")
+    kept = optimum._kept(sc, state.point)
+    assert kept is not None
+    hot = solve(_rate(base, 12.5), scheme="proposed", objective="exact", solver="global",
+                warm_start=state)
+    cold = solve(_rate(base, 12.5), scheme="proposed", objective="exact", solver="global")
+    assert hot.sigma_h_m == pytest.approx(kept[0], rel=1e-12)
+    assert hot.sigma_h_m == pytest.approx(cold.sigma_h_m, rel=1e-4)
+    assert hot.optimality_gap <= 1e-4
+
+    solve(_fig3(1.2), scheme="proposed", objective="exact", solver="global", warm_start=state)
+    assert optimum._kept(make_problem(_fig3(1.3), "proposed", "exact"), state.point) is None
+
+
 def test_the_previous_vertex_is_followed_to_the_next_point_without_slsqp() -> None:
     """The optimum at h_amb_min 1.2 m, carried to 1.3 m by Newton on its active constraints
     (local_refine.follow), is a KKT point there with the cold solve's sigma_h."""

@@ -31,6 +31,7 @@ from uav_insar_planner.solver.global_opt import (
     slave_sets,
     warm,
 )
+from uav_insar_planner.solver.global_opt.kernel import objective_from_normalised, slave_weight
 from uav_insar_planner.solver.problem import Problem, make_problem
 from uav_insar_planner.solver.result import SolverResult
 from uav_insar_planner.swarm import MASTER
@@ -117,7 +118,7 @@ def solve_global(p: Params, scheme: str, objective: str,
         if restricted and warm_start.infeasible:
             return _no_point(p, scheme, sc, branch_bound.SearchResult(
                 math.inf, None, math.inf, 0, True), warm_start, carried=True)
-        start = warm_incumbent(p, sc, warm_start)
+        start = warm_incumbent(p, sc, warm_start, restricted)
         boxes, box_lb = warm.start_boxes(sc, warm_start, restricted)
         angles = warm_start.angles if restricted else None
         warm_start.used_incumbent, warm_start.used_leaves = start is not None, boxes is not None
@@ -212,7 +213,20 @@ def _feasible(p: Params, scheme: str, sc: Problem, value: float, point, lower: f
         certificate=certificate, message=message)
 
 
-def warm_incumbent(p: Params, sc: Problem, state: warm.WarmStart):
+def _kept(sc: Problem, point):
+    """(value, point): the previous sweep point's optimum where sc, a restriction of its
+    problem (warm.restricts), still accepts it on the ray model, its value no worse (its
+    ranges may come from the inner solve); None otherwise. The previous certificate's lower
+    bound holds for sc, whose optimum is therefore this value, to that certificate's gap."""
+    got = local_refine.checked(sc, np.array([point[0], *point[1], *point[2]], dtype=float))
+    if got is None:
+        return None
+    with np.errstate(all="ignore"):
+        w = float(np.sum(slave_weight(sc, point[0], np.array(point[1]), np.array(point[2]))))
+    return got if w > 0 and got[0] <= float(objective_from_normalised(sc, w)) else None
+
+
+def warm_incumbent(p: Params, sc: Problem, state: warm.WarmStart, restricted: bool = False):
     """(value, point, landed) of the previous sweep point's optimum carried to this point's
     parameters, or None; landed: a local optimum here (the search then tries fewer box
     centres, branch_bound.search). Its vertex is followed to the new parameters first
@@ -225,8 +239,8 @@ def warm_incumbent(p: Params, sc: Problem, state: warm.WarmStart):
     point the ray model rejects was tried: it fails slowly where the new point is infeasible.)"""
     if state.point is None or len(state.point[1]) != len(sc.slaves):
         return None
-    followed = None
-    if state.problem is not None and state.problem.slaves == sc.slaves:
+    followed = _kept(sc, state.point) if restricted else None
+    if followed is None and state.problem is not None and state.problem.slaves == sc.slaves:
         followed = local_refine.follow(state.problem, sc, state.point)
     if followed is not None:
         (value, point), landed = followed, True
