@@ -24,7 +24,7 @@ from scipy.optimize import minimize, nnls
 from uav_insar_planner.solver import rays
 from uav_insar_planner.solver.global_opt import slave_sets
 from uav_insar_planner.solver.global_opt.kernel import objective_from_normalised, slave_weight
-from uav_insar_planner.solver.problem import Problem, ray_slacks
+from uav_insar_planner.solver.problem import Problem, pairs, ray_slacks
 
 # C4 may fall short by this fraction of d_min^2 in the re-check (a nanometre at d_min = 1.5 m,
 # far inside the independent checker's micrometre).
@@ -223,7 +223,7 @@ def checked(sc: Problem, v: np.ndarray):
     rr, tt = np.concatenate([[r0], r]), np.concatenate([[sc.th0], th])
     q = np.stack([-rr * np.sin(tt), rr * np.cos(tt)], axis=1)  # master first
     if sc.on("C4"):
-        i, j = np.triu_indices(k_count + 1, 1)
+        i, j = pairs(k_count + 1)
         if np.any(np.sum((q[i] - q[j]) ** 2, axis=1) < sc.p.d_min**2 * (1.0 - C4_SLACK)):
             return best
     w = np.sum(slave_weight(sc, r0, th, r))
