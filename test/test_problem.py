@@ -79,3 +79,22 @@ def test_the_cartesian_box_holds_the_certified_optimum(optimum):
     assert pr.r0_lo <= r0 <= pr.r0_hi
     th = model.look_angle(q[list(pr.slaves), 0], q[list(pr.slaves), 1], p.x_t)
     assert np.all((th >= pr.th_lo) & (th <= pr.th_hi))
+
+
+@pytest.mark.parametrize("scheme", ["proposed", "single-baseline"])
+def test_the_c4_ray_slacks_are_every_pair_s_distance_in_order(scheme):
+    """ray_slacks' C4 columns (pairs in np.triu_indices order, master first, built from a
+    cached index) against each pair's distance taken one by one, on random points."""
+    p = default_params()
+    pr = make_problem(p, scheme, "exact")
+    rng = np.random.default_rng(len(pr.slaves))
+    k_count, m = len(pr.slaves), 7
+    r0, th = rng.uniform(20.0, 200.0, m), rng.uniform(-1.2, 1.2, (m, k_count))
+    r = rng.uniform(0.0, 300.0, (m, k_count))
+    c4 = [g for tag, g in ray_slacks(pr, r0, th, r) if tag == "C4"]
+    xs = np.concatenate([[[-pr.sin0]] * r0[:, None], -r * np.sin(th)], axis=1)
+    zs = np.concatenate([[[np.cos(pr.th0)]] * r0[:, None], r * np.cos(th)], axis=1)
+    want = [[(np.hypot(xs[n, a] - xs[n, b], zs[n, a] - zs[n, b]) ** 2 - p.d_min**2) / p.d_min
+             for a in range(k_count + 1) for b in range(a + 1, k_count + 1)] for n in range(m)]
+    assert len(c4) == 1
+    np.testing.assert_allclose(c4[0], want, rtol=1e-12, atol=1e-9)

@@ -284,3 +284,25 @@ def test_the_last_optimum_decides_the_next_points_relaxations_that_drop_c10(
     assert not ev.constraints["C10"].ok or not ev.constraints["C9"].ok  # (P) is infeasible
     assert infeasibility.feasible_without(p, scheme, frozenset({"C3"}), witnesses=seen)
     assert searches  # the carried point is outside the new disk: a search found one
+
+
+@pytest.mark.parametrize("scheme", ["proposed", "single-baseline"])
+def test_an_optimum_sliding_along_its_c8_line_is_followed_as_slsqp_finds_it(scheme) -> None:
+    """At h_amb_min 0.5 m the optimum has one free direction (the master at its lowest range,
+    the slaves on their C8 lines, d_min apart where two fly): follow slides along it to a KKT
+    point at 0.6 m (local_refine._slide), which SLSQP from the same point (the path it
+    replaces) and the cold solve agree with; one constraint fewer is refused."""
+    state = new_warm_start("global")
+    solve(_fig3(0.5), scheme=scheme, objective="exact", solver="global", warm_start=state)
+    before, sc = state.problem, make_problem(_fig3(0.6), scheme, "exact")
+    followed = local_refine.follow(before, sc, state.point)
+    assert followed is not None and local_refine.at_kkt(sc, followed[1])
+    r0, th = state.point[0], np.array(state.point[1])
+    value, ranges = slave_sets.ranges_for(sc, np.array([r0]), th[None])  # warm_incumbent's
+    start = (r0, tuple(map(float, th)), tuple(map(float, ranges[0])))
+    slsqp = local_refine.refine(sc, start, float(value[0]))
+    assert slsqp[2] and followed[0] == pytest.approx(slsqp[0], rel=1e-11)
+    cold = solve(_fig3(0.6), scheme=scheme, objective="exact", solver="global")
+    assert cold.lower_bound_m <= followed[0] <= cold.sigma_h_m * (1.0 + 1e-11)
+    loose = make_problem(_fig3(0.3), scheme, "exact")  # C8 slack there: more than one free
+    assert local_refine.follow(loose, sc, state.point) is None

@@ -23,6 +23,7 @@ sub-problems keep P_com,k as a variable and take their scheme, slaves and C7 fro
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, replace
 
@@ -195,12 +196,20 @@ def ray_slacks(pr: Problem, r0, th, r) -> list[tuple[str, np.ndarray]]:
             out.append(("C10", ((pr.disk_r2[k] - d2)
                                 / max(math.sqrt(abs(pr.disk_r2[k])), 1.0))[:, None]))
     if pr.on("C4"):
-        pts = np.concatenate([np.stack([-r0 * pr.sin0, r0 * math.cos(pr.th0)], axis=1)[:, None],
-                              np.stack([x, z], axis=2)], axis=1)  # (m, 1 + K, 2), master first
-        i, j = np.triu_indices(pts.shape[1], 1)
-        gap2 = np.sum((pts[:, i] - pts[:, j]) ** 2, axis=2) - p.d_min**2
+        xs = np.concatenate([(-r0 * pr.sin0)[:, None], x], axis=1)  # (m, 1 + K), master first
+        zs = np.concatenate([(r0 * math.cos(pr.th0))[:, None], z], axis=1)
+        i, j = pairs(xs.shape[1])
+        gap2 = ((xs[:, i] - xs[:, j]) ** 2 + (zs[:, i] - zs[:, j]) ** 2) - p.d_min**2
         out.append(("C4", gap2 / max(p.d_min, 1e-3)))
     return out
+
+
+@functools.cache
+def pairs(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """np.triu_indices(n, 1), built once per n (it costs more than the C4 slacks it indexes)."""
+    i, j = np.triu_indices(n, 1)
+    i.flags.writeable = j.flags.writeable = False
+    return i, j
 
 
 def cartesian_bounds(pr: Problem) -> list[tuple[float, float]]:

@@ -24,7 +24,7 @@ from scipy.optimize import minimize, nnls
 from uav_insar_planner.solver import rays
 from uav_insar_planner.solver.global_opt import slave_sets
 from uav_insar_planner.solver.global_opt.kernel import objective_from_normalised, slave_weight
-from uav_insar_planner.solver.problem import Problem, ray_slacks
+from uav_insar_planner.solver.problem import Problem, pairs, ray_slacks
 
 # C4 may fall short by this fraction of d_min^2 in the re-check (a nanometre at d_min = 1.5 m,
 # far inside the independent checker's micrometre).
@@ -140,6 +140,11 @@ def at_kkt(sc: Problem, point) -> bool:
 # follow: Newton steps on the vertex equations, and their convergence in metres.
 FOLLOW_STEPS = 12
 FOLLOW_TOL = 1e-10
+# One free direction left (a chain sliding along the C8 line): secant steps on the objective's
+# derivative along it, to this fraction of the gradient's norm (at_kkt then asks for
+# KKT_TOL), the first a probe of SLIDE_PROBE metres.
+SLIDE_TOL = 1e-10
+SLIDE_PROBE = 1e-3
 
 
 def follow(before: Problem, sc: Problem, point):
@@ -148,10 +153,12 @@ def follow(before: Problem, sc: Problem, point):
     Along a sweep the optimum moves with the parameter but usually keeps its active set: the
     same slaves on the C8 line, at a disk edge or d_min apart. The constraints and variable
     bounds active at `point` in `before` (within KKT_ACTIVE) are solved as equations in sc by
-    Newton's method from `point`, with forward-difference Jacobians as at_kkt takes them.
-    None unless they are exactly as many as the variables (a vertex), Newton converges, the
-    ray model accepts the result (checked) and it meets sc's KKT conditions (at_kkt): a local
-    optimum of sc found without SLSQP. A candidate only, as every result here."""
+    Newton's method from `point`, with forward-difference Jacobians as at_kkt takes them. One
+    equation short of the variables (the optimum slides along a curve, as a chain along the
+    C8 line), the curve is followed to where the objective's derivative along it vanishes
+    (`_slide`). None unless Newton converges, the ray model accepts the result (checked) and
+    it meets sc's KKT conditions (at_kkt): a local optimum of sc found without SLSQP. A
+    candidate only, as every result here."""
     v = np.array([point[0], *point[1], *point[2]], dtype=float)
     k_count = len(sc.slaves)
     if not np.all(np.isfinite(v)) or v[0] <= 0 or len(v) != 1 + 2 * k_count:
@@ -164,28 +171,66 @@ def follow(before: Problem, sc: Problem, point):
         scale = np.array([1.0] + [v[0]] * k_count)  # metres, as at_kkt measures them
         at_lo, at_hi = (x - lo) * scale <= KKT_ACTIVE, (hi - x) * scale <= KKT_ACTIVE
         rows = np.flatnonzero(g <= KKT_ACTIVE)
-        if len(rows) + int((at_lo | at_hi).sum()) != len(v):
+        short = len(v) - len(rows) - int((at_lo | at_hi).sum())
+        if short not in (0, 1):
             return None
         new_lo = np.array([sc.r0_lo] + [sc.th_lo] * k_count)
         new_hi = np.array([sc.r0_hi] + [sc.th_hi] * k_count)
         free = np.ones(len(v), dtype=bool)
         free[:1 + k_count] = ~(at_lo | at_hi)
         v[:1 + k_count] = np.where(at_lo, new_lo, np.where(at_hi, new_hi, x))
-        for _ in range(FOLLOW_STEPS):
-            gv, jac = _with_jacobian(lambda w: _constraints(sc, w), v)
-            res = gv[rows]
-            if not np.all(np.isfinite(res)) or not np.all(np.isfinite(jac[rows])):
-                return None
-            if np.max(np.abs(res)) <= FOLLOW_TOL:
-                break
-            step = np.linalg.lstsq(jac[rows][:, free], -res, rcond=None)[0]
-            v[free] += step
-        else:
-            return None
+        v = _project(sc, v, rows, free) if short == 0 else _slide(sc, v, rows, free)
+    if v is None:
+        return None
     cand = checked(sc, v)
     if cand is None or not at_kkt(sc, cand[1]):
         return None
     return cand
+
+
+def _project(sc: Problem, v: np.ndarray, rows: np.ndarray, free: np.ndarray, out=None):
+    """v moved (in its `free` coordinates) by Newton's method onto g_rows(v) = 0 of sc, with
+    least-norm steps where fewer rows than free coordinates; None unless it converges. out:
+    a list that receives the rows' Jacobian over the free coordinates at the result."""
+    for _ in range(FOLLOW_STEPS):
+        gv, jac = _with_jacobian(lambda w: _constraints(sc, w), v)
+        res = gv[rows]
+        if not np.all(np.isfinite(res)) or not np.all(np.isfinite(jac[rows])):
+            return None
+        if np.max(np.abs(res)) <= FOLLOW_TOL:
+            if out is not None:
+                out.append(jac[rows][:, free])
+            return v
+        v[free] += np.linalg.lstsq(jac[rows][:, free], -res, rcond=None)[0]
+    return None
+
+
+def _slide(sc: Problem, v: np.ndarray, rows: np.ndarray, free: np.ndarray):
+    """On the curve g_rows = 0 (one free direction), the point where the objective's
+    derivative along the curve vanishes, by secant steps from v; None when Newton leaves the
+    curve or the secant does not converge in FOLLOW_STEPS."""
+    t_prev, s_prev, d_prev, s = None, 0.0, 0.0, 0.0
+    for _ in range(FOLLOW_STEPS):
+        jacs: list[np.ndarray] = []
+        if _project(sc, v, rows, free, jacs) is None:
+            return None
+        t = np.linalg.svd(jacs[0])[2][-1]  # the curve's tangent in the free coordinates
+        if t_prev is not None and t @ t_prev < 0:
+            t = -t
+        _, grad = _with_jacobian(lambda w: _objective(sc, w), v)
+        grad = grad[0, free]
+        d = float(t @ grad)
+        if not math.isfinite(d):
+            return None
+        if abs(d) <= SLIDE_TOL * np.linalg.norm(grad):
+            return v
+        step = -math.copysign(SLIDE_PROBE, d) if t_prev is None else \
+            -d * (s - s_prev) / (d - d_prev)
+        if not math.isfinite(step):
+            return None
+        t_prev, s_prev, d_prev, s = t, s, d, s + step
+        v[free] += step * t
+    return None
 
 
 def from_box(sc: Problem, box: np.ndarray):
@@ -223,7 +268,7 @@ def checked(sc: Problem, v: np.ndarray):
     rr, tt = np.concatenate([[r0], r]), np.concatenate([[sc.th0], th])
     q = np.stack([-rr * np.sin(tt), rr * np.cos(tt)], axis=1)  # master first
     if sc.on("C4"):
-        i, j = np.triu_indices(k_count + 1, 1)
+        i, j = pairs(k_count + 1)
         if np.any(np.sum((q[i] - q[j]) ** 2, axis=1) < sc.p.d_min**2 * (1.0 - C4_SLACK)):
             return best
     w = np.sum(slave_weight(sc, r0, th, r))
