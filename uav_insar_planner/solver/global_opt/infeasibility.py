@@ -65,7 +65,8 @@ def _holds(sc: Problem, point) -> tuple | None:
     ray's upper limit) when the ray model accepts it as it stands, else None: the direct test
     of local_refine.checked, to the same tolerances, without the inner solve that checked()
     also tries. So a point accepted here is one checked() accepts (never the other way round
-    missing: `_witnessed` asks checked() when this says no), at about a third of its cost."""
+    missing: `_witnessed` asks checked() of sc's own witness when this says no), at about a
+    third of its cost."""
     k_count = len(sc.slaves)
     r0 = float(np.clip(point[0], sc.r0_lo, sc.r0_hi))
     th = np.clip(np.asarray(point[1], dtype=float), sc.th_lo, sc.th_hi)
@@ -106,7 +107,9 @@ def _witnessed(sc: Problem, witnesses: Witnesses | None, held: Held | None = Non
             continue
         with np.errstate(all="ignore"):
             found = _holds(sc, point)
-            if found is None and (checked := local_refine.checked(
+            # the inner solve only for sc's own witness: another relaxation's point that
+            # fails as it stands rarely passes it, and a search settles sc either way
+            if found is None and point is own and (checked := local_refine.checked(
                     sc, np.array([point[0], *point[1], *point[2]], dtype=float))) is not None:
                 found = checked[1]
         if found is not None:
