@@ -68,7 +68,7 @@ def test_what_a_step_holds_feasible_unchecked_is_feasible(scheme: str) -> None:
     state = new_warm_start("global")
     steps = [(16.5, 1.0), (17.5, 1.0), (18.5, 1.0), (18.5, 6.0), (19.5, 12.0), (20.5, 12.0)]
     seen = 0
-    for (rate, h_amb), (rate_next, h_next) in zip(steps, steps[1:]):
+    for (rate, h_amb), (rate_next, h_next) in zip(steps, steps[1:], strict=False):
         solve(_at(base, rate, h_amb), scheme=scheme, objective="exact", solver="global",
               warm_start=state)
         p = _at(base, rate_next, h_next)
@@ -92,11 +92,15 @@ def test_a_carried_point_whose_relaxations_stand_needs_no_search(monkeypatch) ->
         solve(_at(base, rate, 1.0), scheme="proposed", objective="exact", solver="global",
               warm_start=state)
     calls = []
-    for module, name in ((branch_bound, "search"), (local_refine, "checked")):
-        def spy(*args, _f=getattr(module, name), _n=name, **kw):
-            calls.append(_n)
-            return _f(*args, **kw)
-        monkeypatch.setattr(module, name, spy)
+
+    def spy(name: str, real):
+        def called(*args, **kw):
+            calls.append(name)
+            return real(*args, **kw)
+        return called
+
+    monkeypatch.setattr(branch_bound, "search", spy("search", branch_bound.search))
+    monkeypatch.setattr(local_refine, "checked", spy("checked", local_refine.checked))
     hot = solve(_at(base, 18.5, 1.0), scheme="proposed", objective="exact", solver="global",
                 warm_start=state)
     assert not hot.feasible and "previous sweep point" in hot.certificate
