@@ -113,11 +113,12 @@ def solve_global(p: Params, scheme: str, objective: str,
     start = boxes = box_lb = angles = None
     if warm_start is not None:
         restricted = warm.restricts(warm_start, sc)
+        held = warm.held_here(warm_start, sc)
         if not restricted:
             warm.forget_refuted(warm_start)
         if restricted and warm_start.infeasible:
             return _no_point(p, scheme, sc, branch_bound.SearchResult(
-                math.inf, None, math.inf, 0, True), warm_start, carried=True)
+                math.inf, None, math.inf, 0, True), warm_start, held, carried=True)
         start = warm_incumbent(p, sc, warm_start, restricted)
         boxes, box_lb = warm.start_boxes(sc, warm_start, restricted)
         angles = warm_start.angles if restricted else None
@@ -139,7 +140,8 @@ def solve_global(p: Params, scheme: str, objective: str,
                               box_lb=box_lb, keep_leaves=warm_start is not None, landed=landed,
                               angles=angles, fallback=fallback)
     if res.point is None and (chain is None or chain[1] is None):
-        return _no_point(p, scheme, sc, res, warm_start)
+        return _no_point(p, scheme, sc, res, warm_start,
+                         None if warm_start is None else held)
     if start is not None and res.point is start[1]:
         res = replace(res, refined=True)  # the refined warm point stood: no second SLSQP
     value, point, lower = _search_point(sc, res, chain)
@@ -262,19 +264,29 @@ def warm_incumbent(p: Params, sc: Problem, state: warm.WarmStart, restricted: bo
 
 
 def _no_point(p: Params, scheme: str, sc: Problem, res: branch_bound.SearchResult,
-              state: warm.WarmStart | None = None, carried: bool = False):
+              state: warm.WarmStart | None = None, held: set | None = None,
+              carried: bool = False):
     """The answer of a search that found no feasible point: infeasibility proven (every box
     empty) with an irreducible set of families, or not proven within its limit. carried: the
     proof is the previous sweep point's, whose problem this one restricts (warm.restricts),
-    and so is the infeasibility of its irreducible set."""
+    and so is the infeasibility of its irreducible set; the relaxations that make it feasible
+    are then tried first, within that set (any proven set gives the same ones,
+    infeasibility.blocking_sets), so that each one found feasible settles the filter's trials
+    that drop at least its families (infeasibility.Held). held: warm.held_here's, grown here."""
     hint = state.blocking if state is not None else ()
     seen = state.witnesses if state is not None else None
-    block, proven = infeasibility.irreducible_set(p, scheme, hint, seen, hint_proven=carried)
-    _, fixes = infeasibility.blocking_sets(p, scheme, within=block if proven else (),
-                                           witnesses=seen)
+    fixes = None
+    if carried and hint:
+        _, fixes = infeasibility.blocking_sets(p, scheme, within=hint, witnesses=seen,
+                                               held=held)
+    block, proven = infeasibility.irreducible_set(p, scheme, hint, seen, hint_proven=carried,
+                                                  held=held)
+    if fixes is None:
+        _, fixes = infeasibility.blocking_sets(p, scheme, within=block if proven else (),
+                                               witnesses=seen, held=held)
     if state is not None:
         state.used_blocking = bool(hint) and proven and tuple(block) == tuple(hint)
-        warm.remember(state, sc, None, res, tuple(block) if proven else ())
+        warm.remember(state, sc, None, res, tuple(block) if proven else (), held)
     relax = ("; relaxing any of these alone makes it feasible: "
              + ", ".join("+".join(s) for s in fixes)) if fixes else ""
     together = " + ".join(block) + (" cannot hold together" if len(block) > 1

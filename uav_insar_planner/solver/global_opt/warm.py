@@ -45,6 +45,12 @@ from uav_insar_planner.solver.problem import Problem
 # R_k >= (1 + mu) R_min,k (schemes.planned_rate_bps: a smaller station disk) and nothing else
 # of the plan (the power schedule of a formation changes, not its feasibility otherwise).
 TIGHTER_AS_THEY_GROW = ("h_amb_min_m", "rate_min_mbps")
+# The family whose removal takes each of them out of (P) altogether: h_amb_min_m is read by C8
+# alone; rate_min_mbps by C10, and through its price per unit distance (power.rate_cost) by
+# the station disk that C9 and C11 bound, which without C10 is the whole plane (the cheapest
+# schedule is then no power at all: power.station_radius_sq). A relaxation without that family
+# is the same problem before and after a step in the parameter.
+READ_ONLY_BY = {"h_amb_min_m": "C8", "rate_min_mbps": "C10"}
 # More final boxes than this are not carried to the next point: a hard point's fine partition
 # costs the next, easy point more than the coarse split of its root (measured on the
 # static-power points of Figure 3, 160 000 boxes).
@@ -65,6 +71,7 @@ class WarmStart:
     blocking: tuple[str, ...] = ()
     witnesses: dict = field(default_factory=dict)
     angles: list | None = None
+    held: set = field(default_factory=set)
     used_incumbent: bool = False
     used_leaves: bool = False
     used_blocking: bool = False
@@ -99,6 +106,23 @@ def restricts(warm: WarmStart, sc: Problem) -> bool:
     return True
 
 
+def held_here(warm: WarmStart, sc: Problem) -> set[frozenset[str]]:
+    """The relaxations (families off) proven feasible at sc before any test
+    (infeasibility.Held), from those proven at the previous point (`held`: after a feasible
+    point, frozenset(), which its optimum proves; after an infeasible one, those its filter
+    found feasible). Only along a step that `restricts`, and then each grown by the families
+    that read a parameter the step changed (READ_ONLY_BY): a relaxation without them is the
+    same problem as at the previous point, and it held the old relaxation's feasible set, so
+    it is feasible still. Without them a relaxation's feasible set may have shrunk: its
+    witness is tested afresh (infeasibility._witnessed). Empty after any other step."""
+    if not restricts(warm, sc):
+        return set()
+    before, p = warm.problem.p, sc.p
+    swept = frozenset(family for key, family in READ_ONLY_BY.items()
+                      if before.raw.get(key) != p.raw.get(key))
+    return {off | swept for off in warm.held}
+
+
 def forget_refuted(warm: WarmStart) -> None:
     """Drop the relaxations proven infeasible (infeasibility.Witnesses' None): they hold only
     while each step restricts the one before."""
@@ -127,14 +151,17 @@ def start_boxes(sc: Problem, warm: WarmStart,
 
 
 def remember(warm: WarmStart, sc: Problem, point, res: branch_bound.SearchResult | None,
-             blocking: tuple[str, ...] = ()) -> None:
+             blocking: tuple[str, ...] = (), held: set | None = None) -> None:
     """Keep this solve's optimum (None: infeasible; `infeasible` when the search proved it),
-    final boxes with their bounds, parameters and proven blocking set."""
+    final boxes with their bounds, parameters, proven blocking set and the relaxations proven
+    feasible here (`held`, of an infeasible point; a feasible one's optimum holds them all)."""
     warm.point, warm.blocking, warm.problem = point, blocking, sc
+    warm.held = set() if held is None else held
     if point is not None:
         # a feasible point of (P) itself, the relaxation with no family off: at the next
         # point, should it be infeasible, a likely witness of each relaxation the filter tries
         warm.witnesses[frozenset()] = point
+        warm.held = {frozenset()}
     warm.infeasible = point is None and res is not None and res.exhausted
     leaves = None if res is None else res.leaves
     keep = leaves is not None and 0 < len(leaves) <= LEAVES_MAX
