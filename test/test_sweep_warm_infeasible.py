@@ -108,7 +108,7 @@ def test_a_carried_point_whose_relaxations_stand_needs_no_search(monkeypatch) ->
 
 
 def test_a_point_accepted_as_it_stands_is_one_checked_accepts() -> None:
-    """infeasibility._holds (checked()'s direct test without its inner solve) never accepts a
+    """local_refine.accepted (checked()'s direct test without its inner solve) never accepts a
     point that local_refine.checked rejects, over random points and relaxations near
     Figure 4's edge, and it does accept some."""
     rng = np.random.default_rng(7)
@@ -122,9 +122,9 @@ def test_a_point_accepted_as_it_stands_is_one_checked_accepts() -> None:
         ranges = rng.uniform(0.7, 1.3, len(sc.slaves)) * r0
         point = (r0, tuple(th), tuple(ranges))
         with np.errstate(all="ignore"):
-            found = infeasibility._holds(sc, point)
+            found = local_refine.accepted(sc, point)
             if found is not None:
                 accepted += 1
                 assert local_refine.checked(sc, np.array([r0, *th, *ranges])) is not None
-                assert infeasibility._holds(sc, found) == found
+                assert local_refine.accepted(sc, found) == found
     assert accepted >= 10

@@ -32,7 +32,7 @@ from itertools import combinations
 import numpy as np
 
 from uav_insar_planner.params import Params
-from uav_insar_planner.solver import blocking, rays
+from uav_insar_planner.solver import blocking
 from uav_insar_planner.solver.global_opt import branch_bound, local_refine
 from uav_insar_planner.solver.problem import Problem, make_problem
 from uav_insar_planner.solver.start_grid import find_start
@@ -60,41 +60,16 @@ def _held(sc: Problem, held: Held | None) -> bool:
     return held is not None and any(off <= sc.off for off in held)
 
 
-def _holds(sc: Problem, point) -> tuple | None:
-    """The point itself (its angles and master range cut to sc's domain, each range to its
-    ray's upper limit) when the ray model accepts it as it stands, else None: the direct test
-    of local_refine.checked, to the same tolerances, without the inner solve that checked()
-    also tries. So a point accepted here is one checked() accepts (never the other way round
-    missing: `_witnessed` asks checked() of sc's own witness when this says no), at about a
-    third of its cost."""
-    k_count = len(sc.slaves)
-    r0 = float(np.clip(point[0], sc.r0_lo, sc.r0_hi))
-    th = np.clip(np.asarray(point[1], dtype=float), sc.th_lo, sc.th_hi)
-    r = np.array(point[2], dtype=float)
-    for j, k in enumerate(sc.slaves):
-        lo, up = rays.ray_limits(sc, k, r0, th[j])
-        r[j] = min(r[j], float(up))
-        if r[j] < lo * (1.0 - local_refine.RANGE_SLACK):
-            return None
-    if sc.on("C4"):
-        rr, tt = np.concatenate([[r0], r]), np.concatenate([[sc.th0], th])
-        q = np.stack([-rr * np.sin(tt), rr * np.cos(tt)], axis=1)  # master first
-        i, j = np.triu_indices(k_count + 1, 1)
-        if np.any(np.sum((q[i] - q[j]) ** 2, axis=1)
-                  < sc.p.d_min**2 * (1.0 - local_refine.C4_SLACK)):
-            return None
-    return r0, tuple(map(float, th)), tuple(map(float, r))
-
-
 def _witnessed(sc: Problem, witnesses: Witnesses | None, held: Held | None = None) -> bool:
     """Is sc proven feasible without a search: a relaxation of one held at this point (Held),
     or by a kept feasible point, the one of the relaxation sc.off, else one of a relaxation
     that held more families (frozenset(): a sweep point's optimum, which held them all)? Any
     point the ray model accepts (local_refine.checked, the verdict the solver's own plans get;
-    its direct test first, `_holds`) proves sc feasible; these are only the likely ones: at
-    the first infeasible point of a sweep the previous optimum holds every relaxation that
-    drops what the step tightened (a trial without C10 in Figure 4), for a test of one point
-    instead of a search. The point accepted is kept as sc.off's witness, and sc.off held."""
+    its direct test, local_refine.accepted, first) proves sc feasible; these are only the
+    likely ones: at the first infeasible point of a sweep the previous optimum holds every
+    relaxation that drops what the step tightened (a trial without C10 in Figure 4), for a
+    test of one point instead of a search. The point accepted is kept as sc.off's witness,
+    and sc.off held."""
     if _held(sc, held):
         return True
     if witnesses is None or _refuted(sc, witnesses):
@@ -106,7 +81,7 @@ def _witnessed(sc: Problem, witnesses: Witnesses | None, held: Held | None = Non
         if point is None or len(point[1]) != len(sc.slaves):
             continue
         with np.errstate(all="ignore"):
-            found = _holds(sc, point)
+            found = local_refine.accepted(sc, point)
             # the inner solve only for sc's own witness: another relaxation's point that
             # fails as it stands rarely passes it, and a search settles sc either way
             if found is None and point is own and (checked := local_refine.checked(

@@ -247,11 +247,41 @@ def from_box(sc: Problem, box: np.ndarray):
     return (value, point) if landed and math.isfinite(value) else (math.inf, None)
 
 
+def accepted(sc: Problem, point) -> tuple | None:
+    """The ray model's direct verdict on point (r0, angles, ranges): the point with its angles
+    and master range cut to sc's domain and each range to its ray's upper limit, or None when
+    a range then falls below its ray's lower limit or two UAVs are closer than d_min (C4), to
+    RANGE_SLACK and C4_SLACK."""
+    k_count = len(sc.slaves)
+    r0 = float(np.clip(point[0], sc.r0_lo, sc.r0_hi))
+    th = np.clip(np.asarray(point[1], dtype=float), sc.th_lo, sc.th_hi)
+    r = np.array(point[2], dtype=float)
+    for j, k in enumerate(sc.slaves):
+        lo, up = rays.ray_limits(sc, k, r0, th[j])
+        r[j] = min(r[j], float(up))
+        if r[j] < lo * (1.0 - RANGE_SLACK):
+            return None
+    if sc.on("C4"):
+        rr, tt = np.concatenate([[r0], r]), np.concatenate([[sc.th0], th])
+        q = np.stack([-rr * np.sin(tt), rr * np.cos(tt)], axis=1)  # master first
+        i, j = pairs(k_count + 1)
+        if np.any(np.sum((q[i] - q[j]) ** 2, axis=1) < sc.p.d_min**2 * (1.0 - C4_SLACK)):
+            return None
+    return r0, tuple(map(float, th)), tuple(map(float, r))
+
+
+def value_at(sc: Problem, point) -> float:
+    """The objective at point (r0, angles, ranges) of sc (+inf without any baseline)."""
+    w = float(np.sum(slave_weight(sc, point[0], np.asarray(point[1], dtype=float),
+                                  np.asarray(point[2], dtype=float))))
+    return float(objective_from_normalised(sc, w)) if w > 0 else math.inf
+
+
 def checked(sc: Problem, v: np.ndarray):
     """The ray model's verdict on a point (an SLSQP result, a sweep's witness, both in ray
     coordinates v = (r0, angles, ranges)): (value, point), the ranges cut to the
-    ray's limits, or from the inner solve at its angles when that is better; None when
-    neither is feasible."""
+    ray's limits (`accepted`), or from the inner solve at its angles when that is better;
+    None when neither is feasible."""
     k_count = len(sc.slaves)
     r0 = float(np.clip(v[0], sc.r0_lo, sc.r0_hi))
     th = np.clip(v[1:1 + k_count], sc.th_lo, sc.th_hi)
@@ -259,22 +289,11 @@ def checked(sc: Problem, v: np.ndarray):
     f, ranges = slave_sets.ranges_for(sc, np.array([r0]), th[None])
     if np.isfinite(f[0]):
         best = (float(f[0]), (r0, tuple(map(float, th)), tuple(map(float, ranges[0]))))
-    r = np.array(v[1 + k_count:], dtype=float)
-    for j, k in enumerate(sc.slaves):
-        lo, up = rays.ray_limits(sc, k, r0, th[j])
-        r[j] = min(r[j], float(up))
-        if r[j] < lo * (1.0 - RANGE_SLACK):
-            return best
-    rr, tt = np.concatenate([[r0], r]), np.concatenate([[sc.th0], th])
-    q = np.stack([-rr * np.sin(tt), rr * np.cos(tt)], axis=1)  # master first
-    if sc.on("C4"):
-        i, j = pairs(k_count + 1)
-        if np.any(np.sum((q[i] - q[j]) ** 2, axis=1) < sc.p.d_min**2 * (1.0 - C4_SLACK)):
-            return best
-    w = np.sum(slave_weight(sc, r0, th, r))
-    f_direct = float(objective_from_normalised(sc, w)) if w > 0 else math.inf
-    if best is None or f_direct < best[0]:
-        best = (f_direct, (r0, tuple(map(float, th)), tuple(map(float, r))))
+    direct = accepted(sc, (v[0], v[1:1 + k_count], v[1 + k_count:]))
+    if direct is not None:
+        f_direct = value_at(sc, direct)
+        if best is None or f_direct < best[0]:
+            best = (f_direct, direct)
     return best
 
 

@@ -31,7 +31,6 @@ from uav_insar_planner.solver.global_opt import (
     slave_sets,
     warm,
 )
-from uav_insar_planner.solver.global_opt.kernel import objective_from_normalised, slave_weight
 from uav_insar_planner.solver.problem import Problem, make_problem
 from uav_insar_planner.solver.result import SolverResult
 from uav_insar_planner.swarm import MASTER
@@ -217,15 +216,14 @@ def _feasible(p: Params, scheme: str, sc: Problem, value: float, point, lower: f
 
 def _kept(sc: Problem, point):
     """(value, point): the previous sweep point's optimum where sc, a restriction of its
-    problem (warm.restricts), still accepts it on the ray model, its value no worse (its
-    ranges may come from the inner solve); None otherwise. The previous certificate's lower
-    bound holds for sc, whose optimum is therefore this value, to that certificate's gap."""
-    got = local_refine.checked(sc, np.array([point[0], *point[1], *point[2]], dtype=float))
+    problem (warm.restricts), still accepts it as it is on the ray model (local_refine.accepted,
+    no range cut to a lower value); None otherwise. The previous certificate's lower bound
+    holds for sc, whose optimum is therefore this value, to that certificate's gap."""
+    got = local_refine.accepted(sc, point)
     if got is None:
         return None
-    with np.errstate(all="ignore"):
-        w = float(np.sum(slave_weight(sc, point[0], np.array(point[1]), np.array(point[2]))))
-    return got if w > 0 and got[0] <= float(objective_from_normalised(sc, w)) else None
+    value = local_refine.value_at(sc, got)
+    return (value, got) if value <= local_refine.value_at(sc, point) else None
 
 
 def warm_incumbent(p: Params, sc: Problem, state: warm.WarmStart, restricted: bool = False):
