@@ -306,3 +306,29 @@ def test_an_optimum_sliding_along_its_c8_line_is_followed_as_slsqp_finds_it(sche
     assert cold.lower_bound_m <= followed[0] <= cold.sigma_h_m * (1.0 + 1e-11)
     loose = make_problem(_fig3(0.3), scheme, "exact")  # C8 slack there: more than one free
     assert local_refine.follow(loose, sc, state.point) is None
+
+
+def test_the_fallback_start_is_asked_once_and_only_when_box_centres_find_nothing(
+        monkeypatch) -> None:
+    """A warm search without an incumbent tries the box centres first and asks its fallback
+    (the chain's SLSQP start) only after FALLBACK_ROUNDS rounds without a feasible point.
+    Table I's centres find one at once; with every centre made infeasible (a fault injected
+    into branch_bound._incumbent, which the search then never fills) the fallback's point is
+    the plan, certified as a cold solve's."""
+    sc = make_problem(default_params(), "proposed", "exact")
+    cold = optimum.solve_global(default_params(), "proposed", "exact")
+    asked: list[int] = []
+
+    def fallback():
+        asked.append(1)
+        got = optimum._landed_start(sc, None)
+        return None if got is None else got[:2]
+
+    res = branch_bound.search(sc, rel_gap=optimum.REL_GAP, fallback=fallback)
+    assert not asked and res.exhausted
+    monkeypatch.setattr(branch_bound, "_incumbent", lambda sc, boxes: (np.inf, None))
+    res = branch_bound.search(sc, rel_gap=optimum.REL_GAP, fallback=fallback)
+    assert asked == [1] and res.exhausted and res.point is not None
+    # the same optimum as the cold solve, to the certified gaps
+    assert cold.lower_bound * (1 - 1e-12) <= res.value <= cold.lower_bound / (1 - 1e-4)
+    assert (res.value - res.lower_bound) / res.value <= 1e-4
