@@ -128,3 +128,54 @@ def test_a_point_accepted_as_it_stands_is_one_checked_accepts() -> None:
                 assert local_refine.checked(sc, np.array([r0, *th, *ranges])) is not None
                 assert local_refine.accepted(sc, found) == found
     assert accepted >= 10
+
+
+def test_first_infeasible_points_guess_from_any_point_and_name_the_cold_set(monkeypatch) -> None:
+    """Figure 4's first infeasible point (R_min,1 17.5 after a feasible 17.0) and random edges:
+    the one-slave set guessed from a point (infeasibility._grown) is proven empty for (P) by
+    its own search, and the filter ends with the cold set whatever the point: the previous
+    optimum (a good guess), or points far from it (wrong guesses the filter must widen, or
+    give up for its full run)."""
+    grown: list = []
+    looks: list = []
+
+    def spy(*args, grow=infeasibility._grown):
+        grown.append(grow(*args))
+        return grown[-1]
+
+    def seen(*args, at=infeasibility._families_at):
+        looks.append(at(*args))
+        return looks[-1]
+
+    monkeypatch.setattr(infeasibility, "_grown", spy)
+    monkeypatch.setattr(infeasibility, "_families_at", seen)
+    rng = np.random.default_rng(3)
+    base = default_params().replace(**FIG4)
+    h_amb = base.raw["h_amb_min_m"]
+    cases = [(scheme, _at(base, 17.0, h_amb), _at(base, 17.5, h_amb)) for scheme in SCHEMES]
+    cases += [(SCHEMES[i], _at(base, 17.0, h), _at(base, 17.5, h))
+              for i, h in enumerate(rng.uniform(0.8, 1.6, len(SCHEMES)))]
+    wrong = ran = 0
+    for scheme, before, p in cases:
+        state = new_warm_start("global")
+        if not solve(before, scheme=scheme, objective="exact", solver="global", warm_start=state
+                     ).feasible or solve(p, scheme=scheme, solver="global").feasible:
+            continue
+        cold, ran = infeasibility.irreducible_set(p, scheme), ran + 1
+        sc = make_problem(p, scheme, "bound")
+        far = (float(rng.uniform(sc.r0_lo, min(sc.r0_hi, 3 * sc.r0_lo + 50))),
+               tuple(rng.uniform(0.3, 1.2, len(sc.slaves))),
+               tuple(rng.uniform(20.0, 300.0, len(sc.slaves))))
+        for point in (state.point, far):
+            grown.clear()
+            looks.clear()
+            alone = infeasibility.one_slave_set(p, scheme, point=point)
+            assert grown and alone, (scheme, point)
+            off = frozenset(blocking.FAMILIES) - alone
+            res = branch_bound.search(make_problem(p, scheme, "bound", off),
+                                      stop_when_feasible=True)
+            assert res.exhausted and res.point is None, (scheme, alone)
+            assert infeasibility.irreducible_set(
+                p, scheme, witnesses={frozenset(): point}) == cold, (scheme, point)
+            wrong += len(looks) > 1  # the guess had a feasible point: widened
+    assert ran >= 6 and wrong >= 1, (ran, wrong)

@@ -25,6 +25,7 @@ undecided by a short search asks first whether one slave alone is blocked
 """
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 from dataclasses import replace
 from itertools import combinations
@@ -32,7 +33,7 @@ from itertools import combinations
 import numpy as np
 
 from uav_insar_planner.params import Params
-from uav_insar_planner.solver import blocking
+from uav_insar_planner.solver import blocking, rays
 from uav_insar_planner.solver.global_opt import branch_bound, local_refine
 from uav_insar_planner.solver.problem import Problem, make_problem
 from uav_insar_planner.solver.start_grid import find_start
@@ -48,6 +49,11 @@ Witnesses = dict[frozenset[str], tuple | None]
 # at least the same families is feasible too (its feasible set holds theirs), so one entry
 # settles all of those without a test (warm.WarmStart.held says what carries to a next point)
 Held = set[frozenset[str]]
+
+
+# one slave (a problem's slaves) -> (domain, boxes): the final boxes of the last search that
+# proved a problem on it alone empty, with that problem's domain (`_covering`)
+Proofs = dict[tuple[int, ...], tuple]
 
 
 def _refuted(sc: Problem, witnesses: Witnesses | None) -> bool:
@@ -122,6 +128,20 @@ def _found(sc: Problem, res: branch_bound.SearchResult, witnesses: Witnesses | N
     return res.point is not None
 
 
+def _search(sc: Problem, max_nodes: int, proofs: Proofs | None) -> branch_bound.SearchResult:
+    """branch_bound.search for a feasible point of sc; a one-slave problem's starts from the
+    last proof's boxes on that slave (`_covering`) and, when it proves sc empty, leaves its
+    own for the next."""
+    if proofs is None or len(sc.slaves) != 1:
+        return branch_bound.search(sc, max_nodes=max_nodes, stop_when_feasible=True)
+    boxes = _covering(sc, proofs.get(sc.slaves))
+    res = branch_bound.search(sc, max_nodes=max_nodes, stop_when_feasible=True, keep_leaves=True,
+                              boxes=boxes if boxes is None or len(boxes) < max_nodes else None)
+    if res.exhausted and res.point is None and res.leaves is not None and len(res.leaves):
+        proofs[sc.slaves] = (_domain(sc), res.leaves)
+    return res
+
+
 def feasible_without(p: Params, scheme: str, off: frozenset[str], max_nodes: int = 50_000,
                      witnesses: Witnesses | None = None, held: Held | None = None) -> bool:
     """True when a feasible point of (P) minus the families `off` is found."""
@@ -155,12 +175,13 @@ def blocking_sets(p: Params, scheme: str, max_size: int = 3, within: Iterable[st
 
 
 def decide_families(p: Params, scheme: str, on: frozenset[str],
-                    witnesses: Witnesses | None = None,
-                    held: Held | None = None) -> tuple[bool, bool]:
+                    witnesses: Witnesses | None = None, held: Held | None = None,
+                    proofs: Proofs | None = None) -> tuple[bool, bool]:
     """(feasible, proven): is (P) with only the families `on` (plus C2) feasible? The branch
     and bound decides most cases in milliseconds, both ways, and a few near a feasibility edge
     with more boxes (DECIDE_NODES); when it runs out undecided (few families left make its box
-    huge), the closed-form start grid decides, and an infeasible verdict is then not proven."""
+    huge), the closed-form start grid decides, and an infeasible verdict is then not proven.
+    proofs: see `_search` (a one-slave (P), single-baseline's)."""
     sc = make_problem(p, scheme, "bound", frozenset(blocking.FAMILIES) - on)
     if _witnessed(sc, witnesses, held) or _refuted(sc, witnesses):
         return not _refuted(sc, witnesses), True
@@ -168,7 +189,7 @@ def decide_families(p: Params, scheme: str, on: frozenset[str],
         return False, True
     for max_nodes in DECIDE_NODES:
         with np.errstate(all="ignore"):
-            res = branch_bound.search(sc, max_nodes=max_nodes, stop_when_feasible=True)
+            res = _search(sc, max_nodes, proofs)
             if res.point is not None or res.exhausted:
                 return _found(sc, res, witnesses, held), True
             # Undecided: near a feasibility edge one slave alone is often provably blocked
@@ -184,42 +205,134 @@ def decide_families(p: Params, scheme: str, on: frozenset[str],
     return found, found
 
 
-def one_slave_set(p: Params, scheme: str, held: Held | None = None) -> frozenset[str] | None:
+def one_slave_set(p: Params, scheme: str, held: Held | None = None, point: tuple | None = None,
+                  proofs: Proofs | None = None) -> frozenset[str] | None:
     """A family set proven infeasible for (P) on one slave alone, or None when no slave alone
-    is provably blocked with every family on (or there is one slave only: that relaxation is
-    (P) itself). Dropping the other slaves (and their C4 pairs) relaxes (P), so a family set
-    infeasible for one slave is infeasible for (P). The deletion filter runs on that relaxation,
-    whose boxes are 2-D: a trial takes about 1 ms either way, where proving a trial of (P) empty
-    takes 3-20 ms (Figure 4 at 17.5 Mbit/s). Every trial that (P)'s filter finds infeasible
-    holds (P)'s final irreducible set, so when this set is that one (as there), all of them
-    are free and only the feasible trials, decided by a found point, are searched. For the
-    same reason a trial that drops at least the families of a relaxation of (P) held feasible
-    (`held`: the sweep's, e.g. every one without C10 at Figure 4's first infeasible point) is
-    feasible without a search."""
+    is provably blocked with every family on. Dropping the other slaves (and their C4 pairs)
+    relaxes (P), so a family set infeasible for one slave is infeasible for (P). The deletion
+    filter runs on that relaxation, whose boxes are 2-D: a trial takes about 1 ms either way,
+    where proving a trial of (P) empty takes 3-20 ms (Figure 4 at 17.5 Mbit/s). Every trial
+    that (P)'s filter finds infeasible holds (P)'s final irreducible set, so when this set is
+    that one (as there), all of them are free and only the feasible trials, decided by a found
+    point, are searched. For the same reason a trial that drops at least the families of a
+    relaxation of (P) held feasible (`held`: the sweep's, e.g. every one without C10 at Figure
+    4's first infeasible point) is feasible without a search. Each trial's search starts from
+    the last proof's boxes (`_search`, `proofs`): the filter's trials only drop families, so
+    most close in one round. `point`: a likely place of (P)'s optimum (the previous sweep
+    point's); the filter then runs within the families `_grown` proves infeasible from it
+    instead of all of them, fewer trials, and that set is as proven. With one slave (P itself)
+    only then, and None without a point."""
     base = make_problem(p, scheme, "bound")
-    if len(base.slaves) < 2:
-        return None  # a single slave's relaxation is (P) itself
+    proofs = {} if proofs is None else proofs
 
-    def empty(k: int, on: frozenset[str]) -> bool:
+    def search(k: int, on: frozenset[str]) -> branch_bound.SearchResult | None:
         sc = replace(make_problem(p, scheme, "bound", frozenset(blocking.FAMILIES) - on),
                      slaves=(k,))
         if _held(sc, held):
-            return False
+            return None
         with np.errstate(all="ignore"):
-            res = branch_bound.search(sc, max_nodes=DECIDE_NODES[0], stop_when_feasible=True)
-        return res.exhausted and res.point is None  # undecided counts as feasible: kept
+            j = base.slaves.index(k)
+            if point is not None and len(point[1]) == len(base.slaves) and (
+                    got := local_refine.accepted(sc, (point[0], point[1][j:j + 1],
+                                                      point[2][j:j + 1]))) is not None:
+                # the ray model accepts the point's slave k: sc is feasible, as in _witnessed
+                return branch_bound.SearchResult(math.inf, got, -math.inf, 0, False)
+            return _search(sc, DECIDE_NODES[0], proofs)
 
-    everything = frozenset(blocking.FAMILIES)
-    for k in base.slaves:
-        if empty(k, everything):
-            return frozenset(blocking.irreducible_set(
-                blocking.FAMILIES, lambda on, k=k: not empty(k, on)))
+    def empty(k: int, on: frozenset[str]) -> bool:
+        res = search(k, on)  # undecided counts as feasible: kept
+        return res is not None and res.exhausted and res.point is None
+
+    for j, k in enumerate(base.slaves):
+        within = None if point is None or len(point[1]) != len(base.slaves) else _grown(
+            p, scheme, k, (point[0], point[1][j], point[2][j]), search)
+        if within is None and len(base.slaves) < 2:
+            return None  # a single slave's relaxation is (P) itself: its own filter
+        if within is not None or empty(k, within := frozenset(blocking.FAMILIES)):
+            return frozenset(blocking.irreducible_set(within, lambda on, k=k: not empty(k, on)))
     return None
+
+
+# Relative distance to a family's bound within which a point counts as on it (`_grown`)
+ACTIVE_TOL = 1e-6
+
+
+def _grown(p: Params, scheme: str, k: int, point: tuple, search) -> frozenset[str] | None:
+    """A family set proven infeasible for slave k alone (`search`(k, families): one_slave_set's),
+    guessed from `point` (r0, theta_k, r_k), or None. The guess starts with the families that
+    point is on or breaks (`_families_at`: the previous optimum's active ones and what the
+    step tightened); while slave k has a feasible point under it, the families that point
+    breaks join it (it breaks one at least unless slave k is not blocked at all: None). Only
+    the final search's proof makes the set infeasible; the guess only says where to look."""
+    single = {f: frozenset({f, "C10"} if f in RATE_PRICED else {f}) for f in blocking.FAMILIES}
+    alone = {on: make_problem(p, scheme, "bound", frozenset(blocking.FAMILIES) - on)
+             for on in single.values()}
+    guess = _families_at(alone, k, point, ACTIVE_TOL)
+    while guess:
+        res = search(k, guess)
+        if res is None or not res.exhausted and res.point is None:
+            return None  # held feasible (no point to grow from) or undecided
+        if res.point is None:
+            return guess
+        more = _families_at(alone, k, (res.point[0], res.point[1][0], res.point[2][0]), 0.0)
+        if more <= guess:
+            return None
+        guess |= more
+    return None
+
+
+# C9 and C11 bound a UAV's position only with C10's price of rate per distance (without C10 the
+# cheapest schedule is no power at all: power.station_radius_sq)
+RATE_PRICED = ("C9", "C11")
+
+
+def _families_at(alone: dict[frozenset[str], Problem], k: int, point: tuple,
+                 tol: float) -> frozenset[str]:
+    """The union of the family sets of `alone` (each with its problem, those families alone
+    on) whose problem's domain or ray limits for slave k the point (r0, theta, r) misses or
+    meets within tol (relative)."""
+    r0, th, r = point
+    out: set[str] = set()
+    for on, sc in alone.items():
+        lo, up = rays.ray_limits(sc, k, r0, th)
+        h1, h2 = rays.master_hole(sc, r0, th)
+        e, a = tol * abs(r), tol * max(abs(th), 1.0)
+        e0 = 0.0 if sc.fixed_master else tol * abs(r0)
+        if not (sc.r0_lo + e0 <= r0 <= sc.r0_hi - e0 and sc.th_lo + a <= th <= sc.th_hi - a
+                and lo + e <= r <= up - e and not h1 - e < r < h2 + e):
+            out |= on
+    return frozenset(out)
+
+
+def proof_of(sc: Problem, res: branch_bound.SearchResult) -> Proofs | None:
+    """The final boxes of res, a search (keep_leaves) that proved sc empty, as `irreducible_set`'s
+    start; one slave only: there they are 2-D, like its trials'."""
+    if len(sc.slaves) != 1 or not res.exhausted or res.leaves is None or not len(res.leaves):
+        return None
+    return {sc.slaves: (_domain(sc), res.leaves)}
+
+
+def _domain(sc: Problem) -> tuple[float, float, float, float]:
+    return sc.r0_lo, sc.r0_hi, sc.th_lo, sc.th_hi
+
+
+def _covering(sc: Problem, proof: tuple | None) -> np.ndarray | None:
+    """The final boxes of `proof` (domain, boxes), a search's that proved a problem on sc's one
+    slave empty, when that domain is sc's: they cover it (branch_bound.SearchResult.leaves),
+    and any boxes that do are a valid start (branch_bound.search), each bounded afresh for sc.
+    The filter's trials only drop families, and a box the last proof closed with a family sc
+    keeps closes again at once, without the splits that found it (0.2-0.3 ms a proof instead
+    of 0.6-1). None (the search's own root) otherwise: where the domain grew, the strips
+    around the old boxes cost more than a search from the root (measured)."""
+    if proof is None or proof[0] != _domain(sc):
+        return None
+    return proof[1]
 
 
 def irreducible_set(p: Params, scheme: str, hint: Iterable[str] = (),
                     witnesses: Witnesses | None = None,
-                    hint_proven: bool = False, held: Held | None = None) -> tuple[list[str], bool]:
+                    hint_proven: bool = False, held: Held | None = None,
+                    start: Proofs | None = None) -> tuple[list[str], bool]:
     """(families, proven): the deletion filter over FAMILIES with `decide_families` as the
     test: families that cannot hold together, each needed for that; proven: their
     infeasibility is the branch and bound's proof, not the start grid's verdict. `hint` (the
@@ -229,15 +342,17 @@ def irreducible_set(p: Params, scheme: str, hint: Iterable[str] = (),
     The relaxations `witnesses` holds proven infeasible are such sets too (a trial keeping
     every family one keeps is infeasible). The result is the one without any of them: they
     only decide trials that hold a set proven infeasible. `witnesses`, `held`: see the module
-    docstring and Held."""
+    docstring and Held. `start`: the boxes of (P)'s own proof of emptiness when it has one
+    slave (`_search`, whose later proofs the filter's next trials start from)."""
     everything = frozenset(blocking.FAMILIES)
+    covers: Proofs = dict(start or {})
     proofs: dict[frozenset[str], bool] = {everything - off: False for off, point in (
         witnesses or {}).items() if point is None}
 
     def feasible(on: frozenset[str]) -> bool:
         if any(not ok and known <= on for known, ok in proofs.items()):
             return False  # holds a proven infeasible set
-        ok, proven = decide_families(p, scheme, on, witnesses, held)
+        ok, proven = decide_families(p, scheme, on, witnesses, held, covers)
         if proven:
             proofs[on] = ok
         return ok
@@ -247,7 +362,8 @@ def irreducible_set(p: Params, scheme: str, hint: Iterable[str] = (),
             proofs[known] = False
         else:
             feasible(known)
-    if proofs.get(known) is not False and (alone := one_slave_set(p, scheme, held)):
+    if proofs.get(known) is not False and (alone := one_slave_set(
+            p, scheme, held, (witnesses or {}).get(frozenset()), covers)):
         proofs[alone] = False
     block = blocking.irreducible_set(blocking.FAMILIES, feasible)
     key = frozenset(block)

@@ -278,7 +278,7 @@ def _no_point(p: Params, scheme: str, sc: Problem, res: branch_bound.SearchResul
         _, fixes = infeasibility.blocking_sets(p, scheme, within=hint, witnesses=seen,
                                                held=held)
     block, proven = infeasibility.irreducible_set(p, scheme, hint, seen, hint_proven=carried,
-                                                  held=held)
+                                                  held=held, start=infeasibility.proof_of(sc, res))
     if fixes is None:
         _, fixes = infeasibility.blocking_sets(p, scheme, within=block if proven else (),
                                                witnesses=seen, held=held)
