@@ -196,6 +196,61 @@ def c8_cap(sc: Problem, k: int) -> float:
     return float(model.baseline_max(sc.p, 1.0, k)) if sc.on("C8") else math.inf
 
 
+def capped_weight_bound(sc: Problem, r0a, ta, tb, cap):
+    """Upper bound on w / r0^2 for a slave with C8 cap `cap` (c8_cap) at every feasible point of
+    the box r0 >= r0a > 0, theta in [ta, tb]; +inf where the proof below does not apply.
+
+    Proof. C8 is r |sin(delta)| <= cap r0, delta = theta - theta_0, and w / r0^2 is
+    non-decreasing in r (module docstring), so w / r0^2 <= V(r0, theta) = weight(cap, gamma_Rg,
+    gamma_SNR(r0, cap r0 / sin|delta|)) = cap^2 F(g), g = gamma_Rg(theta) gamma_SNR, F
+    increasing. gamma_SNR falls with r0 (directly and through the range): take r0a. With
+    kappa = cap r0a^3 / gamma_m, log gamma_SNR = const - log(1 + kappa / sin|delta|) / 2, whose
+    slope in |delta| is kappa cos / (2 sin (sin + kappa)) > 0, decreasing on (0, pi/2]: concave
+    in theta on either side of theta_0. gamma_Rg = 1 - 2 y / B_p (eqs. 10-11) with
+    y = (s_0 - s) / (3 s_0 + s) below theta_0 and y = (s - s_0) / (s_0 + 3 s) above (s = sin
+    theta, s_0 = sin theta_0), and (log(1 - c y))'' = -c y'' / g_Rg - (c y' / g_Rg)^2, c = 2 / B_p.
+    Below: y'' = 4 s_0 (s (3 s_0 + s) + 2 cos^2) / (3 s_0 + s)^3 >= 0 for theta in [0, pi/2).
+    Above: y'' = -4 s_0 (s (s_0 + 3 s) + 6 cos^2) / (s_0 + 3 s)^3 and g_Rg <= 1, so
+    |y''| <= c y'^2, i.e. (s (s_0 + 3 s) + 6 cos^2)(s_0 + 3 s) <= 4 c s_0 cos^2, suffices; it is
+    checked once over the whole slave domain above theta_0 (_concave_above; it must lie in
+    [0, pi/2)). So L = log(gamma_Rg gamma_SNR) is concave on [ta, tb] where the box lies on one
+    side of theta_0 within [0, pi/2) (above: within [theta_0, th_hi]), gamma_Rg > 0 at both
+    ends (so throughout: it is monotone on each side), and (above) the check passes. A
+    concave L lies below its tangents at ta and tb, hence max L <= L(ta) if L'(ta) <= 0,
+    L(tb) if L'(tb) >= 0, else the tangents' crossing."""
+    s0, c, th0 = sc.sin0, 2.0 / sc.bp, sc.th0
+    below = (tb < th0) & (ta >= 0.0)
+    ok = below | ((ta > th0) & (tb <= sc.th_hi)) if _concave_above(sc) else below
+    side = np.where(below, -1.0, 1.0)  # d|delta| / d theta
+    ends = np.stack([ta, tb])  # both ends in one pass
+    s, cos = np.sin(ends), np.cos(ends)
+    sd, cd = side * np.sin(ends - th0), np.cos(ends - th0)  # sin, cos of |delta|
+    u = side * (s - s0)  # y = u / den, den = 3 s_0 + s below, s_0 + 3 s above
+    den = 2.0 * (s + s0) + u
+    g_rg = 1.0 - c * u / den
+    kappa = cap * r0a**3 / sc.gm
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ell = 0.5 * np.log(g_rg * g_rg * sd / (sd + kappa))  # log gamma_Rg + log gamma_SNR + const
+        slope = side * (0.5 * kappa * cd / (sd * (sd + kappa))
+                        - 4.0 * c * s0 * cos / (den * den * g_rg))
+        (la, lb), (da, db) = ell, slope
+        cross = la + da * (lb - la - db * (tb - ta)) / (da - db)
+        top = np.where(da <= 0.0, la, np.where(db >= 0.0, lb, cross))
+        g = np.exp(top) / np.sqrt(1.0 + r0a**3 / sc.gm)  # gamma_Rg gamma_SNR
+    ok &= (np.minimum(g_rg[0], g_rg[1]) > 0.0) & (g * sc.p.coherence_other < 1.0) & (r0a > 0)
+    return np.where(ok, rays.weight(sc, cap, np.where(ok, g, 0.5), 1.0), math.inf)
+
+
+def _concave_above(sc: Problem) -> bool:
+    """capped_weight_bound's check above theta_0 over the whole domain [theta_0, th_hi] (s and
+    cos are monotone there, so it holds on every box inside)."""
+    s0, c = sc.sin0, 2.0 / sc.bp
+    if not sc.th0 < sc.th_hi < HALF_PI:
+        return False
+    sb, ca, cb = math.sin(sc.th_hi), math.cos(sc.th0), math.cos(sc.th_hi)
+    return (sb * (s0 + 3.0 * sb) + 6.0 * ca * ca) * (s0 + 3.0 * sb) <= 4.0 * c * s0 * cb * cb
+
+
 def weight_bound(sc: Problem, r0a, rho, smax, g_rg, cap):
     """Upper bound on w / r0^2 for any point of the box whose slave range is at most rho.
 
