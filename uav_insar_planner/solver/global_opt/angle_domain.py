@@ -124,3 +124,43 @@ def clip_to_feasible(intervals: np.ndarray, ta: np.ndarray, tb: np.ndarray):
     a = np.where(i < len(s), np.maximum(ta, s[np.minimum(i, len(s) - 1)]), np.inf)
     b = np.where(j >= 0, np.minimum(tb, e[np.maximum(j, 0)]), -np.inf)
     return a, b
+
+
+def clip_to_cap(sc: Problem, r0b, ta: np.ndarray, tb: np.ndarray, caps: np.ndarray):
+    """(ta', tb'), (K, n): each slave's angles [ta, tb] of a box with r0 <= r0b cut to those
+    where its C5 floor lies below its C8 ceiling; ta' > tb' where none does. caps (K, 1):
+    slave_ranges.c8_cap.
+
+    Why. Both limits of a slave are taken at their own favourable end of the box's angles, so
+    a box across the crossing of the C5 floor and the C8 ceiling (the static-power slave's
+    vertex from h_amb_min 1.2 m on in Figure 3) is bounded with its slave both at the ceiling
+    of one end and at the angle of the other: a bound looser than the optimum by about the
+    angle width, which the search closes only with boxes some 1e-5 rad wide. feasible_angles
+    cannot cut there: the ceiling grows with r0, and it takes the whole master interval.
+
+    Proof. A feasible point has S_min cos(theta) / Theta_3dB <= r (C5) and r |sin(theta -
+    theta_0)| <= cap r0 <= cap r0b (C8), so g(theta) = cos(theta) |sin(theta - theta_0)| <=
+    kappa = cap r0b Theta_3dB / S_min. With 2 g = sin(2 theta - theta_0) - sin(theta_0) above
+    theta_0 and sin(theta_0) - sin(2 theta - theta_0) below, g falls then rises on
+    M = [theta_0 / 2 - pi / 4, theta_0 / 2 + pi / 4], where 2 theta - theta_0 is within pi/2
+    of 0; so on M it holds exactly between (theta_0 + asin(sin(theta_0) -/+ 2 kappa)) / 2,
+    the arcsine's argument clipped to [-1, 1]. Only boxes inside M (and in [0, pi/2)) are cut."""
+    if not (sc.on("C5") and sc.on("C8")):
+        return ta, tb
+    lo, hi = cap_interval(sc, r0b, caps)
+    span_lo, span_hi = cap_span(sc)
+    inside = (ta >= span_lo) & (tb <= span_hi)
+    return np.where(inside, np.maximum(ta, lo), ta), np.where(inside, np.minimum(tb, hi), tb)
+
+
+def cap_span(sc: Problem) -> tuple[float, float]:
+    """M within [0, pi/2): the angles where clip_to_cap's interval is exact (see there)."""
+    return max(0.0, 0.5 * sc.th0 - 0.25 * np.pi), min(0.5 * sc.th0 + 0.25 * np.pi, 0.5 * np.pi)
+
+
+def cap_interval(sc: Problem, r0, caps):
+    """(lo, hi): clip_to_cap's angles where a slave's C5 floor is below its C8 ceiling at
+    master range r0, for slave angles within M (see there)."""
+    kappa = caps * np.maximum(r0, 0.0) * sc.p.beamwidth / sc.p.swath_min
+    return (0.5 * (sc.th0 + np.arcsin(np.clip(sc.sin0 - 2.0 * kappa, -1.0, 1.0))),
+            0.5 * (sc.th0 + np.arcsin(np.clip(sc.sin0 + 2.0 * kappa, -1.0, 1.0))))

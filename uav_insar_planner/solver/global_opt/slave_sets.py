@@ -56,16 +56,15 @@ def box_lower_bound(sc: Problem, boxes: np.ndarray, close_at: float = np.inf,
     bounds it; a box whose angles miss them is empty)."""
     r0a, r0b = boxes[:, 0], boxes[:, 1]
     ta, tb = boxes[:, 2::2].T, boxes[:, 3::2].T  # (K, n): one row per slave
-    if angles is not None:
-        cut = [angle_domain.clip_to_feasible(a, ta[j], tb[j]) for j, a in enumerate(angles)]
-        ca, cb = np.stack([c[0] for c in cut]), np.stack([c[1] for c in cut])
-        missed = ~np.all(ca <= cb, axis=0)  # the box is empty; its own angles keep the sums finite
-        ta, tb = np.where(missed, ta, ca), np.where(missed, tb, cb)
-    lo, up, smax, g_rg = slave_ranges.slave_box(sc, tuple(sc.slaves), r0a, r0b, ta, tb)
     caps = np.array([slave_ranges.c8_cap(sc, k) for k in sc.slaves])  # per slave: its rung
-    ok = np.all(lo <= up, axis=0)
+    ca, cb = angle_domain.clip_to_cap(sc, r0b, ta, tb, caps[:, None])
     if angles is not None:
-        ok &= ~missed
+        cut = [angle_domain.clip_to_feasible(a, ca[j], cb[j]) for j, a in enumerate(angles)]
+        ca, cb = np.stack([c[0] for c in cut]), np.stack([c[1] for c in cut])
+    missed = ~np.all(ca <= cb, axis=0)  # the box is empty; its own angles keep the sums finite
+    ta, tb = np.where(missed, ta, ca), np.where(missed, tb, cb)
+    lo, up, smax, g_rg = slave_ranges.slave_box(sc, tuple(sc.slaves), r0a, r0b, ta, tb)
+    ok = np.all(lo <= up, axis=0) & ~missed
     single = slave_ranges.weight_bound(sc, r0a, up, smax, g_rg, caps[:, None])
     if len(single) == 1 or not sc.on("C4"):
         w = np.sum(single, axis=0)
