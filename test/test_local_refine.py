@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from uav_insar_planner.params import default_params
-from uav_insar_planner.solver import solve
+from uav_insar_planner.solver import new_warm_start, solve
 from uav_insar_planner.solver.global_opt import local_refine, slave_sets
 from uav_insar_planner.solver.problem import make_problem
 
@@ -41,3 +41,29 @@ def test_slsqp_stops_at_its_vertex_instead_of_line_searching_in_rounding_noise(
     assert cold.lower_bound_m <= value <= cold.sigma_h_m * (1.0 + 1e-12)
     assert local_refine.at_kkt(sc, point)
     assert len(calls) < 40
+
+
+def test_a_followed_vertex_the_ray_model_accepts_as_it_is_needs_no_inner_solve(
+        monkeypatch) -> None:
+    """Figure 3's fixed-master optimum at h_amb_min 1.2 m followed to 1.3 m: Newton's vertex
+    is accepted on the ray model as it is, so follow asks no inner solve at its angles
+    (slave_sets.ranges_for), and it is still the cold solve's optimum, at a KKT point."""
+    fig3 = default_params().replace(master_fixed_xz_m=[-54.0, 74.0], p_com_max_db=10.1)
+    state = new_warm_start("global")
+    solve(fig3.replace(h_amb_min_m=1.2), scheme="fixed-master", objective="exact",
+          solver="global", warm_start=state)
+    sc = make_problem(fig3.replace(h_amb_min_m=1.3), "fixed-master", "exact")
+    inner: list[int] = []
+
+    def counted(*args, ranges_for=slave_sets.ranges_for):
+        inner.append(1)
+        return ranges_for(*args)
+
+    monkeypatch.setattr(slave_sets, "ranges_for", counted)
+    followed = local_refine.follow(state.problem, sc, state.point)
+    monkeypatch.undo()
+    assert followed is not None and not inner
+    assert local_refine.at_kkt(sc, followed[1])
+    cold = solve(fig3.replace(h_amb_min_m=1.3), scheme="fixed-master", objective="exact",
+                 solver="global")
+    assert cold.lower_bound_m <= followed[0] <= cold.sigma_h_m * (1.0 + 1e-11)
