@@ -160,7 +160,11 @@ def cap_span(sc: Problem) -> tuple[float, float]:
 
 def cap_interval(sc: Problem, r0, caps):
     """(lo, hi): clip_to_cap's angles where a slave's C5 floor is below its C8 ceiling at
-    master range r0, for slave angles within M (see there)."""
+    master range r0, for slave angles within M (see there); every angle when S_min = 0 (no
+    C5 floor, no crossing)."""
+    if sc.p.swath_min <= 0.0:
+        shape = np.broadcast(caps, r0).shape
+        return np.full(shape, -np.inf), np.full(shape, np.inf)
     kappa = caps * np.maximum(r0, 0.0) * sc.p.beamwidth / sc.p.swath_min
     return (0.5 * (sc.th0 + np.arcsin(np.clip(sc.sin0 - 2.0 * kappa, -1.0, 1.0))),
             0.5 * (sc.th0 + np.arcsin(np.clip(sc.sin0 + 2.0 * kappa, -1.0, 1.0))))
