@@ -377,13 +377,15 @@ def test_ctrl_c_mid_run_is_one_line_exit_130_and_nothing_written(tmp_path: Path,
                                                                  jobs: str) -> None:
     """Ctrl-C as a terminal sends it: SIGINT to the whole process group, workers included,
     once a few solves are done (the progress bar says so)."""
-    argv = ("map", "h_amb_min_m", "0.6", "1.6", "20", "rate_min_mbps[1]", "12", "18", "20",
+    # 3 600 solves: the warm chains made a 20 x 20 map finish in about a second, before the
+    # Ctrl-C; this one runs for several.
+    argv = ("map", "h_amb_min_m", "0.6", "1.6", "60", "rate_min_mbps[1]", "12", "18", "60",
             "--schemes", "proposed", "--set", "p_com_max_db=9", "--jobs", jobs,
             "--csv", str(tmp_path / "m.csv"), "--plot", str(tmp_path / "m.png"))
     with subprocess.Popen([*CLI, *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                           start_new_session=True) as proc:
         try:
-            done = re.compile(r"\b([3-9]|\d\d+)/400 \[")
+            done = re.compile(r"\b([3-9]|\d\d+)/3600 \[")
             said = _read_until(proc, lambda t: bool(done.search(t)), 60)
             assert done.search(said) and proc.poll() is None, said
             process_group.kill_group(proc, signal.SIGINT)
