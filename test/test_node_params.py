@@ -231,6 +231,27 @@ def test_sigint_and_sigterm_stop_every_node_cleanly(watcher, procs, name, sig):
     assert "Traceback" not in out and "[ERROR]" not in out, out
 
 
+def test_a_teardown_that_hangs_prints_its_stacks_and_ends_the_node(children):
+    """Fault injected (see the script): destroy_node hangs after Ctrl-C. The node prints every
+    thread's stack, then ends with its code, 0, well before the SIGTERM stop_nodes would send
+    after STOP_TIMEOUT_S."""
+    from uav_insar_planner.demo.processes import STOP_TIMEOUT_S
+    from uav_insar_planner.ros.run import TEARDOWN_EXIT_S, TEARDOWN_MAX_S
+
+    proc = children.start(script=Path(__file__).with_name("hang_in_teardown.py"))
+    assert proc.stdout.readline().strip() == "spinning"
+    time.sleep(0.5)
+    proc.send_signal(signal.SIGINT)
+    start = time.monotonic()
+    out, err = proc.communicate(timeout=30)
+    took = time.monotonic() - start
+    assert proc.returncode == 0, err
+    assert TEARDOWN_MAX_S <= took < STOP_TIMEOUT_S, took
+    assert TEARDOWN_MAX_S + TEARDOWN_EXIT_S < STOP_TIMEOUT_S
+    assert "in stuck_here" in err and "did not finish in" in err, err
+    assert err.rstrip().endswith("exiting with code 0"), err[-300:]
+
+
 def test_a_stop_signal_while_the_node_is_built_is_a_clean_stop(children):
     # The fault CI met once: SIGINT after the planner was on the graph, before its constructor
     # had made its last publisher (fault injection, see the script's docstring).

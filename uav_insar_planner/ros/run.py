@@ -11,8 +11,10 @@ import faulthandler
 import os
 import signal
 import sys
+import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from typing import Any
 
 import rclpy
@@ -21,7 +23,7 @@ from rclpy.executors import ExternalShutdownException
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 
-from uav_insar_planner.exit_codes import EXIT_BAD_INPUT, STACK_DUMP_SIGNAL
+from uav_insar_planner.exit_codes import EXIT_BAD_INPUT, EXIT_CRASH, STACK_DUMP_SIGNAL
 from uav_insar_planner.params_file import params_file_problems
 
 # Fast DDS derives its ports from the domain id; above 232 they pass 65535 and the process
@@ -101,12 +103,49 @@ def _ignore_stop_signals() -> None:
             continue
 
 
+# The last of a stop, destroying the node and shutting rcl and the middleware down, once took
+# longer than SIGINT's and SIGTERM's five seconds each (an agent, twice in some hundreds of
+# stops under CI load; where, unknown). Past TEARDOWN_MAX_S every thread's stack is printed (by
+# faulthandler's own thread, which needs no GIL) and, TEARDOWN_EXIT_S later, the process ends
+# with the node's code: its work is done, and a Ctrl-C must end it.
+TEARDOWN_MAX_S = 3.0
+TEARDOWN_EXIT_S = 0.5
+
+
+@contextmanager
+def _bounded_teardown(name: str, code: int) -> Iterator[None]:
+    faulthandler.dump_traceback_later(TEARDOWN_MAX_S)
+    timer = threading.Timer(TEARDOWN_MAX_S + TEARDOWN_EXIT_S, _end_teardown, (name, code))
+    timer.daemon = True
+    timer.start()
+    try:
+        yield
+    finally:
+        timer.cancel()
+        faulthandler.cancel_dump_traceback_later()
+
+
+def _name_of(node: Node | None, default_name: str) -> str:
+    try:
+        return node.get_name() if node is not None else default_name
+    except Exception:  # a handle already gone: the name is only for the log line
+        return default_name
+
+
+def _end_teardown(name: str, code: int) -> None:
+    print(f"[WARN] [{name}]: the node's teardown in rcl and the middleware did not finish in "
+          f"{TEARDOWN_MAX_S:g} s (every thread's stack above); exiting with code {code}",
+          file=sys.stderr, flush=True)
+    os._exit(code)
+
+
 def run_node(make_node: Callable[[], Node], default_name: str,
              args: list[str] | None = None) -> int:
     """Check the start-up arguments, init, build the node, spin until Ctrl-C / SIGTERM, shut
     down; 0, or EXIT_BAD_INPUT when the arguments or the node's parameters were invalid
     (the node's `problems`, one line each), in which case nothing was published. A node's
-    optional `stop()` runs before it is destroyed."""
+    optional `stop()` runs before it is destroyed, unbounded; the teardown after it is bounded
+    (TEARDOWN_MAX_S)."""
     argv = list(sys.argv if args is None else args)
     problems = startup_problems(argv, default_name)
     if problems:
@@ -147,10 +186,13 @@ def run_node(make_node: Callable[[], Node], default_name: str,
         pass  # the stop signal's own KeyboardInterrupt, arriving while its failure was handled
     finally:
         _ignore_stop_signals()
-        if node is not None:
-            stop = getattr(node, "stop", None)
-            if stop is not None:
-                stop()
-            node.destroy_node()
-        rclpy.try_shutdown()
+        stop = getattr(node, "stop", None)
+        if stop is not None:
+            stop()
+        # a failure on its way out (a bug) must not end as a clean stop
+        with _bounded_teardown(_name_of(node, default_name),
+                               code if sys.exc_info()[0] is None else EXIT_CRASH):
+            if node is not None:
+                node.destroy_node()
+            rclpy.try_shutdown()
     return code
