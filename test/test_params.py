@@ -47,6 +47,25 @@ def test_every_params_field_is_one_specs_value_in_si():
         assert getattr(changed, spec.attribute) == spec.si_value(changed.raw[spec.name])
 
 
+def test_replace_checks_what_it_changes_and_every_rule_between_fields():
+    """replace takes the unchanged values as they are (a sweep makes thousands of copies)
+    and gives what a full validation of the merged values gives, errors included."""
+    from uav_insar_planner.params import params_from_mapping
+
+    p = default_params()
+    changes = {"h_amb_min_m": 1.3, "rate_min_mbps": [10, 17.5, 1], "num_uavs": 3,
+               "p_com_max_db": 9}
+    assert p.replace(**changes) == params_from_mapping({**p.raw, **changes})
+    assert p.replace(num_uavs=3).rate_min_bps == p.rate_min_bps
+    with pytest.raises(ParamError, match=r"^h_amb_min_m: value -1\.0 is not allowed"):
+        p.replace(h_amb_min_m=-1.0)
+    with pytest.raises(ParamError, match=r"^z_min_m: value 500\.0 is not allowed; expected "
+                       r"less than z_max_m"):
+        p.replace(z_min_m=500.0)  # valid alone, against the unchanged z_max_m
+    with pytest.raises(ParamError, match=r"rate_min_mbps: .* with num_uavs 2"):
+        p.replace(num_uavs=2)  # the unchanged per-UAV lists hold three
+
+
 def test_node_section_overrides_global_section(tmp_path):
     f = tmp_path / "p.yaml"
     f.write_text('"/**":\n  ros__parameters:\n    looks: 4\n    d_min_m: 2.0\n'

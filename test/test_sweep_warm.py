@@ -147,22 +147,30 @@ def test_only_a_raised_h_amb_min_or_rate_min_restricts_the_problem() -> None:
 
 def test_carried_bounds_hold_at_a_restricted_point_and_are_dropped_at_a_relaxed_one() -> None:
     """Every carried bound is at most the objective at feasible points sampled in its box at
-    the tighter point (the carried bounds are proven there, not merely plausible); a relaxed
-    point (h_amb_min lowered) gets no bounds, and both solves give the cold answer."""
+    the tighter point (the carried bounds are proven there, not merely plausible), and the
+    boxes proven empty before, which are not carried, hold no feasible point there; a relaxed
+    point (h_amb_min lowered) after that gets no boxes (they no longer cover its domain), and
+    both solves give the cold answer."""
     state = new_warm_start("global")
     solve(_fig3(1.2), scheme="proposed", objective="exact", solver="global", warm_start=state)
     sc = make_problem(_fig3(1.3), "proposed", "exact")
     boxes, bounds = warm.start_boxes(sc, state, warm.restricts(state, sc))
-    assert bounds is not None and np.isinf(bounds).any() and np.isfinite(bounds).any()
+    assert bounds is not None and np.all(np.isfinite(bounds))
+    empty = state.leaves[np.isinf(state.leaf_lb)]
+    assert len(empty) and len(boxes) + len(empty) == len(state.leaves)
     rng = np.random.default_rng(7)
-    for _ in range(40):
-        u = rng.random(boxes.shape[0] * 3).reshape(3, -1, 1)
-        pts = boxes[:, 0::2] + (boxes[:, 1::2] - boxes[:, 0::2]) * np.concatenate(
-            [u[0], u[1], u[2]], axis=1)
-        f, _ = slave_sets.ranges_for(sc, pts[:, 0], pts[:, 1:])
-        assert np.all(f >= bounds * (1.0 - 1e-12))
+    for cut, lower in ((boxes, bounds), (empty, np.inf)):
+        for _ in range(40):
+            u = rng.random(cut.shape[0] * 3).reshape(3, -1, 1)
+            pts = cut[:, 0::2] + (cut[:, 1::2] - cut[:, 0::2]) * np.concatenate(
+                [u[0], u[1], u[2]], axis=1)
+            f, _ = slave_sets.ranges_for(sc, pts[:, 0], pts[:, 1:])
+            assert np.all(f >= lower * (1.0 - 1e-12))
     for h in (1.3, 1.0):  # tighter, then looser than the point before
         p = _fig3(h)
+        if h == 1.0:
+            assert state.partial and warm.start_boxes(
+                make_problem(p, "proposed", "exact"), state) == (None, None)
         hot = solve(p, scheme="proposed", objective="exact", solver="global", warm_start=state)
         cold = solve(p, scheme="proposed", objective="exact", solver="global")
         assert hot.sigma_h_m == pytest.approx(cold.sigma_h_m, rel=1e-4)

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import difflib
 import math
-from collections.abc import Mapping
+from collections.abc import Container, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -105,10 +105,12 @@ class Params:
         return self.e_max_j if self.energy_budget_uav_j is None else self.energy_budget_uav_j[k]
 
     def replace(self, **user_values: Any) -> Params:
-        """A copy with some user-facing (file-unit) parameters changed, validated again."""
+        """A copy with some user-facing (file-unit) parameters changed: those validated and
+        converted, and every cross-field rule checked again (the others are this one's, valid
+        and converted already: a sweep or a map makes thousands of copies)."""
         merged = dict(self.raw)
         merged.update(user_values)
-        return params_from_mapping(merged)
+        return params_from_mapping(merged, known=self, changed=frozenset(user_values))
 
     @property
     def y_track(self):
@@ -204,8 +206,10 @@ def unknown_parameter(name: str) -> str:
             f"{', '.join(nodes[:-1])} or {nodes[-1]} (the documentation's parameter reference)")
 
 
-def validate(values: Mapping[str, Any]) -> tuple[dict[str, Any], list[str]]:
-    """Check every value against PARAM_SPECS and the cross-field rules; collect all problems."""
+def validate(values: Mapping[str, Any],
+             trusted: Container[str] = ()) -> tuple[dict[str, Any], list[str]]:
+    """Check every value against PARAM_SPECS and the cross-field rules; collect all problems.
+    `trusted`: names whose values are check_value's output already (taken as they are)."""
     problems: list[str] = []
     clean: dict[str, Any] = {}
     for name in values:
@@ -219,6 +223,9 @@ def validate(values: Mapping[str, Any]) -> tuple[dict[str, Any], list[str]]:
             problems.append(unknown_parameter(name))
     bad: set[str] = set()
     for spec in PARAM_SPECS:
+        if spec.name in trusted:
+            clean[spec.name] = values[spec.name]
+            continue
         value, problem = check_value(spec, values.get(spec.name, spec.default))
         clean[spec.name] = value
         if problem:
@@ -293,13 +300,18 @@ def nav_error_problems(nav_error: Any, solver: Any) -> list[str]:
             f"expected 0 ({backend.nominal_only}), or solver " + " or ".join(others)]
 
 
-def params_from_mapping(values: Mapping[str, Any]) -> Params:
-    """Validate user-facing values (file units) and convert them to SI. Raises ParamError."""
-    v, problems = validate(values)
+def params_from_mapping(values: Mapping[str, Any], known: Params | None = None,
+                        changed: frozenset[str] = frozenset()) -> Params:
+    """Validate user-facing values (file units) and convert them to SI. Raises ParamError.
+    known: a Params whose values `values` keeps for every name not in `changed` (Params.replace),
+    taken from it without a second check or conversion."""
+    same = frozenset() if known is None else frozenset(known.raw) - changed
+    v, problems = validate(values, same)
     if problems:
         raise ParamError(problems)
-    return Params(raw=dict(v), **{spec.attribute: spec.si_value(v[spec.name])
-                                  for spec in PARAM_SPECS})
+    return Params(raw=dict(v), **{
+        spec.attribute: getattr(known, spec.attribute) if spec.name in same
+        else spec.si_value(v[spec.name]) for spec in PARAM_SPECS})
 
 
 def default_params() -> Params:

@@ -114,6 +114,7 @@ def solve_global(p: Params, scheme: str, objective: str,
             f"chain packing bound (solver/global_opt/chain_packing.py) over {intervals} "
             "master-range intervals, all closed"), intervals)
     start = boxes = box_lb = angles = None
+    partial = False
     if warm_start is not None:
         restricted = warm.restricts(warm_start, sc)
         held = warm.held_here(warm_start, sc)
@@ -124,6 +125,7 @@ def solve_global(p: Params, scheme: str, objective: str,
                 math.inf, None, math.inf, 0, True), warm_start, held, carried=True)
         start = warm_incumbent(p, sc, warm_start, restricted)
         boxes, box_lb = warm.start_boxes(sc, warm_start, restricted)
+        partial = restricted and boxes is not None  # start_boxes left out the empty ones
         angles = warm_start.angles if restricted else None
         warm_start.used_incumbent, warm_start.used_leaves = start is not None, boxes is not None
     landed = start is not None and start[2]
@@ -144,12 +146,12 @@ def solve_global(p: Params, scheme: str, objective: str,
                               angles=angles, fallback=fallback)
     if res.point is None and (chain is None or chain[1] is None):
         return _no_point(p, scheme, sc, res, warm_start,
-                         None if warm_start is None else held)
+                         None if warm_start is None else held, partial=partial)
     if start is not None and res.point is start[1]:
         res = replace(res, refined=True)  # the refined warm point stood: no second SLSQP
     value, point, lower = _search_point(sc, res, chain)
     if warm_start is not None:
-        warm.remember(warm_start, sc, point, res)
+        warm.remember(warm_start, sc, point, res, partial=partial)
     gap = (value - lower) / value
     dims = ", ".join(["r0"] + [f"theta{k}" for k in sc.slaves])
     return _feasible(p, scheme, sc, value, point, lower, "" if res.exhausted else (
@@ -285,14 +287,17 @@ def _inside_caps(sc: Problem, r0: float, th: np.ndarray) -> tuple[np.ndarray, bo
 
 def _no_point(p: Params, scheme: str, sc: Problem, res: branch_bound.SearchResult,
               state: warm.WarmStart | None = None, held: set | None = None,
-              carried: bool = False):
+              carried: bool = False, partial: bool = False):
     """The answer of a search that found no feasible point: infeasibility proven (every box
     empty) with an irreducible set of families, or not proven within its limit. carried: the
     proof is the previous sweep point's, whose problem this one restricts (warm.restricts),
     and so is the infeasibility of its irreducible set; the relaxations that make it feasible
     are then tried first, within that set (any proven set gives the same ones,
     infeasibility.blocking_sets), so that each one found feasible settles the filter's trials
-    that drop at least its families (infeasibility.Held). held: warm.held_here's, grown here."""
+    that drop at least its families (infeasibility.Held). held: warm.held_here's, grown here.
+    partial: the search started without the boxes an earlier point proved empty (warm.py), so
+    its boxes cover this problem's feasible set but not the domain of a relaxation: they are
+    no start for the filter's trials (infeasibility.proof_of)."""
     hint = state.blocking if state is not None else ()
     seen = state.witnesses if state is not None else None
     fixes = None
@@ -300,13 +305,14 @@ def _no_point(p: Params, scheme: str, sc: Problem, res: branch_bound.SearchResul
         _, fixes = infeasibility.blocking_sets(p, scheme, within=hint, witnesses=seen,
                                                held=held)
     block, proven = infeasibility.irreducible_set(p, scheme, hint, seen, hint_proven=carried,
-                                                  held=held, start=infeasibility.proof_of(sc, res))
+                                                  held=held, start=None if partial
+                                                  else infeasibility.proof_of(sc, res))
     if fixes is None:
         _, fixes = infeasibility.blocking_sets(p, scheme, within=block if proven else (),
                                                witnesses=seen, held=held)
     if state is not None:
         state.used_blocking = bool(hint) and proven and tuple(block) == tuple(hint)
-        warm.remember(state, sc, None, res, tuple(block) if proven else (), held)
+        warm.remember(state, sc, None, res, tuple(block) if proven else (), held, partial)
     relax = ("; relaxing any of these alone makes it feasible: "
              + ", ".join("+".join(s) for s in fixes)) if fixes else ""
     together = " + ".join(block) + (" cannot hold together" if len(block) > 1

@@ -61,10 +61,22 @@ def box_lower_bound(sc: Problem, boxes: np.ndarray, close_at: float = np.inf,
     if angles is not None:
         cut = [angle_domain.clip_to_feasible(a, ca[j], cb[j]) for j, a in enumerate(angles)]
         ca, cb = np.stack([c[0] for c in cut]), np.stack([c[1] for c in cut])
-    missed = ~np.all(ca <= cb, axis=0)  # the box is empty; its own angles keep the sums finite
-    ta, tb = np.where(missed, ta, ca), np.where(missed, tb, cb)
+    hit = np.all(ca <= cb, axis=0)  # elsewhere some slave has no angle left: the box is empty
+    if hit.all():
+        return _cut_box_bound(sc, r0a, r0b, ca, cb, caps, close_at)
+    # Along a sweep that tightens C8 most carried boxes it proves empty are proven so here
+    # (Figure 3: a third of the boxes bounded), before the costlier rest of the bound.
+    lb = np.full(len(boxes), np.inf)
+    if hit.any():
+        lb[hit] = _cut_box_bound(sc, r0a[hit], r0b[hit], ca[:, hit], cb[:, hit], caps, close_at)
+    return lb
+
+
+def _cut_box_bound(sc: Problem, r0a: np.ndarray, r0b: np.ndarray, ta: np.ndarray,
+                   tb: np.ndarray, caps: np.ndarray, close_at: float) -> np.ndarray:
+    """box_lower_bound of boxes whose slave angles [ta, tb] (K, n) are cut already."""
     lo, up, smax, g_rg = slave_ranges.slave_box(sc, tuple(sc.slaves), r0a, r0b, ta, tb)
-    ok = np.all(lo <= up, axis=0) & ~missed
+    ok = np.all(lo <= up, axis=0)
     single = slave_ranges.weight_bound(sc, r0a, up, smax, g_rg, caps[:, None])
     if len(single) == 1 or not sc.on("C4"):
         w = np.sum(single, axis=0)

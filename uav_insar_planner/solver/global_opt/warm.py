@@ -21,12 +21,15 @@ A step that only tightens (P) (`restricts`: the new point differs from the previ
 in parameters that bound the feasible set and do not enter the objective, each moved the
 tightening way) keeps more: the new feasible set lies inside the old one and the objective is
 the same function, so every lower bound proven over a box before still holds over it (the
-minimum over a subset is no smaller). The carried boxes keep their bounds (`leaf_lb`; +inf for
-a box proven empty), and the search computes a bound afresh only where the carried one no
-longer closes the box. An infeasibility proven before stays proven, and so does every family
-set proven infeasible (the previous irreducible set is infeasible here without a search). The
-slaves' feasible angles proven before (angle_domain.py) contain the new ones, so the search
-cuts its boxes to them from its first round, without proving them again.
+minimum over a subset is no smaller). The carried boxes keep their bounds (`leaf_lb`), and the
+search computes a bound afresh only where the carried one no longer closes the box. A box
+proven empty stays empty, so it is not carried at all: the boxes then cover the feasible set
+of every later point of a chain of such steps, not the domain (`partial`), and are carried
+only along such steps; should they grow past LEAVES_MAX, only their non-empty part is kept.
+An infeasibility proven before stays proven, and so does every family set proven infeasible
+(the previous irreducible set is infeasible here without a search). The slaves' feasible angles
+proven before (angle_domain.py) contain the new ones, so the search cuts its boxes to them from
+its first round, without proving them again.
 
 So a warm solve certifies what a cold one does, to the same gap; only its route differs.
 """
@@ -72,6 +75,7 @@ class WarmStart:
     witnesses: dict = field(default_factory=dict)
     angles: list | None = None
     held: set = field(default_factory=set)
+    partial: bool = False
     used_incumbent: bool = False
     used_leaves: bool = False
     used_blocking: bool = False
@@ -132,8 +136,9 @@ def forget_refuted(warm: WarmStart) -> None:
 def start_boxes(sc: Problem, warm: WarmStart,
                 restricted: bool = False) -> tuple[np.ndarray | None, np.ndarray | None]:
     """(boxes, lower bounds): the previous final boxes cut to sc's domain when they cover it,
-    else (None, None); their carried lower bounds when `restricted` (restricts), else None."""
-    if warm.leaves is None or warm.domain is None:
+    else (None, None); when `restricted` (restricts), those not proven empty (module
+    docstring) with their carried lower bounds, else all of them and None."""
+    if warm.leaves is None or warm.domain is None or (warm.partial and not restricted):
         return None, None
     slaves, pairs, r0_lo, r0_hi, th_lo, th_hi, *problem = warm.domain
     new = domain_of(sc)
@@ -144,6 +149,8 @@ def start_boxes(sc: Problem, warm: WarmStart,
     boxes[:, 0::2] = np.maximum(boxes[:, 0::2], [sc.r0_lo] + [sc.th_lo] * len(sc.slaves))
     boxes[:, 1::2] = np.minimum(boxes[:, 1::2], [sc.r0_hi] + [sc.th_hi] * len(sc.slaves))
     keep = np.all(boxes[:, 0::2] <= boxes[:, 1::2], axis=1)
+    if restricted and warm.leaf_lb is not None:
+        keep &= np.isfinite(warm.leaf_lb)
     if not keep.any():
         return None, None
     lb = warm.leaf_lb[keep] if restricted and warm.leaf_lb is not None else None
@@ -151,10 +158,13 @@ def start_boxes(sc: Problem, warm: WarmStart,
 
 
 def remember(warm: WarmStart, sc: Problem, point, res: branch_bound.SearchResult | None,
-             blocking: tuple[str, ...] = (), held: set | None = None) -> None:
+             blocking: tuple[str, ...] = (), held: set | None = None,
+             partial: bool = False) -> None:
     """Keep this solve's optimum (None: infeasible; `infeasible` when the search proved it),
     final boxes with their bounds, parameters, proven blocking set and the relaxations proven
-    feasible here (`held`, of an infeasible point; a feasible one's optimum holds them all)."""
+    feasible here (`held`, of an infeasible point; a feasible one's optimum holds them all).
+    partial: the search started from `start_boxes`' boxes of a restricting step (module
+    docstring)."""
     warm.point, warm.blocking, warm.problem = point, blocking, sc
     warm.held = set() if held is None else held
     if point is not None:
@@ -164,8 +174,13 @@ def remember(warm: WarmStart, sc: Problem, point, res: branch_bound.SearchResult
         warm.held = {frozenset()}
     warm.infeasible = point is None and res is not None and res.exhausted
     leaves = None if res is None else res.leaves
+    lb = None if res is None else res.leaf_lb
+    if leaves is not None and len(leaves) > LEAVES_MAX:
+        kept = np.isfinite(lb)
+        leaves, lb, partial = leaves[kept], lb[kept], True
     keep = leaves is not None and 0 < len(leaves) <= LEAVES_MAX
     warm.leaves = leaves if keep else None
-    warm.leaf_lb = res.leaf_lb if keep else None
+    warm.leaf_lb = lb if keep else None
     warm.domain = domain_of(sc) if keep else None
+    warm.partial = partial
     warm.angles = None if res is None else res.angles
