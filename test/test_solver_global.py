@@ -105,6 +105,32 @@ def test_exact_beats_every_bound_minimiser():
         assert exact <= lo * (1 + 1e-9) and lo <= bound_plan.sigma_h_m * (1 + 1e-3) <= hi * 1.002
 
 
+def test_boxes_bisected_toward_the_landed_start_still_cover_the_domain():
+    """branch_bound._toward: the root's boxes holding Table I's optimum bisected 8 times
+    toward it cover what the root's boxes covered (the same volume; random points of the
+    domain each in some box), and the box holding the optimum is 1/256 of the one before."""
+    p = default_params()
+    sc = make_problem(p, "proposed", "exact")
+    res = branch_bound.search(sc, rel_gap=5e-5)
+    point = np.array([res.point[0], *res.point[1]])
+    root = branch_bound._root_boxes(sc, branch_bound.interchangeable_pairs(sc), landed=True)
+    boxes = branch_bound._toward(sc, root, res.point, 8)
+
+    def volume(b):
+        return np.prod(b[:, 1::2] - b[:, 0::2], axis=1)
+
+    def holding(b, x):
+        return np.all((b[:, 0::2] <= x) & (x <= b[:, 1::2]), axis=1)
+
+    assert len(boxes) == len(root) + 8
+    assert volume(boxes).sum() == pytest.approx(volume(root).sum(), rel=1e-12)
+    assert volume(boxes[holding(boxes, point)]).max() == pytest.approx(
+        volume(root[holding(root, point)]).max() / 256, rel=1e-9)
+    lo, hi = root[:, 0::2].min(axis=0), root[:, 1::2].max(axis=0)
+    for x in np.random.default_rng(3).uniform(lo, hi, (500, len(lo))):
+        assert holding(boxes, x).any()
+
+
 def test_slave_swap_symmetry():
     """Swapping U1's and U2's rate requirements swaps their roles: same optimum."""
     for p in (default_params(), default_params().replace(h_amb_min_m=2.0),
