@@ -13,7 +13,12 @@ is printed as the time per sweep point over the standalone default-scenario solv
 runner's time over the cold solves': what the warm starts save), and the two must agree
 point for point within the certified gap.
 
-Run: .venv/bin/python benchmarks/global_solver.py [--repeats 21] [--no-ao]
+Side by side: a shared machine's speed drifts by tens of percent within a minute, so the
+measurements are interleaved over `--rounds` rounds (each: Table I `--repeats` times, paper-ao
+a few times, both sweeps through the runner and cold) and every figure is the median over the
+rounds of what it measured there (Table I and paper-ao: the median of all their solves).
+
+Run: .venv/bin/python benchmarks/global_solver.py [--repeats 21] [--rounds 3] [--no-ao]
 """
 from __future__ import annotations
 
@@ -36,13 +41,14 @@ FIGURES = {
 }
 
 
-def median_time(params, solver: str, repeats: int) -> tuple[float, object]:
-    times, plan = [], None
+def times(params, solver: str, repeats: int) -> tuple[list[float], object]:
+    """(seconds of each of `repeats` solves of Table I's proposed scheme, the last plan)."""
+    out, plan = [], None
     for _ in range(repeats):
         start = time.perf_counter()
         plan = solve(params, scheme="proposed", objective="exact", solver=solver)
-        times.append(time.perf_counter() - start)
-    return statistics.median(times), plan
+        out.append(time.perf_counter() - start)
+    return out, plan
 
 
 def cold_sweep(name: str, index: int | None, values, base) -> tuple[float, list]:
@@ -93,30 +99,44 @@ def sweep(name: str, index: int | None, values, base):
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=21)
+    ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--no-ao", action="store_true", help="skip the paper-ao timing")
     args = ap.parse_args()
     p = default_params()
     solve(p, solver="global")  # warm up imports
-    t_glob, plan = median_time(p, "global", args.repeats)
+    glob, ao, runs = [], [], []  # runs: per round, per figure (runner s, cold s, result)
+    plan = ao_plan = None
+    for _ in range(args.rounds):
+        got, plan = times(p, "global", args.repeats)
+        glob += got
+        if not args.no_ao:
+            got, ao_plan = times(p, "paper-ao", max(2, args.repeats // 7 // args.rounds + 1))
+            ao += got
+        runs.append([sweep(name, index, values, p.replace(**settings))
+                     for name, index, values, settings in FIGURES.values()])
+    t_glob = statistics.median(glob)
     print(f"default scenario, proposed, exact: global median {t_glob * 1e3:.1f} ms over "
-          f"{args.repeats} runs; sigma_h {plan.sigma_h_m:.6g} m, lower bound "
-          f"{plan.lower_bound_m:.6g} m, gap {plan.optimality_gap:.2e}")
-    if not args.no_ao:
-        reps = max(3, args.repeats // 7)
-        t_ao, ao_plan = median_time(p, "paper-ao", reps)
-        print(f"  paper-ao median {t_ao * 1e3:.1f} ms over {reps} runs; sigma_h "
+          f"{len(glob)} runs in {args.rounds} rounds; sigma_h {plan.sigma_h_m:.6g} m, lower "
+          f"bound {plan.lower_bound_m:.6g} m, gap {plan.optimality_gap:.2e}")
+    if ao:
+        t_ao = statistics.median(ao)
+        print(f"  paper-ao median {t_ao * 1e3:.1f} ms over {len(ao)} runs; sigma_h "
               f"{ao_plan.sigma_h_m:.6g} m (feasible {ao_plan.feasible}); "
               f"time ratio paper-ao / global = {t_ao / t_glob:.1f}x; sigma_h ratio "
               f"paper-ao / global = {ao_plan.sigma_h_m / plan.sigma_h_m:.3f}")
     grand, cold, worst, diff, count = 0.0, 0.0, 0.0, 0.0, 0
-    for title, (name, index, values, settings) in FIGURES.items():
-        total, gap, lines, dev, cold_s = sweep(name, index, values, p.replace(**settings))
+    for i, (title, (_, _, values, _)) in enumerate(FIGURES.items()):
+        total = statistics.median(r[i][0] for r in runs)
+        cold_s = statistics.median(r[i][4] for r in runs)
+        _, gap, lines, dev, _ = runs[-1][i]
         grand, cold, count = grand + total, cold + cold_s, count + len(values) * len(SCHEMES)
-        worst, diff = max(worst, gap), max(diff, dev)
+        worst = max([worst] + [r[i][1] for r in runs])
+        diff = max([diff] + [r[i][3] for r in runs])
         print(f"\n{title}: sigma_h [cm] per scheme ({', '.join(SCHEMES)}), exact objective")
         print("\n".join(lines))
         print(f"  {len(values) * len(SCHEMES)} solves in {total:.2f} s through the sweep runner "
-              f"({cold_s:.2f} s as cold solves), largest gap {gap:.2e}")
+              f"({cold_s:.2f} s as cold solves; medians of {args.rounds} rounds), largest gap "
+              f"{gap:.2e}")
     print(f"\nboth sweeps: {grand:.2f} s total (target <= 5 s), largest certified gap "
           f"{worst:.2e} (target <= 1e-4); sigma_h of the sweep runner vs cold solves: largest "
           f"relative difference {diff:.1e}")
