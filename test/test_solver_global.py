@@ -13,7 +13,7 @@ from uav_insar_planner.evaluate import evaluate
 from uav_insar_planner.params import SCHEMES, default_params
 from uav_insar_planner.schemes import static_power_w
 from uav_insar_planner.solver import blocking, power, rays, solve
-from uav_insar_planner.solver.global_opt import branch_bound, infeasibility
+from uav_insar_planner.solver.global_opt import box_splits, branch_bound, infeasibility
 from uav_insar_planner.solver.global_opt.kernel import slave_weight
 from uav_insar_planner.solver.global_opt.optimum import solve_global
 from uav_insar_planner.solver.power import schedules
@@ -106,7 +106,7 @@ def test_exact_beats_every_bound_minimiser():
 
 
 def test_boxes_bisected_toward_the_landed_start_still_cover_the_domain():
-    """branch_bound._toward: the root's boxes holding Table I's optimum bisected 8 times
+    """box_splits.toward: the root's boxes holding Table I's optimum bisected 8 times
     toward it cover what the root's boxes covered (the same volume; random points of the
     domain each in some box), and the box holding the optimum is 1/256 of the one before."""
     p = default_params()
@@ -114,7 +114,7 @@ def test_boxes_bisected_toward_the_landed_start_still_cover_the_domain():
     res = branch_bound.search(sc, rel_gap=5e-5)
     point = np.array([res.point[0], *res.point[1]])
     root = branch_bound._root_boxes(sc, branch_bound.interchangeable_pairs(sc), landed=True)
-    boxes = branch_bound._toward(sc, root, res.point, 8)
+    boxes = box_splits.toward(sc, root, res.point, 8)
 
     def volume(b):
         return np.prod(b[:, 1::2] - b[:, 0::2], axis=1)

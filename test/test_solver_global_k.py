@@ -309,7 +309,7 @@ def test_agrees_with_cartesian_multistart(k_slaves, scheme, d_min, ratio):
 
 
 # Certificates that stopped at the 400 000-box limit before the split rule weighed r0 widths
-# by branch_bound.R0_WEIGHT_MANY (benchmarks/global_solver_hard.py): the five-UAV C8 ladder at
+# by box_splits.R0_WEIGHT_MANY (benchmarks/global_solver_hard.py): the five-UAV C8 ladder at
 # d_min 6 m (U2..U4 on different rungs: no symmetry cut; 400 148 boxes, gap 1.4e-4, now
 # about 107 000) and a random four-slave swarm pressed together near theta_max and on a
 # second common ray (about 403 000 boxes, gap 6.0e-5 without every box closed; now about
