@@ -171,10 +171,9 @@ class NetLab:
             ns, ip = self.namespaces[name], ("ip", "-n", self.namespaces[name])
             _run("ip", "link", "set", taps[name], "netns", ns)
             _run(*ip, "link", "set", taps[name], "name", IFNAME)
-            _run(*self.prefix(name), "sysctl", "-qw", f"net.ipv6.conf.{IFNAME}.disable_ipv6=1")
-            for key in NEIGH_SOLICIT_KEYS:
-                _run(*self.prefix(name), "sysctl", "-qw",
-                     f"net.ipv4.neigh.{IFNAME}.{key}={NEIGH_SOLICITS}")
+            _run(*self.prefix(name), "sysctl", "-qw", f"net.ipv6.conf.{IFNAME}.disable_ipv6=1",
+                 *(f"net.ipv4.neigh.{IFNAME}.{key}={NEIGH_SOLICITS}"
+                   for key in NEIGH_SOLICIT_KEYS))
             _run(*ip, "addr", "add", f"{self.address(name)}/24", "dev", IFNAME)
             _run(*ip, "link", "set", "lo", "up")
             _run(*ip, "link", "set", IFNAME, "up")

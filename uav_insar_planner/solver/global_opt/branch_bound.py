@@ -217,8 +217,9 @@ def _root_boxes(sc: Problem, pairs: list[tuple[int, int]], landed: bool = False,
     boxes = np.array([[sc.r0_lo, sc.r0_hi] + [sc.th_lo, sc.th_hi] * k_count])
     if not pairs:
         boxes = box_splits.split(sc, boxes, _coarse_splits(k_count, landed))
-    for _ in range(_coarse_splits(k_count, landed) if pairs else 0):
-        boxes = _order(box_splits.split(sc, boxes), pairs)
+    else:
+        for _ in range(_coarse_splits(k_count, landed)):
+            boxes = _order(box_splits.split(sc, boxes), pairs)
     return boxes if toward is None else box_splits.toward(sc, boxes, toward)
 
 
