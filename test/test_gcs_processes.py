@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import signal
 import threading
 import time
@@ -141,6 +142,7 @@ def test_a_planner_killed_and_started_again_resumes_where_the_swarm_holds(watche
         # the resume waits for every bridge to find the new planner, then flies the pass again
         w.spin_until(lambda: False, RESTARTED_DELAY_S + 4.0)
         flown = along() - held
+        _, confirmed = bridge_status(w)  # the start the bridge says it flies
     finally:
         watching.set()
         codes = stop_nodes([p for p in (bridge, again) if p is not None])
@@ -149,6 +151,11 @@ def test_a_planner_killed_and_started_again_resumes_where_the_swarm_holds(watche
     assert codes == [0, 0]
     log = again.stdout.read()
     assert "resuming the pass where the swarm is" in log, log[-3000:]
+    # the bridge confirmed the new planner's start on /diagnostics: it was not moved
+    instant = float(re.search(r"resuming the pass where the swarm is: .*wall clock ([\d.]+)",
+                              log)[1])
+    assert float(confirmed["pass_start"]) == pytest.approx(instant, abs=2e-3), confirmed
+    assert "the resumed pass waits" not in log, log[-3000:]
     assert 0.0 < flown < speed * 4.0 + 1.0, flown  # on from where it held, at the pass's speed
     assert fastest[0] <= speed + 1.0, fastest[0]
     print(f"planner started again: resumed from {held:.1f} m, fastest vehicle "

@@ -32,29 +32,45 @@ SPEED = 4.3  # the scenario's v_y (Table I)
 class FakeBridges:
     """FAULT INJECTION: the per-UAV bridges as the planner hears them. Each UAV holds its start
     point until the planner's pass start, then flies the pass at SPEED, except the `held`
-    ones, which stop where they are and report `behind` on the flown plan."""
+    ones, which stop where they are and report `behind` on the flown plan until a resumed
+    start comes (as a real bridge rejoins on it), then fly on from its offset. Each reports on
+    /diagnostics, once a second, the start it flies (`pass_start`, `pass_plan`), as the real
+    bridge does. A `deaf` UAV's bridge takes no new start until a wall-clock time (one whose
+    DDS reader matched a restarted planner late, or whose radio lost them all)."""
 
     def __init__(self, w) -> None:
         self.w, self.node = w, w.node
         self.starts: list[Header] = []
+        self.flying: dict[int, Header] = {}  # uav -> the start its bridge took last
+        self.deaf: dict[int, float] = {}  # uav -> no start taken before this (wall clock)
         self.points: list | None = None
         self.held: dict[int, float] = {}  # uav -> where it stopped (along track)
         self._poses = {k: self.node.create_publisher(PoseStamped, "/" + topics.mavlink_pose(k),
                                                      topics.DEPTH) for k in uavs(DEFAULT_NUM_UAVS)}
         self._diag = self.node.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, topics.DEPTH)
-        self.node.create_subscription(Header, "/" + topics.FORMATION_START, self.starts.append,
+        self.node.create_subscription(Header, "/" + topics.FORMATION_START, self._on_start,
                                       topics.LATCHED)
         self._timer = self.node.create_timer(0.1, self._tick)
         self._diag_timer = self.node.create_timer(1.0, self._report)
 
+    def _on_start(self, msg: Header) -> None:
+        self.starts.append(msg)
+        for k in uavs(DEFAULT_NUM_UAVS):
+            if time.time() >= self.deaf.get(k, 0.0):
+                self.flying[k] = msg
+
+    def resumed(self, k: int) -> bool:
+        """Whether UAV k's bridge took a resumed start (one with an offset)."""
+        return k in self.flying and " at " in self.flying[k].frame_id
+
     def along(self, k: int) -> float:
         """How far UAV k is past its start line now."""
-        if k in self.held:
+        if k in self.held and not self.resumed(k):
             return self.held[k]
-        if not self.starts:
+        if k not in self.flying:
             return 0.0
-        _, t0, offset = decode_start(self.starts[0], time.time())
-        return max(0.0, SPEED * (time.time() - t0))
+        _, t0, offset = decode_start(self.flying[k], time.time())
+        return offset + max(0.0, SPEED * (time.time() - t0))
 
     def _tick(self) -> None:
         if self.points is None and self.w.formations:
@@ -71,17 +87,20 @@ class FakeBridges:
             pub.publish(msg)
 
     def _report(self) -> None:
-        if not self.held or not self.starts:
-            return
-        label = self.starts[0].frame_id
-        self._diag.publish(DiagnosticArray(status=[DiagnosticStatus(
-            level=DiagnosticStatus.WARN, name=bridge_status_name(k),
-            message="holding (LOITER): 9.00 m behind its target ...",
-            values=[KeyValue(key="pass_plan", value=label),
-                    KeyValue(key="behind", value="9.00 m behind its target, more than the "
-                                                 "4.30 m it may catch up: cannot keep the "
-                                                 "pass, keeps holding")])
-            for k in self.held]))
+        self._diag.publish(DiagnosticArray(status=[self._status(k) for k in self.flying]))
+
+    def _status(self, k: int) -> DiagnosticStatus:
+        start = self.flying[k]
+        label = start.frame_id.split(" at ")[0]
+        values = [KeyValue(key="pass_plan", value=label),
+                  KeyValue(key="pass_start", value=f"{decode_start(start, time.time())[1]:.3f}")]
+        if k in self.held and not self.resumed(k):
+            values.append(KeyValue(key="behind", value="9.00 m behind its target, more than "
+                                   "the 4.30 m it may catch up: cannot keep the pass, keeps "
+                                   "holding"))
+        return DiagnosticStatus(level=DiagnosticStatus.WARN, name=bridge_status_name(k),
+                                message="holding (LOITER): 9.00 m behind its target ...",
+                                values=values)
 
     def hold(self, ks) -> None:
         for k in ks:
@@ -130,3 +149,59 @@ def test_every_uav_behind_resumes_the_pass_from_the_rearmost(watcher, procs):
     assert len(watcher.formations) == 1, "re-planned instead of resumed"
     assert "resuming the pass where the swarm is: every flown UAV holds behind" in log
     assert math.isfinite(offset) and plan_id.planner == "/planner"
+
+
+def _instant(start: Header) -> float:
+    return decode_start(start, time.time())[1]
+
+
+def test_a_resumed_start_a_bridge_has_not_confirmed_is_moved_later_until_it_has(watcher,
+                                                                                 procs):
+    """Every UAV behind, and uav2's bridge hears no start for 5 s (FAULT INJECTION: a CI run's
+    bridge matched a restarted planner's start writer 7 s late over a lossy radio): the planner
+    moves the start later until uav2's bridge confirms it, and the whole swarm resumes on one
+    instant, uav2 kept."""
+    planner, bridges = fly(watcher, procs)
+    bridges.deaf[2] = time.time() + 5.0
+    bridges.hold([0, 1, 2])
+
+    def settled() -> bool:  # uav2 took a resumed start, and the latest one's instant is past
+        return bridges.resumed(2) and time.time() > _instant(bridges.starts[-1]) + 1.5
+
+    assert watcher.spin_until(settled, 25.0, [planner]), [s.frame_id for s in bridges.starts]
+    codes = stop_nodes([planner])
+    assert codes == [0]
+    log = planner.stdout.read()
+    resumed = [s for s in bridges.starts if " at " in s.frame_id]
+    first, last = _instant(resumed[0]), _instant(resumed[-1])
+    print(f"the resumed start moved {last - first:.1f} s later, "
+          f"{log.count('the resumed pass waits')} times")
+    assert "the resumed pass waits for the bridge of uav2, which has not confirmed" in log, \
+        log[-3000:]
+    assert "bridge of uav0" not in log and "bridge of uav1" not in log, log[-3000:]
+    assert last > first and time.time() > last
+    for k in range(3):  # one instant for the whole swarm, the last one published
+        assert _instant(bridges.flying[k]) == pytest.approx(last, abs=1e-3), k
+    assert len(watcher.formations) == 1, "uav2 was re-planned out"
+    assert log.count("resuming the pass where the swarm is") == 1
+
+
+def test_a_bridge_that_never_confirms_the_resumed_start_is_left_behind(watcher, procs):
+    """uav2's bridge never hears the resumed start (FAULT INJECTION): the planner waits
+    CONFIRM_WAIT_MAX_S for it, says so, lets the others fly on, and re-plans without uav2."""
+    planner, bridges = fly(watcher, procs)
+    bridges.deaf[2] = time.time() + 600.0
+    bridges.hold([0, 1, 2])
+    held_at = time.monotonic()
+    assert watcher.spin_until(lambda: len(watcher.formations) >= 2, 45.0, [planner])
+    waited = time.monotonic() - held_at
+    codes = stop_nodes([planner])
+    assert codes == [0]
+    log = planner.stdout.read()
+    print(f"uav2 never confirmed: re-planned without it {waited:.1f} s after the hold")
+    assert "the resumed pass starts without its start confirmed by the bridge of uav2" in log, \
+        log[-3000:]
+    assert "uav2 lost at slot" in log and "cannot keep the pass" in log, log[-3000:]
+    assert decode_formation(watcher.formations[-1]).points[2] is None
+    assert waited >= 20.0  # start_confirmations.CONFIRM_WAIT_MAX_S
+    assert bridges.resumed(0) and bridges.resumed(1) and not bridges.resumed(2)

@@ -55,6 +55,7 @@ class FlightState:
         self._count, self._emit, self._send_command = count, emit, send_command
         self.pass_ = PassTrajectory(config.speed_mps, config.track_duration_s)
         self._start_label = ""  # the plan whose pass start the track clock is (planner)
+        self._start_wall: float | None = None  # that start's instant as the planner sent it
         self._catch_up: dict[int, CatchUp] = {}  # vehicles catching up after a rejoin
         self._separation = [""] * count
         self.sequences: dict[int, ArmingSequence] = {}  # per UAV, once arm_and_takeoff ran
@@ -85,6 +86,7 @@ class FlightState:
         """pass_start "planner": see `Bridge.set_start`."""
         text = planner_start(self.pass_, wall_time_s, now, time.time(), label, offset_m)
         self._start_label = label if self.pass_.formation is not None else ""
+        self._start_wall = wall_time_s if self.pass_.formation is not None else None
         if text:  # held ones near their targets rejoin, ones too late to keep up hold
             self._emit(-1, "info", text)
             self._rejoin(now, "a new pass start", late=True)
@@ -125,6 +127,7 @@ class FlightState:
                                 self.sequences.get(v.uav), self._separation[v.uav])
         held = self.holding.phase(v)
         return replace(status, phase=held or status.phase, pass_plan=self._start_label,
+                       pass_start_s=None if self.pass_.t_start is None else self._start_wall,
                        behind=self.holding.behind.get(v.uav, ""))
 
     def _rejoin(self, now: float, why: str, here: bool = False, late: bool = False) -> None:

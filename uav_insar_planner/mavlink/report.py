@@ -45,6 +45,9 @@ class VehicleStatus:
     link_up: bool = True  # False while its TCP link is (re)connecting
     separation: str = ""  # "" or why this UAV is planned too close to another
     pass_plan: str = ""  # the plan whose pass start the track clock is ("": none, capture)
+    # that start's wall-clock instant (time.time()), as the planner sent it: its confirmation
+    # that this bridge flies the planner's latest start (ros/start_confirmations.py)
+    pass_start_s: float | None = None
     behind: str = ""  # held and too far behind its target to rejoin: why ("" otherwise)
 
 

@@ -24,6 +24,8 @@ the instant, then fly on at v_y; never a catch-up to an old clock):
   RESTARTED_DELAY_S (every bridge must find the new planner first). Said in one line.
 - every flown UAV's bridge reports it `behind` on this planner's pass (held by a ground
   silence, too far behind its target to rejoin, e.g. this planner froze): the same resume.
+- either way from the hover, the start waits for every flown UAV's bridge to confirm it on
+  /diagnostics, and is moved later while one has not (ros/start_confirmations.py).
 - some, not all, report it for longer than BEHIND_GRACE_S: each is declared lost
   (`declare_lost`) and the swarm watch replans without it, as for a lost UAV.
 
@@ -47,8 +49,9 @@ from rclpy.node import Node
 from std_msgs.msg import Header
 
 from uav_insar_planner import published
-from uav_insar_planner.ros import topics
+from uav_insar_planner.ros import start_confirmations, topics
 from uav_insar_planner.ros.plan_msgs import PlanId
+from uav_insar_planner.ros.start_confirmations import GIVE_UP, LATER, WAIT, AwaitedStart
 from uav_insar_planner.ros.start_msgs import encode_start
 from uav_insar_planner.swarm import uav_name
 
@@ -144,6 +147,8 @@ class FormationStart:
         self._ys: dict[int, deque[tuple[float, float]]] = {}  # recent (monotonic, y) per UAV
         self._behind: dict[int, tuple[float, float, str]] = {}  # uav -> (first, last, why)
         self._started: set[str] = set()  # labels of the plans this planner started
+        self._awaited: AwaitedStart | None = None  # a resumed start not yet confirmed by all
+        self._confirms: dict[int, tuple[float, float]] = {}  # uav -> (heard, its start)
         self._repeat: tuple[Header, float, float] | None = None  # message, next, until (wall)
         self._wait_told = time.monotonic()  # the last time the wait for a capture was said
         self._pub = node.create_publisher(Header, topics.FORMATION_START, topics.LATCHED)
@@ -170,6 +175,7 @@ class FormationStart:
             self._wait_told = time.monotonic()
             if not same:
                 self._start_ns, self._repeat = None, None  # the old pass's start is void
+                self._awaited = None
                 self._offset_m = 0.0
                 return
             start_ns, offset = self._start_ns, self._offset_m
@@ -230,7 +236,12 @@ class FormationStart:
             if k is None:
                 continue
             values = {kv.key: kv.value for kv in s.values}
+            instant = start_confirmations.reported_instant(values.get("pass_start"))
             with self._lock:
+                if instant is None:
+                    self._confirms.pop(k, None)
+                else:
+                    self._confirms[k] = (now, instant)
                 if values.get("behind") and values.get("pass_plan") in self._started:
                     first = self._behind.get(k, (now, now, ""))[0]
                     self._behind[k] = (first, now, values["behind"])
@@ -253,6 +264,7 @@ class FormationStart:
             else:
                 rear = on_track(starts, self._poses, self._speeds(now), now, self._length_m)
         if running:
+            self._confirm(starts)
             if everyone is not None:
                 self._resume(everyone, delay, "every flown UAV holds behind its target")
             for k, why in left_behind:
@@ -282,6 +294,33 @@ class FormationStart:
             f"{radius:g} m of its start: the pass starts in {delay:g} s, wall clock "
             f"{start_ns * 1e-9:.3f} ({plan_id})")
 
+    def _confirm(self, starts: dict[int, Point]) -> None:
+        """A resumed start that some of `starts` has not confirmed by its instant: moved later,
+        or waited for no longer (start_confirmations.py)."""
+        with self._lock:
+            awaited, plan_id, past = self._awaited, self._plan, self._offset_m
+            if awaited is None or plan_id is None:
+                return
+            what, missing = start_confirmations.verdict(
+                awaited, starts, self._confirms, time.monotonic(), time.time())
+            if what == WAIT:
+                return
+            self._awaited = awaited.later(time.time_ns()) if what == LATER else None
+            if self._awaited is not None:
+                self._start_ns = start_ns = self._awaited.start_ns
+        who = ", ".join(uav_name(k) for k in missing)
+        if what == GIVE_UP:
+            self._node.get_logger().warning(
+                f"the resumed pass starts without its start confirmed by the bridge of {who}: "
+                f"waited {start_confirmations.CONFIRM_WAIT_MAX_S:g} s ({plan_id})")
+        if what != LATER:
+            return
+        self._publish(encode_start(start_ns, plan_id, past), start_ns)
+        self._node.get_logger().warning(
+            f"the resumed pass waits for the bridge of {who}, which has not confirmed its "
+            f"start: it starts in {awaited.delay_s:g} s instead, from {past:.2f} m past the "
+            f"start line, wall clock {start_ns * 1e-9:.3f} ({plan_id})")
+
     def _behind_now(self, starts: dict[int, Point], now: float
                     ) -> tuple[tuple[int, float, float] | None, list[tuple[int, str]]]:
         """(the resume point when every flown UAV with fresh poses reports `behind`, else
@@ -297,6 +336,8 @@ class FormationStart:
             rear = min(past, key=past.__getitem__)
             self._behind.clear()
             return (rear, max(past[rear], 0.0), 0.0), []
+        if self._awaited is not None:  # one behind may not have heard the resumed start yet
+            return None, []
         left = [(k, why) for k, (first, _, why) in self._behind.items()
                 if now - first > BEHIND_GRACE_S and k in starts]
         for k, _ in left:
@@ -317,6 +358,7 @@ class FormationStart:
                 start_ns = time.time_ns() + round(delay * 1e9)
             self._start_ns, self._offset_m = start_ns, past
             self._started.add(plan_id.label)
+            self._awaited = None if moving else AwaitedStart(start_ns, delay, time.monotonic())
         self._publish(encode_start(start_ns, plan_id, past), start_ns)
         when = "at once (still flying)" if moving else f"in {delay:g} s"
         self._node.get_logger().warning(

@@ -1,0 +1,87 @@
+"""Whether every flown UAV's bridge has the planner's resumed pass start, and what the planner
+does when one has not by its instant.
+
+A pass resumed from the hover (ros/formation_start.py) starts at an instant the planner
+chooses, and every flown UAV's bridge must have that start by then: one that hears it late
+holds while the others fly on and, more than a second of the pass behind, is re-planned out.
+The delivery is not in the planner's hands. A planner started again is a new DDS participant,
+each bridge matches its formation/start writer on its own, and over a lossy radio a lost
+discovery sample waits for the writer's next heartbeat (3 s in Fast DDS). A CI run at 10 %
+loss: one bridge heard the new planner's start 7 s after the others, 1.9 s past its instant,
+7.9 m behind, and its UAV was re-planned out.
+
+Each bridge says on /diagnostics which start it flies (value `pass_start`: the instant as the
+planner sent it, wall clock). CONFIRM_MARGIN_S before the instant, every flown UAV's bridge
+must have reported it within CONFIRMED_FRESH_S. Otherwise the planner moves the start later
+(the same offset, the same delay from now) and says which UAVs it waits for: the swarm keeps
+holding meanwhile, and bridges take a newer instant as a new start. After CONFIRM_WAIT_MAX_S it
+stops waiting, says so, and the start stands: a bridge that never hears the planner is then
+left behind and re-planned out, as any UAV that cannot keep the pass.
+"""
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, replace
+
+# Bridges report once a second: a start heard more than this before its instant is confirmed
+# by then in most cases; one heard later moves the start by a few seconds, harmlessly.
+CONFIRM_MARGIN_S = 0.5
+CONFIRMED_FRESH_S = 3.0  # a report older than this confirms nothing (as formation_start's)
+# Several Fast DDS heartbeat periods (3 s): a bridge not matched by then is cut off.
+CONFIRM_WAIT_MAX_S = 20.0
+SAME_INSTANT_S = 0.002  # bridges report the instant with 1 ms resolution
+
+WAIT, CONFIRMED, LATER, GIVE_UP = "wait", "confirmed", "later", "give up"
+
+
+@dataclass(frozen=True)
+class AwaitedStart:
+    """A published resumed start awaiting its confirmations: its instant (wall clock, ns),
+    how long before it it was sent (`delay_s`), and when the first instant of this resume was
+    sent (monotonic)."""
+
+    start_ns: int
+    delay_s: float
+    since: float
+
+    def later(self, now_ns: int) -> AwaitedStart:
+        """The same resume `delay_s` from `now_ns`."""
+        return replace(self, start_ns=now_ns + round(self.delay_s * 1e9))
+
+
+def reported_instant(value: str | None) -> float | None:
+    """A bridge's `pass_start` diagnostic value as an instant (s), None when it reports none
+    or something that is no finite number (nothing is confirmed by it)."""
+    try:
+        got = float(value) if value else math.nan
+    except ValueError:
+        return None
+    return got if math.isfinite(got) else None
+
+
+def unconfirmed(uavs: Iterable[int], reports: Mapping[int, tuple[float, float]],
+                start_s: float, now: float) -> list[int]:
+    """The UAVs of `uavs` whose bridge has not reported the instant `start_s` (wall clock, s)
+    within CONFIRMED_FRESH_S of `now` (monotonic); reports: uav -> (monotonic time, instant)."""
+    out = []
+    for k in uavs:
+        heard = reports.get(k)
+        if (heard is None or now - heard[0] > CONFIRMED_FRESH_S
+                or abs(heard[1] - start_s) > SAME_INSTANT_S):
+            out.append(k)
+    return sorted(out)
+
+
+def verdict(awaited: AwaitedStart, uavs: Iterable[int],
+            reports: Mapping[int, tuple[float, float]], now: float,
+            wall_now: float) -> tuple[str, list[int]]:
+    """(what to do, the UAVs not confirmed): WAIT before the check, CONFIRMED when none is
+    missing, else LATER, or GIVE_UP past CONFIRM_WAIT_MAX_S (module docstring)."""
+    start_s = awaited.start_ns * 1e-9
+    if wall_now < start_s - CONFIRM_MARGIN_S:
+        return WAIT, []
+    missing = unconfirmed(uavs, reports, start_s, now)
+    if not missing:
+        return CONFIRMED, []
+    return (GIVE_UP if now - awaited.since > CONFIRM_WAIT_MAX_S else LATER), missing
