@@ -107,8 +107,8 @@ class FakeBridges:
             self.held[k] = self.along(k)
 
 
-def fly(w, procs):
-    planner = procs("planner", "-p", "uav_timeout_s:=30.0")
+def fly(w, procs, *args: str):
+    planner = procs("planner", "-p", "uav_timeout_s:=30.0", *args)
     bridges = FakeBridges(w)
     assert w.spin_until(lambda: bridges.starts and bridges.along(0) > 8.0, 30.0, [planner]), \
         "no pass start"
@@ -186,14 +186,17 @@ def test_a_resumed_start_a_bridge_has_not_confirmed_is_moved_later_until_it_has(
     assert log.count("resuming the pass where the swarm is") == 1
 
 
+WAIT_S = 5.0  # start_confirm_wait_s (default 20 s)
+
+
 def test_a_bridge_that_never_confirms_the_resumed_start_is_left_behind(watcher, procs):
     """uav2's bridge never hears the resumed start (FAULT INJECTION): the planner waits
-    CONFIRM_WAIT_MAX_S for it, says so, lets the others fly on, and re-plans without uav2."""
-    planner, bridges = fly(watcher, procs)
+    start_confirm_wait_s for it, says so, lets the others fly on, and re-plans without uav2."""
+    planner, bridges = fly(watcher, procs, "-p", f"start_confirm_wait_s:={WAIT_S}")
     bridges.deaf[2] = time.time() + 600.0
     bridges.hold([0, 1, 2])
     held_at = time.monotonic()
-    assert watcher.spin_until(lambda: len(watcher.formations) >= 2, 45.0, [planner])
+    assert watcher.spin_until(lambda: len(watcher.formations) >= 2, 20.0, [planner])
     waited = time.monotonic() - held_at
     codes = stop_nodes([planner])
     assert codes == [0]
@@ -203,5 +206,5 @@ def test_a_bridge_that_never_confirms_the_resumed_start_is_left_behind(watcher, 
         log[-3000:]
     assert "uav2 lost at slot" in log and "cannot keep the pass" in log, log[-3000:]
     assert decode_formation(watcher.formations[-1]).points[2] is None
-    assert waited >= 20.0  # start_confirmations.CONFIRM_WAIT_MAX_S
+    assert waited >= WAIT_S
     assert bridges.resumed(0) and bridges.resumed(1) and not bridges.resumed(2)

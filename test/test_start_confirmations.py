@@ -7,7 +7,6 @@ import pytest
 
 from uav_insar_planner.ros.start_confirmations import (
     CONFIRM_MARGIN_S,
-    CONFIRM_WAIT_MAX_S,
     CONFIRMED,
     CONFIRMED_FRESH_S,
     GIVE_UP,
@@ -21,8 +20,11 @@ from uav_insar_planner.ros.start_confirmations import (
 START_S = 1_800_000_000.0  # wall clock of the awaited instant
 
 
+WAIT_S = 20.0  # the planner's start_confirm_wait_s
+
+
 def _awaited(since: float = 100.0) -> AwaitedStart:
-    return AwaitedStart(round(START_S * 1e9), 5.0, since)
+    return AwaitedStart(round(START_S * 1e9), 5.0, since, WAIT_S)
 
 
 @pytest.mark.parametrize("value", ["", None, "nan", "inf", "-inf", "1e400", "soon", "1,5"])
@@ -58,7 +60,7 @@ def test_a_missing_stale_or_other_instant_moves_the_start_later_naming_those_uav
 
 def test_after_the_longest_wait_the_start_stands_and_the_missing_are_named():
     since = 100.0
-    now = since + CONFIRM_WAIT_MAX_S + 0.1
+    now = since + WAIT_S + 0.1
     got = verdict(_awaited(since), [0, 1], {0: (now, START_S)}, now, START_S)
     assert got == (GIVE_UP, [1])
 
@@ -66,4 +68,4 @@ def test_after_the_longest_wait_the_start_stands_and_the_missing_are_named():
 def test_a_start_moved_later_keeps_its_delay_and_when_the_wait_began():
     moved = _awaited(since=100.0).later(round((START_S + 2.0) * 1e9))
     assert moved.start_ns * 1e-9 == pytest.approx(START_S + 7.0)
-    assert moved.since == 100.0 and moved.delay_s == 5.0
+    assert moved.since == 100.0 and moved.delay_s == 5.0 and moved.wait_s == WAIT_S

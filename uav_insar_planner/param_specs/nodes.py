@@ -84,6 +84,10 @@ PLANNER_SPECS = (
     ParamSpec("start_delay_s", float, 2.0, "the pass starts this long after every UAV was "
               "seen captured, on the wall clock: time for the start to reach every bridge [s]",
               0.1, 600.0),
+    ParamSpec("start_confirm_wait_s", float, 20.0, "a pass resumed from the hover starts only "
+              "once every flown UAV's bridge confirmed its start on /diagnostics, moved later "
+              "meanwhile, and after this long without them (then left behind); 0: not waited "
+              "for [s]", 0.0, 600.0),
 )
 #: The scenario parameters an agent needs (P_max and E_max for the closed loop).
 AGENT_SCENARIO_SPECS = tuple(SPEC_BY_NAME[n] for n in (

@@ -131,7 +131,7 @@ def all_captured(starts: dict[int, Point], poses: dict[int, tuple[float, Point]]
 
 class FormationStart:
     """See the module docstring. `lost()` is the set of UAVs the swarm watch declared lost;
-    `node` has the parameters capture_radius_m and start_delay_s."""
+    `node` has the parameters capture_radius_m, start_delay_s and start_confirm_wait_s."""
 
     def __init__(self, node: Node, lost: Callable[[], set[int]],
                  declare_lost: Callable[[int, str], None]) -> None:
@@ -312,7 +312,7 @@ class FormationStart:
         if what == GIVE_UP:
             self._node.get_logger().warning(
                 f"the resumed pass starts without its start confirmed by the bridge of {who}: "
-                f"waited {start_confirmations.CONFIRM_WAIT_MAX_S:g} s ({plan_id})")
+                f"waited start_confirm_wait_s {awaited.wait_s:g} s ({plan_id})")
         if what != LATER:
             return
         self._publish(encode_start(start_ns, plan_id, past), start_ns)
@@ -358,7 +358,9 @@ class FormationStart:
                 start_ns = time.time_ns() + round(delay * 1e9)
             self._start_ns, self._offset_m = start_ns, past
             self._started.add(plan_id.label)
-            self._awaited = None if moving else AwaitedStart(start_ns, delay, time.monotonic())
+            wait = float(self._node.get_parameter("start_confirm_wait_s").value)
+            self._awaited = (None if moving or wait <= 0.0
+                             else AwaitedStart(start_ns, delay, time.monotonic(), wait))
         self._publish(encode_start(start_ns, plan_id, past), start_ns)
         when = "at once (still flying)" if moving else f"in {delay:g} s"
         self._node.get_logger().warning(

@@ -14,8 +14,9 @@ Each bridge says on /diagnostics which start it flies (value `pass_start`: the i
 planner sent it, wall clock). CONFIRM_MARGIN_S before the instant, every flown UAV's bridge
 must have reported it within CONFIRMED_FRESH_S. Otherwise the planner moves the start later
 (the same offset, the same delay from now) and says which UAVs it waits for: the swarm keeps
-holding meanwhile, and bridges take a newer instant as a new start. After CONFIRM_WAIT_MAX_S it
-stops waiting, says so, and the start stands: a bridge that never hears the planner is then
+holding meanwhile, and bridges take a newer instant as a new start. After the planner's
+`start_confirm_wait_s` (20 s: several Fast DDS heartbeat periods) it stops waiting, says so,
+and the start stands: a bridge that never hears the planner is then
 left behind and re-planned out, as any UAV that cannot keep the pass.
 """
 from __future__ import annotations
@@ -28,8 +29,6 @@ from dataclasses import dataclass, replace
 # by then in most cases; one heard later moves the start by a few seconds, harmlessly.
 CONFIRM_MARGIN_S = 0.5
 CONFIRMED_FRESH_S = 3.0  # a report older than this confirms nothing (as formation_start's)
-# Several Fast DDS heartbeat periods (3 s): a bridge not matched by then is cut off.
-CONFIRM_WAIT_MAX_S = 20.0
 SAME_INSTANT_S = 0.002  # bridges report the instant with 1 ms resolution
 
 WAIT, CONFIRMED, LATER, GIVE_UP = "wait", "confirmed", "later", "give up"
@@ -38,12 +37,13 @@ WAIT, CONFIRMED, LATER, GIVE_UP = "wait", "confirmed", "later", "give up"
 @dataclass(frozen=True)
 class AwaitedStart:
     """A published resumed start awaiting its confirmations: its instant (wall clock, ns),
-    how long before it it was sent (`delay_s`), and when the first instant of this resume was
-    sent (monotonic)."""
+    how long before it it was sent (`delay_s`), when the first instant of this resume was sent
+    (monotonic) and how long it waits for them at most (`wait_s`)."""
 
     start_ns: int
     delay_s: float
     since: float
+    wait_s: float
 
     def later(self, now_ns: int) -> AwaitedStart:
         """The same resume `delay_s` from `now_ns`."""
@@ -77,11 +77,11 @@ def verdict(awaited: AwaitedStart, uavs: Iterable[int],
             reports: Mapping[int, tuple[float, float]], now: float,
             wall_now: float) -> tuple[str, list[int]]:
     """(what to do, the UAVs not confirmed): WAIT before the check, CONFIRMED when none is
-    missing, else LATER, or GIVE_UP past CONFIRM_WAIT_MAX_S (module docstring)."""
+    missing, else LATER, or GIVE_UP past its `wait_s` (module docstring)."""
     start_s = awaited.start_ns * 1e-9
     if wall_now < start_s - CONFIRM_MARGIN_S:
         return WAIT, []
     missing = unconfirmed(uavs, reports, start_s, now)
     if not missing:
         return CONFIRMED, []
-    return (GIVE_UP if now - awaited.since > CONFIRM_WAIT_MAX_S else LATER), missing
+    return (GIVE_UP if now - awaited.since > awaited.wait_s else LATER), missing
