@@ -359,8 +359,10 @@ class FormationStart:
             self._start_ns, self._offset_m = start_ns, past
             self._started.add(plan_id.label)
             wait = float(self._node.get_parameter("start_confirm_wait_s").value)
+            # a resume again while one awaits its confirmations: the wait goes on, not anew
+            since = time.monotonic() if self._awaited is None else self._awaited.since
             self._awaited = (None if moving or wait <= 0.0
-                             else AwaitedStart(start_ns, delay, time.monotonic(), wait))
+                             else AwaitedStart(start_ns, delay, since, wait))
         self._publish(encode_start(start_ns, plan_id, past), start_ns)
         when = "at once (still flying)" if moving else f"in {delay:g} s"
         self._node.get_logger().warning(
