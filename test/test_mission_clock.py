@@ -16,8 +16,8 @@ from uav_insar_planner.mavlink.holds import Holding
 from uav_insar_planner.mavlink.pass_clock import lags, planner_start, resume_where_held
 from uav_insar_planner.mavlink.supervision import WatchedVehicle
 from uav_insar_planner.mavlink.trajectory import RAMP_MPS2, PassTrajectory
-from uav_insar_planner.ros.formation_start import ON_TRACK_M, POSE_FRESH_S, on_track
 from uav_insar_planner.ros.plan_msgs import PlanId, PlanMessageError
+from uav_insar_planner.ros.start_capture import ON_TRACK_M, POSE_FRESH_S, on_track
 from uav_insar_planner.ros.start_msgs import decode_start, encode_start
 from uav_insar_sim.observed_mission import SPEED_TOLERANCE, ObservedMission
 

@@ -15,8 +15,8 @@ from uav_insar_planner.mavlink.pass_clock import planner_start
 from uav_insar_planner.mavlink.trajectory import RAMP_MPS2, PassTrajectory, ramp_up
 from uav_insar_planner.param_specs.nodes import BRIDGE_SPECS
 from uav_insar_planner.ros.claims import Claim, refusal
-from uav_insar_planner.ros.formation_start import POSE_FRESH_S, all_captured, not_captured
 from uav_insar_planner.ros.plan_msgs import PlanId, PlanMessageError
+from uav_insar_planner.ros.start_capture import POSE_FRESH_S, all_captured, not_captured
 from uav_insar_planner.ros.start_msgs import PLAUSIBLE_S, decode_start, encode_start
 from uav_insar_planner.swarm import MAX_UAVS
 

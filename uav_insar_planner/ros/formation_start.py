@@ -1,5 +1,5 @@
 """The planner's one start of the pass for the whole formation (`formation/start`), for
-bridges that each fly one UAV (their side: mavlink/pass_start.py's `planner_start`).
+bridges that each fly one UAV (their side: mavlink/pass_clock.py's `planner_start`).
 
 No per-UAV bridge sees the other vehicles, so none can tell when the formation is complete.
 The planner can: it watches uav{K}/mavlink/pose of every UAV the current plan flies and the
@@ -18,7 +18,8 @@ A pass that cannot go on from its clock resumes where the swarm is, with an expl
 (`encode_start` with an offset: the targets hold at that distance past the start line until
 the instant, then fly on at v_y; never a catch-up to an old clock):
 - a planner started again finds the UAVs on their tracks past the start line (each fresh,
-  within ON_TRACK_M across track and height of its line, before the end of the pass): the
+  within ON_TRACK_M across track and height of its line, before the end of the pass;
+  ros/start_capture.py, as the capture above): the
   pass resumes from the rearmost UAV, at once if the swarm is still flying the dead planner's
   clock (moving at more than half v_y), else after `start_delay_s` and at least
   RESTARTED_DELAY_S (every bridge must find the new planner first). Said in one line.
@@ -51,18 +52,22 @@ from std_msgs.msg import Header
 from uav_insar_planner import published
 from uav_insar_planner.ros import start_confirmations, topics
 from uav_insar_planner.ros.plan_msgs import PlanId
+from uav_insar_planner.ros.start_capture import (
+    POSE_FRESH_S,
+    Point,
+    all_captured,
+    not_captured,
+    on_track,
+)
 from uav_insar_planner.ros.start_confirmations import GIVE_UP, LATER, WAIT, AwaitedStart
 from uav_insar_planner.ros.start_msgs import encode_start
 from uav_insar_planner.swarm import uav_name
 
 CHECK_PERIOD_S = 0.1
-# Bridges publish a pose per LOCAL_POSITION_NED, ~10 Hz: older than this is a silent UAV.
-POSE_FRESH_S = 1.0
 SAME_Y_START_M = 1e-3  # as trajectory.PassTrajectory: the same track start
 REPEAT_PERIOD_S = 0.5
 REPEAT_AFTER_S = 1.0
 REPEAT_MIN_S = 3.0
-ON_TRACK_M = 2.0  # a held copter drifts in wind: wider than the default capture radius
 SPEED_WINDOW_S = 1.0  # along-track speed from the poses of the last second
 # Bridges say `behind` once a second on /diagnostics; a swarm held by one silence says it
 # within a few seconds of each other, DDS repairs included. Longer alone: it is left behind.
@@ -79,54 +84,6 @@ RESTARTED_DELAY_S = 5.0
 # A capture that takes longer than this is said, with who is missing and why, this often: a
 # copter's boot and climb take a minute, a vehicle that never arrives must not be silent.
 WAIT_LOG_PERIOD_S = 15.0
-
-
-Point = tuple[float, float, float]
-
-
-def not_captured(starts: dict[int, Point], poses: dict[int, tuple[float, Point]],
-                 now: float, radius_m: float) -> dict[int, str]:
-    """Why each UAV of `starts` is not captured (no pose fresher than POSE_FRESH_S at `now`,
-    monotonic, or farther than `radius_m` from its start), by UAV; empty when all are."""
-    why: dict[int, str] = {}
-    for k, start in starts.items():
-        seen = poses.get(k)
-        if seen is None:
-            why[k] = f"no {topics.mavlink_pose(k)} yet"
-        elif now - seen[0] > POSE_FRESH_S:
-            why[k] = f"no {topics.mavlink_pose(k)} for {now - seen[0]:.1f} s"
-        elif not (radius_m <= 0.0 or math.dist(seen[1], start) <= radius_m):
-            # (written so that a NaN distance never counts as inside)
-            why[k] = f"{math.dist(seen[1], start):.2f} m from its start point"
-    return why
-
-
-def on_track(starts: dict[int, Point], poses: dict[int, tuple[float, Point]],
-              speeds: dict[int, float], now: float, length_m: float
-              ) -> tuple[int, float, float] | None:
-    """(rearmost UAV, its distance past the start line, its along-track speed) when every UAV
-    of `starts` is fresh, within ON_TRACK_M of its track line and between its start line
-    (ON_TRACK_M past it) and the end of the pass (`length_m`); None otherwise."""
-    past: dict[int, float] = {}
-    for k, (x0, y0, z0) in starts.items():
-        seen = poses.get(k)
-        if seen is None or now - seen[0] > POSE_FRESH_S:
-            return None
-        x, y, z = seen[1]
-        if not (math.hypot(x - x0, z - z0) <= ON_TRACK_M and ON_TRACK_M < y - y0 < length_m):
-            return None
-        past[k] = y - y0
-    if not past:
-        return None
-    rear = min(past, key=past.__getitem__)
-    return rear, past[rear], speeds.get(rear, 0.0)
-
-
-def all_captured(starts: dict[int, Point], poses: dict[int, tuple[float, Point]],
-                 now: float, radius_m: float) -> bool:
-    """Whether every UAV of `starts` has a pose (monotonic time, position) fresher than
-    POSE_FRESH_S at `now` within `radius_m` of its start; False with nothing to start."""
-    return bool(starts) and not not_captured(starts, poses, now, radius_m)
 
 
 class FormationStart:

@@ -1,0 +1,63 @@
+"""Where the UAVs are for the planner's pass start (ros/formation_start.py), from the poses
+their bridges publish: each captured at its start point, or (a planner started again) all on
+their tracks past the start line, and the rearmost of them.
+
+Poses are (monotonic time heard, (x, y, z) in the track frame) per UAV; a start point is
+(x_k, y_start, z_k).
+"""
+from __future__ import annotations
+
+import math
+
+from uav_insar_planner.ros import topics
+
+# Bridges publish a pose per LOCAL_POSITION_NED, ~10 Hz: older than this is a silent UAV.
+POSE_FRESH_S = 1.0
+ON_TRACK_M = 2.0  # a held copter drifts in wind: wider than the default capture radius
+
+Point = tuple[float, float, float]
+
+
+def not_captured(starts: dict[int, Point], poses: dict[int, tuple[float, Point]],
+                 now: float, radius_m: float) -> dict[int, str]:
+    """Why each UAV of `starts` is not captured (no pose fresher than POSE_FRESH_S at `now`,
+    monotonic, or farther than `radius_m` from its start), by UAV; empty when all are."""
+    why: dict[int, str] = {}
+    for k, start in starts.items():
+        seen = poses.get(k)
+        if seen is None:
+            why[k] = f"no {topics.mavlink_pose(k)} yet"
+        elif now - seen[0] > POSE_FRESH_S:
+            why[k] = f"no {topics.mavlink_pose(k)} for {now - seen[0]:.1f} s"
+        elif not (radius_m <= 0.0 or math.dist(seen[1], start) <= radius_m):
+            # (written so that a NaN distance never counts as inside)
+            why[k] = f"{math.dist(seen[1], start):.2f} m from its start point"
+    return why
+
+
+def on_track(starts: dict[int, Point], poses: dict[int, tuple[float, Point]],
+              speeds: dict[int, float], now: float, length_m: float
+              ) -> tuple[int, float, float] | None:
+    """(rearmost UAV, its distance past the start line, its along-track speed) when every UAV
+    of `starts` is fresh, within ON_TRACK_M of its track line and between its start line
+    (ON_TRACK_M past it) and the end of the pass (`length_m`); None otherwise."""
+    past: dict[int, float] = {}
+    for k, (x0, y0, z0) in starts.items():
+        seen = poses.get(k)
+        if seen is None or now - seen[0] > POSE_FRESH_S:
+            return None
+        x, y, z = seen[1]
+        if not (math.hypot(x - x0, z - z0) <= ON_TRACK_M and ON_TRACK_M < y - y0 < length_m):
+            return None
+        past[k] = y - y0
+    if not past:
+        return None
+    rear = min(past, key=past.__getitem__)
+    return rear, past[rear], speeds.get(rear, 0.0)
+
+
+def all_captured(starts: dict[int, Point], poses: dict[int, tuple[float, Point]],
+                 now: float, radius_m: float) -> bool:
+    """Whether every UAV of `starts` has a pose (monotonic time, position) fresher than
+    POSE_FRESH_S at `now` within `radius_m` of its start; False with nothing to start."""
+    return bool(starts) and not not_captured(starts, poses, now, radius_m)
