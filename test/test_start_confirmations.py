@@ -8,9 +8,9 @@ import pytest
 from uav_insar_planner.ros.start_confirmations import (
     CONFIRM_MARGIN_S,
     CONFIRMED,
-    CONFIRMED_FRESH_S,
     GIVE_UP,
     LATER,
+    REPORT_FRESH_S,
     WAIT,
     AwaitedStart,
     reported_instant,
@@ -53,7 +53,7 @@ def test_every_flown_bridge_with_a_fresh_report_of_the_instant_confirms_it():
 def test_a_missing_stale_or_other_instant_moves_the_start_later_naming_those_uavs():
     now = 104.0
     reports = {0: (now - 0.5, START_S),
-               1: (now - CONFIRMED_FRESH_S - 0.1, START_S),  # heard, but long ago
+               1: (now - REPORT_FRESH_S - 0.1, START_S),  # heard, but long ago
                2: (now - 0.5, START_S - 3.0)}  # flies the start before this one
     assert verdict(_awaited(), [0, 1, 2, 3], reports, now, START_S - 0.1) == (LATER, [1, 2, 3])
 

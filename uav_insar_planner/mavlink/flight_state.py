@@ -85,8 +85,8 @@ class FlightState:
     def set_start(self, wall_time_s: float, now: float, label: str, offset_m: float) -> None:
         """pass_start "planner": see `Bridge.set_start`."""
         text = planner_start(self.pass_, wall_time_s, now, time.time(), label, offset_m)
-        self._start_label = label if self.pass_.formation is not None else ""
-        self._start_wall = wall_time_s if self.pass_.formation is not None else None
+        flying = self.pass_.formation is not None
+        self._start_label, self._start_wall = (label, wall_time_s) if flying else ("", None)
         if text:  # held ones near their targets rejoin, ones too late to keep up hold
             self._emit(-1, "info", text)
             self._rejoin(now, "a new pass start", late=True)

@@ -59,7 +59,13 @@ from uav_insar_planner.ros.start_capture import (
     not_captured,
     on_track,
 )
-from uav_insar_planner.ros.start_confirmations import GIVE_UP, LATER, WAIT, AwaitedStart
+from uav_insar_planner.ros.start_confirmations import (
+    GIVE_UP,
+    LATER,
+    REPORT_FRESH_S,
+    WAIT,
+    AwaitedStart,
+)
 from uav_insar_planner.ros.start_msgs import encode_start
 from uav_insar_planner.swarm import uav_name
 
@@ -72,7 +78,6 @@ SPEED_WINDOW_S = 1.0  # along-track speed from the poses of the last second
 # Bridges say `behind` once a second on /diagnostics; a swarm held by one silence says it
 # within a few seconds of each other, DDS repairs included. Longer alone: it is left behind.
 BEHIND_GRACE_S = 4.0
-BEHIND_FRESH_S = 3.0
 # A swarm still flying is resumed on an instant this far in the past (more than the bridges'
 # trajectory.JOIN_GRACE_S): they take it as a running pass and do not ramp up from a hover.
 MOVING_BACKDATE_S = 1.0
@@ -282,7 +287,7 @@ class FormationStart:
                     ) -> tuple[tuple[int, float, float] | None, list[tuple[int, str]]]:
         """(the resume point when every flown UAV with fresh poses reports `behind`, else
         None; the UAVs left behind alone for BEHIND_GRACE_S, with why). Under the lock."""
-        for k in [k for k, (_, last, _) in self._behind.items() if now - last > BEHIND_FRESH_S]:
+        for k in [k for k, (_, last, _) in self._behind.items() if now - last > REPORT_FRESH_S]:
             del self._behind[k]
         flying = {k: p for k, p in starts.items()
                   if k in self._poses and now - self._poses[k][0] <= POSE_FRESH_S}

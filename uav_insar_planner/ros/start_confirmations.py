@@ -12,7 +12,7 @@ loss: one bridge heard the new planner's start 7 s after the others, 1.9 s past 
 
 Each bridge says on /diagnostics which start it flies (value `pass_start`: the instant as the
 planner sent it, wall clock). CONFIRM_MARGIN_S before the instant, every flown UAV's bridge
-must have reported it within CONFIRMED_FRESH_S. Otherwise the planner moves the start later
+must have reported it within REPORT_FRESH_S. Otherwise the planner moves the start later
 (the same offset, the same delay from now) and says which UAVs it waits for: the swarm keeps
 holding meanwhile, and bridges take a newer instant as a new start. After the planner's
 `start_confirm_wait_s` (20 s: several Fast DDS heartbeat periods) it stops waiting, says so,
@@ -28,7 +28,9 @@ from dataclasses import dataclass, replace
 # Bridges report once a second: a start heard more than this before its instant is confirmed
 # by then in most cases; one heard later moves the start by a few seconds, harmlessly.
 CONFIRM_MARGIN_S = 0.5
-CONFIRMED_FRESH_S = 3.0  # a report older than this confirms nothing (as formation_start's)
+# Bridges report once a second: a report older than this says nothing, of the start a bridge
+# flies or of its being behind (formation_start.py).
+REPORT_FRESH_S = 3.0
 SAME_INSTANT_S = 0.002  # bridges report the instant with 1 ms resolution
 
 WAIT, CONFIRMED, LATER, GIVE_UP = "wait", "confirmed", "later", "give up"
@@ -63,11 +65,11 @@ def reported_instant(value: str | None) -> float | None:
 def unconfirmed(uavs: Iterable[int], reports: Mapping[int, tuple[float, float]],
                 start_s: float, now: float) -> list[int]:
     """The UAVs of `uavs` whose bridge has not reported the instant `start_s` (wall clock, s)
-    within CONFIRMED_FRESH_S of `now` (monotonic); reports: uav -> (monotonic time, instant)."""
+    within REPORT_FRESH_S of `now` (monotonic); reports: uav -> (monotonic time, instant)."""
     out = []
     for k in uavs:
         heard = reports.get(k)
-        if (heard is None or now - heard[0] > CONFIRMED_FRESH_S
+        if (heard is None or now - heard[0] > REPORT_FRESH_S
                 or abs(heard[1] - start_s) > SAME_INSTANT_S):
             out.append(k)
     return sorted(out)
