@@ -61,6 +61,8 @@ setup(
         "uav": ROS_WHEELS,
         "test": PLANNER + [
             "pytest>=7", "pytest-timeout>=2", "ruff>=0.4", "mavsdk==3.17.4", "hypothesis>=6",
+            # `make test` runs the suite on two workers (Makefile's TEST_WORKERS)
+            "pytest-xdist>=3.5,<4",
             # independent reader of the recorded bags (test/test_bag_record.py)
             "mcap-ros2-support>=0.5",
             # `--scheduler` of sweep / map on a local Dask cluster (test/test_param_map.py)

@@ -19,8 +19,13 @@ _counter = itertools.count()
 
 def _next_domain() -> int:
     # Fast DDS takes domains 0..232; pid spreads parallel pytest runs, the counter separates
-    # tests within one. 0 stays free for whatever else runs on the machine.
-    return 1 + (os.getpid() * 7 + next(_counter)) % 232
+    # tests within one. 0 stays free for whatever else runs on the machine. Each worker of a
+    # pytest-xdist run (`make test`) takes the domains of its own residue modulo the workers'
+    # count, so that two of their tests never meet on one domain.
+    worker = os.environ.get("PYTEST_XDIST_WORKER", "")
+    index, count, spread = ((int(worker[2:]), int(os.environ["PYTEST_XDIST_WORKER_COUNT"]),
+                             os.getppid()) if worker.startswith("gw") else (0, 1, os.getpid()))
+    return 1 + ((spread * 7 + next(_counter)) % (232 // count)) * count + index
 
 
 @pytest.fixture
@@ -193,6 +198,45 @@ def mission(tmp_path_factory):
         finally:
             stop_nodes(nodes + [recorder])
     yield seen
+
+
+# `make test` runs the suite on two pytest-xdist workers (Makefile). These modules fly a swarm
+# in real time and judge it by its timing (slot durations, spreads, speeds), some on fixed
+# ports or with side-by-side flights (test/side_by_side.py): they form one work unit, run by one
+# worker one after the other as in a serial run, while the other worker runs the rest. (Two of
+# them at once made a field-starts run see slots of 0.03 s and a UAV stuck short of its line:
+# each worker flew that module's fixture on the same vehicle ports.)
+REAL_TIME_MODULES = frozenset({
+    "test_agent_autopilot.py", "test_demo.py", "test_export_mission.py", "test_field_faults.py",
+    "test_field_starts.py", "test_gcs_processes.py", "test_num_uavs.py", "test_per_uav_stacks.py",
+    "test_replanning_processes.py", "test_sitl.py", "test_sitl_across_hosts.py",
+    "test_sitl_signing.py", "test_sitl_wind.py", "test_swarm_across_hosts.py",
+    "test_ten_uavs.py"})
+REAL_TIME = "real time"
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config, log):
+    """The workers' units: every other module one unit (its module fixtures run once), all of
+    REAL_TIME_MODULES one unit, the largest first. (Not xdist_group marks: pytest 9.2 drops
+    the node-id suffix that --dist loadgroup groups by, pytest-xdist issue 1386.)"""
+    from xdist.scheduler import LoadScopeScheduling
+
+    class ModulesRealTimeTogether(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            module = nodeid.split("::", 1)[0]
+            return REAL_TIME if Path(module).name in REAL_TIME_MODULES else module
+
+    return ModulesRealTimeTogether(config, log)
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """A side-by-side flight is flown by the worker that runs its test: its module must be one
+    of REAL_TIME_MODULES, or another worker would fly its group again."""
+    for item in items:
+        if any(item.iter_markers("side_by_side")) and item.path.name not in REAL_TIME_MODULES:
+            raise pytest.UsageError(f"{item.nodeid}: a side-by-side flight's module must be "
+                                    "in conftest.REAL_TIME_MODULES")
 
 
 @pytest.fixture(scope="session")

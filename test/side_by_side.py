@@ -9,6 +9,10 @@ group whose test was selected, each in a thread of its own; the first result wai
 them, so nothing of the group flies on beside the tests that follow. Each test gets its own
 flight's result, or its exception re-raised.
 
+Under `make test`'s pytest-xdist workers each worker has a SideBySide of its own: a flight's
+module is one of conftest.REAL_TIME_MODULES, which one worker runs, so that each group is
+flown once.
+
 Why: an ArduCopter SITL test mostly waits (its EKF takes about 25 s of wall time to use GPS,
 then the pass is flown in real time), and takes a small share of a core while it does. Four
 such flights started together take about as long as the slowest of them, where one after the
