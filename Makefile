@@ -3,7 +3,7 @@
 PY ?= python3
 # pytest workers of `make test`: most of the suite waits on processes, radios and simulators
 # in real time, so two workers on a 2-core machine take about half as long as one (measured:
-# 16.7 instead of 27.5 minutes). The modules that fly swarms in real time run on one of them,
+# 14.6 instead of 27.5 minutes). The modules that fly swarms in real time run on one of them,
 # one after the other (test/conftest.py's REAL_TIME_MODULES).
 TEST_WORKERS ?= 2
 VENV := .venv
