@@ -10,13 +10,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from clean_stop import stop_cleanly
 from rcl_interfaces.msg import Parameter as ParameterMsg
 from rcl_interfaces.msg import ParameterType, ParameterValue
 from rcl_interfaces.srv import GetParameters, SetParameters, SetParametersAtomically
 from std_srvs.srv import Trigger
 
 from uav_insar_planner import load_params, solve
-from uav_insar_planner.demo.processes import start_node, stop_node
+from uav_insar_planner.demo.processes import start_node
 
 CONFIG = str(Path(__file__).resolve().parents[1] / "config" / "params.yaml")
 N = 8
@@ -98,7 +99,7 @@ def test_runtime_sets_replan_refuse_or_convert_as_ros2_param_set_would(watcher, 
         refused = probe.set(node, name, value)
         assert not refused.successful and "read-only" in refused.reason, refused.reason
     assert probe.get("agent0", "uav_id").integer_value == 0
-    assert [stop_node(p) for p in (planner, agent)] == [0, 0]
+    stop_cleanly([planner, agent])
 
 
 def test_the_swarm_size_changes_at_run_time_in_one_atomic_set(watcher, procs):
@@ -126,7 +127,7 @@ def test_the_swarm_size_changes_at_run_time_in_one_atomic_set(watcher, procs):
                                             "rate_min_mbps": rates})).formation
     assert np.allclose(xz(probe.formations[-1]), expected, atol=1e-6)
     assert probe.get("planner", "num_uavs").integer_value == 5
-    assert stop_node(planner) == 0
+    stop_cleanly([planner])
 
 
 def test_integer_in_params_file_is_the_double_meant(watcher, procs, tmp_path):
@@ -140,7 +141,7 @@ def test_integer_in_params_file_is_the_double_meant(watcher, procs, tmp_path):
     expected = solve(load_params(overrides={"num_slots": N, "speed_mps": 4.0,
                                             "ground_station_m": [70.0, 150.0, 25.0]}))
     assert np.allclose(xz(probe.formations[0]), expected.formation, atol=1e-6)
-    assert stop_node(planner) == 0
+    stop_cleanly([planner])
 
 
 BAD_FILES = {
@@ -212,7 +213,7 @@ def test_domains_are_isolated(watcher, procs, another_domain):
         stranger.destroy()
     finally:
         other.try_shutdown()
-    assert stop_node(planner) == 0
+    stop_cleanly([planner])
 
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])

@@ -7,9 +7,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from clean_stop import stop_cleanly
 
 from uav_insar_planner import load_params, model, solve
-from uav_insar_planner.demo.processes import stop_node
 from uav_insar_planner.evaluate import rate_tolerance_bps
 from uav_insar_planner.swarm import MAX_UAVS
 
@@ -57,7 +57,7 @@ def test_planner_and_three_agent_processes_survive_a_planner_restart(watcher, pr
         assert len(w.rates[k]) == N  # one rate per slot: the slot clock never restarted
         assert np.allclose(w.rates[k], expected[k], rtol=1e-9)
         assert min(w.rates[k]) >= params.rate_min_bps[k] - tol
-    assert [stop_node(p) for p in (planner, *agents)] == [0, 0, 0, 0]
+    stop_cleanly([planner, *agents])
 
 
 def test_bad_params_file_stops_the_planner_with_code_2_and_publishes_nothing(
@@ -101,6 +101,5 @@ def test_a_node_prints_its_stacks_on_the_dump_signal_and_still_stops_cleanly(wat
     agent.send_signal(STACK_DUMP_SIGNAL)
     watcher.spin_until(lambda: False, 1.0)
     assert agent.poll() is None  # alive: the dump does not stop it
-    assert stop_node(agent) == 0
-    out = agent.stdout.read()
+    out, = stop_cleanly([agent])
     assert "most recent call first" in out and "in spin" in out, out[-2000:]

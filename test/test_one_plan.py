@@ -8,6 +8,7 @@ import os
 
 import numpy as np
 import pytest
+from clean_stop import stop_cleanly
 from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import PoseArray
 from std_msgs.msg import Float64MultiArray
@@ -60,7 +61,7 @@ def test_plan_identity_is_the_same_on_both_topics_and_changes_on_replan(watcher,
     assert [i.planner for i in ids] == ["/planner", "/planner"]
     assert stamps == [i.stamp for i in ids]  # formation k and power k: one plan
     assert stamps[1] > stamps[0]
-    assert stop_node(planner) == 0
+    stop_cleanly([planner])
 
 
 def test_two_planners_are_reported_and_never_mixed(watcher, procs):
@@ -119,10 +120,7 @@ def test_two_planners_are_reported_and_never_mixed(watcher, procs):
     assert w.spin_until(lambda: all(len(f) == 2 for f in w.flown_plans.values()), 15.0), \
         w.flown_plans
     assert all(f == [first_id, second_id.label] for f in w.flown_plans.values())
-    outs = [a.stdout for a in agents]
-    assert [stop_node(p) for p in (again, *agents)] == [0, 0, 0, 0]
-    for k, out in enumerate(outs):
-        text = out.read()
+    for k, text in enumerate(stop_cleanly([again, *agents])[1:]):
         assert f"uav{k}: 2 publishers of formation (/planner, /planner2): keeping " \
                f"{first_id}" in text, text
         assert text.count(f"uav{k}: flying plan") == 2, text
@@ -214,7 +212,7 @@ def test_a_planner_restarted_infeasible_still_reports_the_agents(watcher, procs)
     planner = procs("planner", *COMMON)
     assert w.spin_until(lambda: w.flown_plans[1], 30.0), "the agent took no plan"
     flown = w.flown_plans[1][-1]
-    assert stop_node(planner) == 0
+    stop_cleanly([planner])
     restarted = procs("planner", *COMMON, "-p", INFEASIBLE)
     since = len(w.diagnostics)
     # STALE until the agent's next slot rate reaches the new planner, then WARN.
@@ -231,4 +229,4 @@ def test_a_planner_restarted_infeasible_still_reports_the_agents(watcher, procs)
     assert value(uav1, "plan_flown") == flown and value(uav1, "plan_published") == ""
     assert value(uav1, "position_error_m") == "nan"  # no target of this planner's for it
     assert "planner: uav0" not in last and "planner: uav2" not in last  # no agents there
-    assert [stop_node(p) for p in (restarted, agent)] == [0, 0]
+    stop_cleanly([restarted, agent])

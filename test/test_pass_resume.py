@@ -14,11 +14,11 @@ import math
 import time
 
 import pytest
+from clean_stop import stop_cleanly
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PoseStamped
 from std_msgs.msg import Header
 
-from uav_insar_planner.demo.processes import stop_nodes
 from uav_insar_planner.published import bridge_status_name
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.plan_msgs import decode_formation
@@ -122,9 +122,7 @@ def test_one_uav_behind_alone_is_replanned_out_as_a_lost_uav(watcher, procs):
     assert watcher.spin_until(lambda: len(watcher.formations) >= 2, 20.0, [planner])
     replanned_after = time.monotonic() - held_at
     survivors = decode_formation(watcher.formations[-1]).points
-    codes = stop_nodes([planner])
-    assert codes == [0]
-    log = planner.stdout.read()
+    log, = stop_cleanly([planner])
     assert survivors[2] is None and survivors[0] is not None and survivors[1] is not None
     assert "uav2 lost at slot" in log and "cannot keep the pass" in log, log[-3000:]
     assert len(bridges.starts) >= 1 and " at " not in bridges.starts[-1].frame_id
@@ -141,9 +139,7 @@ def test_every_uav_behind_resumes_the_pass_from_the_rearmost(watcher, procs):
     resumed = next(s for s in bridges.starts if " at " in s.frame_id)
     plan_id, t_start, offset = decode_start(resumed, time.time())
     watcher.spin_until(lambda: False, 1.0)  # its log line follows the start it sent
-    codes = stop_nodes([planner])
-    assert codes == [0]
-    log = planner.stdout.read()
+    log, = stop_cleanly([planner])
     assert offset == pytest.approx(rear, abs=0.3)  # (the pose read a tick before)
     assert t_start > time.time() - 5.0  # after start_delay_s from the decision: no sprint
     assert len(watcher.formations) == 1, "re-planned instead of resumed"
@@ -169,9 +165,7 @@ def test_a_resumed_start_a_bridge_has_not_confirmed_is_moved_later_until_it_has(
         return bridges.resumed(2) and time.time() > _instant(bridges.starts[-1]) + 1.5
 
     assert watcher.spin_until(settled, 25.0, [planner]), [s.frame_id for s in bridges.starts]
-    codes = stop_nodes([planner])
-    assert codes == [0]
-    log = planner.stdout.read()
+    log, = stop_cleanly([planner])
     resumed = [s for s in bridges.starts if " at " in s.frame_id]
     first, last = _instant(resumed[0]), _instant(resumed[-1])
     print(f"the resumed start moved {last - first:.1f} s later, "
@@ -198,9 +192,7 @@ def test_a_bridge_that_never_confirms_the_resumed_start_is_left_behind(watcher, 
     held_at = time.monotonic()
     assert watcher.spin_until(lambda: len(watcher.formations) >= 2, 20.0, [planner])
     waited = time.monotonic() - held_at
-    codes = stop_nodes([planner])
-    assert codes == [0]
-    log = planner.stdout.read()
+    log, = stop_cleanly([planner])
     print(f"uav2 never confirmed: re-planned without it {waited:.1f} s after the hold")
     assert "the resumed pass starts without its start confirmed by the bridge of uav2" in log, \
         log[-3000:]

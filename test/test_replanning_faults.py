@@ -6,11 +6,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from clean_stop import stop_cleanly
 from diagnostic_msgs.msg import DiagnosticStatus
 from rclpy.parameter import Parameter
 
 from uav_insar_planner import load_params, solve
-from uav_insar_planner.demo.processes import stop_nodes
 from uav_insar_planner.replanning.triggers import SATURATED_MISSES
 from uav_insar_planner.ros.planner import PlannerNode
 from uav_insar_planner.ros.swarm_watch import SWARM_STATUS_NAME
@@ -61,8 +61,7 @@ def test_bridge_reports_the_master_lost_and_commands_loiter_to_the_others(watche
             [v.mode for v in vehicles]
         assert vehicles[0].mode == "GUIDED"  # it never heard the order
         assert swarm(w)[-1].level == DiagnosticStatus.ERROR
-        assert stop_nodes([bridge, planner]) == [0, 0]
-        out = bridge.stdout.read()
+        out = stop_cleanly([bridge, planner])[0]
         assert "commanding LOITER to every vehicle" in out, out
     finally:
         for v in vehicles:

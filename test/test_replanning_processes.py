@@ -16,12 +16,12 @@ from pathlib import Path
 import numpy as np
 import process_group
 import pytest
+from clean_stop import stop_cleanly
 from conftest import REPO
 from diagnostic_msgs.msg import DiagnosticStatus
 from side_by_side import flight
 
 from uav_insar_planner import load_params, solve
-from uav_insar_planner.demo.processes import stop_nodes
 from uav_insar_planner.evaluate import evaluate, rate_tolerance_bps
 from uav_insar_planner.replanning import plans
 from uav_insar_planner.ros.swarm_watch import SWARM_STATUS_NAME
@@ -120,9 +120,7 @@ def test_killed_slave_is_replanned_out_and_the_survivors_finish(watcher, procs, 
         assert w.offloads[k][-1][1] == pytest.approx(p_new[k, -1])
     swarm = swarm_statuses(w)[-1]
     assert swarm.level == DiagnosticStatus.WARN and "uav1 lost at slot" in swarm.message
-    codes = stop_nodes(survivors)
-    assert codes == [0, 0, 0]
-    out = agents[2].stdout.read()
+    out = stop_cleanly(survivors)[survivors.index(agents[2])]
     assert "mission complete: " in out, out
 
 
@@ -158,8 +156,7 @@ def test_killed_master_stops_the_mission_and_the_slaves_hold(watcher, procs):
         assert math.dist((p.x, p.y, p.z), (where[k].x, where[k].y, where[k].z)) < 1e-3
     swarm = [s for s in swarm_statuses(w)][-1]
     assert swarm.level == DiagnosticStatus.ERROR
-    assert stop_nodes([planner, agents[1], agents[2]]) == [0, 0, 0]
-    assert "holding position after" in agents[1].stdout.read()
+    assert "holding position after" in stop_cleanly([planner, agents[1], agents[2]])[1]
 
 
 @flight("demo-kill-uav", "replanning")
