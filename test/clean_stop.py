@@ -13,18 +13,32 @@ from uav_insar_planner.demo.processes import stop_nodes
 TAIL_CHARS = 6000
 
 
-def outputs_if_clean(procs: Sequence[subprocess.Popen], codes: Sequence[int]) -> list[str]:
-    """Each process's output (its piped stdout, stderr merged), in order; fails, naming the
-    exit codes and showing the tail of every unclean process's output, unless all are 0."""
+def _head(proc: subprocess.Popen) -> str:
+    return " ".join(map(str, proc.args))[:300]
+
+
+def stop_and_read(procs: Sequence[subprocess.Popen]) -> tuple[list[int], list[str]]:
+    """stop_nodes(procs), then each one's output (its piped stdout, stderr merged). The tail of
+    every output is printed too: pytest shows it when the test fails, whatever failed."""
+    codes = stop_nodes(procs)
     outs = [proc.stdout.read() if proc.stdout is not None else "" for proc in procs]
-    unclean = [f"--- process {i} exited {code}: {' '.join(map(str, proc.args))[:300]}\n"
-               f"{out[-TAIL_CHARS:]}"
+    for proc, code, out in zip(procs, codes, outs, strict=True):
+        print(f"--- exited {code}: {_head(proc)}\n{out[-TAIL_CHARS:]}")
+    return codes, outs
+
+
+def assert_clean(procs: Sequence[subprocess.Popen], codes: Sequence[int],
+                 outs: Sequence[str]) -> None:
+    """Fails, naming the exit codes and showing the tail of every unclean process's output,
+    unless every code is 0."""
+    unclean = [f"--- process {i} exited {code}: {_head(proc)}\n{out[-TAIL_CHARS:]}"
                for i, (proc, code, out) in enumerate(zip(procs, codes, outs, strict=True))
                if code != 0]
     assert not unclean, f"exit codes {list(codes)}\n" + "\n".join(unclean)
-    return outs
 
 
 def stop_cleanly(procs: Sequence[subprocess.Popen]) -> list[str]:
-    """stop_nodes(procs), then `outputs_if_clean`."""
-    return outputs_if_clean(procs, stop_nodes(procs))
+    """`stop_and_read`, then `assert_clean`; returns the outputs."""
+    codes, outs = stop_and_read(procs)
+    assert_clean(procs, codes, outs)
+    return outs

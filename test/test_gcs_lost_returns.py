@@ -17,10 +17,10 @@ import time
 
 import pytest
 import rclpy
-from clean_stop import outputs_if_clean
+from clean_stop import assert_clean, stop_and_read
 from radio_relay import RadioRelay
 
-from uav_insar_planner.demo.processes import start_node, stop_nodes
+from uav_insar_planner.demo.processes import start_node
 from uav_insar_planner.ros.plan_msgs import decode_power
 from uav_insar_planner.ros.swarm_watch import SWARM_STATUS_NAME
 from uav_insar_sim.vehicle.simulator import SimVehicle
@@ -108,11 +108,11 @@ def test_a_lost_uav_back_in_range_keeps_holding_out_of_the_survivors_plan(
     finally:
         radio.set_up(True)
         stopped = ([planner] if planner else []) + ground + uav_side
-        codes = stop_nodes(stopped)
+        codes, outs = stop_and_read(stopped)
         vehicle.stop()
         radio.destroy()
         uav_ctx.try_shutdown()
-    outs = outputs_if_clean(stopped, codes)
+    assert_clean(stopped, codes, outs)
     out = outs[0]
     assert f"uav{K} heard again after it was lost at slot" in out, out
     bridge_out = outs[-1]

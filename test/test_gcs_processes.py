@@ -15,11 +15,10 @@ import threading
 import time
 
 import pytest
-from clean_stop import outputs_if_clean
+from clean_stop import assert_clean, stop_and_read
 from diagnostic_msgs.msg import DiagnosticStatus
 from std_srvs.srv import Trigger
 
-from uav_insar_planner.demo.processes import stop_nodes
 from uav_insar_planner.ros.formation_start import RESTARTED_DELAY_S
 from uav_insar_sim.vehicle.simulator import SimVehicle
 
@@ -87,11 +86,11 @@ def test_a_frozen_planner_holds_the_vehicle_then_resumes_the_pass_where_it_holds
         assert vehicle.mode == "GUIDED"
     finally:
         os.killpg(planner.pid, signal.SIGCONT)
-        codes = stop_nodes(everyone)
+        codes, outs = stop_and_read(everyone)
         for v in swarm:
             v.stop()
-    planner_out, bridge_out = outputs_if_clean(everyone, codes)
-    out = bridge_out
+    assert_clean(everyone, codes, outs)
+    planner_out, out = outs
     silent = [line for line in out.splitlines() if "ground station silent for" in line]
     assert len(silent) == 1 and "last heard: " in silent[0], out
     assert "stopping the setpoints and commanding LOITER to every vehicle" in silent[0]
@@ -147,10 +146,11 @@ def test_a_planner_killed_and_started_again_resumes_where_the_swarm_holds(watche
     finally:
         watching.set()
         stopped = [p for p in (bridge, again) if p is not None]
-        codes = stop_nodes(stopped)
+        codes, outs = stop_and_read(stopped)
         for v in swarm:
             v.stop()
-    log = outputs_if_clean(stopped, codes)[1]
+    assert_clean(stopped, codes, outs)
+    log = outs[1]
     assert "resuming the pass where the swarm is" in log, log[-3000:]
     # the bridge confirmed the new planner's start on /diagnostics: it was not moved
     instant = float(re.search(r"resuming the pass where the swarm is: .*wall clock ([\d.]+)",
