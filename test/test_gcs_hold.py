@@ -26,13 +26,15 @@ class GroundStation:
 
     def __init__(self, bridge: Bridge):
         self.bridge, self.on, self._stop = bridge, True, threading.Event()
+        self.newer_plan = False  # its heartbeat names a plan the bridge does not fly
         self._thread = threading.Thread(target=self._run, daemon=True)
         self._thread.start()
 
     def _run(self) -> None:
         while not self._stop.wait(GCS_HEARTBEAT_PERIOD_S):
             if self.on:
-                self.bridge.gcs_heard("gcs/heartbeat from /test", heartbeat=True)
+                self.bridge.gcs_heard("gcs/heartbeat from /test", heartbeat=True,
+                                      newer_plan=self.newer_plan)
 
     def close(self) -> None:
         self._stop.set()
@@ -137,6 +139,39 @@ def test_a_mode_a_pilot_chose_during_the_hold_is_not_taken_back():
         bridge.stop()
         vehicle.stop()
     assert any("a pilot switched it): not taken back to GUIDED" in e for e in events), events
+
+
+def test_heard_again_with_a_plan_not_flown_here_it_holds_until_that_plan_comes():
+    """The planner re-planned during the silence (perhaps without this UAV): its heartbeat
+    names the new plan, which the lossy radio delivers later. No rejoin to the old plan: the
+    vehicle holds, no setpoints, until the new plan is adopted."""
+    vehicle, bridge = fly("ardupilot")
+    ground = GroundStation(bridge)
+    try:
+        bridge.set_formation(FORMATION)
+        assert wait_until(bridge.track_started, 10.0)
+        assert wait_until(lambda: bridge.gcs_state().startswith("heard "), 2.0)
+        ground.on = False
+        assert wait_until(lambda: vehicle.mode == "LOITER", TIMEOUT_S + 1.0), vehicle.mode
+        ground.newer_plan, ground.on = True, True  # at once: near enough to rejoin the old one
+        assert wait_until(lambda: bridge.gcs_state().startswith("heard "), 2.0)
+        sent = bridge.status()[0].setpoints_sent
+        time.sleep(1.5)
+        assert vehicle.mode == "LOITER" and bridge.status()[0].setpoints_sent == sent
+        assert "waiting for the pass to resume" in bridge.status()[0].phase
+        bridge.set_formation(FORMATION)  # the new plan arrives: it gives the UAV a target
+        assert wait_until(lambda: vehicle.mode == "GUIDED", 5.0), vehicle.mode
+        assert wait_until(lambda: bridge.status()[0].setpoints_sent > sent + 5, 3.0)
+        events = [e.text for e in bridge.drain_events()]
+    finally:
+        ground.close()
+        bridge.stop()
+        vehicle.stop()
+    waited = [i for i, e in enumerate(events) if e.startswith(
+        "the ground station flies a plan not received here yet")]
+    rejoined = [i for i, e in enumerate(events) if "rejoins the pass" in e]
+    assert len(waited) == 1 and rejoined and rejoined[0] > waited[0], events
+    assert "a new plan: rejoins the pass" in events[rejoined[0]], events
 
 
 def test_never_heard_is_waiting_not_silent():

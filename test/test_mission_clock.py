@@ -119,6 +119,29 @@ def test_a_held_uav_rejoins_when_near_its_target_and_says_so_when_too_far_behind
     assert "no target in the current plan" in holding.phase(far)
 
 
+def test_a_rejoined_uav_the_next_plan_takes_out_is_ordered_to_hold_and_nothing_else():
+    """Heard again, both held UAVs rejoin (GUIDED ordered); the plan that comes next gives
+    uav1 no target (the survivors' plan). uav1's order is the hold alone from then on: a
+    resume still engaged beside it once alternated with it and left the UAV in GUIDED."""
+    a, b = _vehicle(0, 19.0), _vehicle(1, 19.0)
+    holding = Holding(profile("ardupilot"), 1.0, [0, 1], lambda k, level, text: None)
+    holding.gcs_heard("gcs/heartbeat", 0.0, heartbeat=True)
+    holding.check(5.0)
+    assert holding.gcs_heard("gcs/heartbeat", 6.0, heartbeat=True)
+    assert holding.rejoin([a, b], {0: 1.0, 1: 1.0}, 2.0, "heard") == [0, 1]
+    holding.on_plan([(0.0, 0.0, 50.0), None], True)
+    assert holding.stopped(b) and not holding.stopped(a)
+    sent = {0: [], 1: []}
+    for step in range(40):  # the bridge's loop, 0.25 s a turn, for 10 s
+        now = 6.0 + 0.25 * step
+        for v in (a, b):
+            if (order := holding.order_due(v, now)) is not None:
+                sent[v.uav].append(order.mode.name)
+                order.sent(v, now)
+    assert sent[1] and set(sent[1]) == {"LOITER"}, sent[1]
+    assert set(sent[0]) == {"GUIDED"}, sent[0]
+
+
 def test_slots_flown_off_the_planned_speed_are_found():
     params = load_params(overrides={"num_slots": 6, "slot_duration_s": 1.0})
     mission = ObservedMission(0, params)

@@ -110,11 +110,12 @@ class Bridge(IoThread):
         with self._lock:
             self._flight.set_formation(poses, self._clock())
 
-    def gcs_heard(self, what: str, heartbeat: bool = False) -> None:
+    def gcs_heard(self, what: str, heartbeat: bool = False, newer_plan: bool = False) -> None:
         """Something came from the ground station (`what`: a heartbeat, plan or start;
-        `heartbeat`: a gcs/heartbeat, which starts the silence clock)."""
+        `heartbeat`: a gcs/heartbeat, which starts the silence clock; `newer_plan`: it is of,
+        or names, a plan other than the one flown, so held vehicles wait for that plan)."""
         with self._lock:
-            self._flight.gcs_heard(what, self._clock(), heartbeat)
+            self._flight.gcs_heard(what, self._clock(), heartbeat, newer_plan)
 
     def gcs_state(self) -> str:
         """The ground station's link as the bridge sees it (holds.GcsWatch.state)."""

@@ -78,8 +78,16 @@ class FlightState:
                 if clean[v.uav] is not None and v.uav not in self.sequences:
                     self.sequences[v.uav] = self._new_sequence(v)
 
-    def gcs_heard(self, what: str, now: float, heartbeat: bool) -> None:
-        if self.holding.gcs_heard(what, now, heartbeat):
+    def gcs_heard(self, what: str, now: float, heartbeat: bool, newer_plan: bool) -> None:
+        """See `Bridge.gcs_heard`. Heard again while the ground flies a plan not adopted here
+        (the planner re-planned during the silence, perhaps without a held UAV), the held
+        vehicles wait for it: its adoption (`set_formation`) rejoins them, or not."""
+        if not self.holding.gcs_heard(what, now, heartbeat):
+            return
+        if newer_plan:
+            self._emit(-1, "info", "the ground station flies a plan not received here yet: "
+                                   "the held vehicles wait for it")
+        else:
             self._rejoin(now, "the ground station heard again")
 
     def set_start(self, wall_time_s: float, now: float, label: str, offset_m: float) -> None:

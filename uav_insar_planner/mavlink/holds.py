@@ -20,11 +20,14 @@ thread-safe: the bridge holds its lock.
   start or plan comes): a held vehicle whose target, on the pass clock it flies, is at most
   `rejoin_m` ahead of where it stands rejoins the pass: its setpoints resume, and if it is
   still in the hold mode the bridge commanded it is switched back to GUIDED / OFFBOARD
-  (`mode_orders.resume_order`: the bridge put it there, so it may take it back; one a pilot switched
-  to another mode is not taken back). One farther behind cannot keep the pass without a
-  sprint: it keeps holding and is reported `behind` (for the planner to resume the swarm from
-  where it stands, or replan without it). A vehicle without a target (the planner's
-  survivors' plan gives it NaN) keeps holding.
+  (`mode_orders.resume_order`: the bridge put it there, so it may take it back; one a pilot
+  switched to another mode is not taken back). One farther behind cannot keep the pass without
+  a sprint: it keeps holding and is reported `behind` (for the planner to resume the swarm
+  from where it stands, or replan without it). A vehicle without a target (the planner's
+  survivors' plan gives it NaN) keeps holding. Heard again through a plan other than the one
+  flown, or a heartbeat naming one, the bridge waits for that plan before any rejoin
+  (`flight_state.FlightState.gcs_heard`): the planner may have re-planned without a held UAV
+  during the silence.
 """
 from __future__ import annotations
 
@@ -118,8 +121,7 @@ class Holding:
         self._stopped = set(self._uavs)
         self._gcs_held, self._no_target = set(self._uavs), set()
         self.behind = {}
-        self.resume.release()
-        self.hold.engage(self._uavs)
+        self._order_hold(self._uavs)
         self._emit(-1, "warn", f"{why}: stopping the setpoints and commanding "
                                f"{self.hold.mode.name} to every vehicle")
 
@@ -157,8 +159,7 @@ class Holding:
             if v.uav in self._stopped or lag is None or lag <= rejoin_m:
                 continue
             self._stopped.add(v.uav)
-            self.resume.release([v.uav])
-            self.hold.engage([v.uav])
+            self._order_hold([v.uav])
             self.behind[v.uav] = (f"{lag:.2f} m behind its target, more than the "
                                   f"{rejoin_m:.2f} m it may catch up: cannot keep the pass, "
                                   "keeps holding")
@@ -185,7 +186,7 @@ class Holding:
         targets = {k for k, p in enumerate(formation) if p is not None}
         if not targets:
             if flown_before and not self.held:
-                self.hold.engage(self._uavs)
+                self._order_hold(self._uavs)
                 self._emit(-1, "warn", "every pose NaN: the mission stopped; commanding "
                                        f"{self.hold.mode.name} to every vehicle")
             return
@@ -196,9 +197,15 @@ class Holding:
         if kept:  # (lost meanwhile: the survivors' plan gives it NaN; never into their way)
             self._no_target.update(kept)
             self._stopped.update(kept)
-            self.hold.engage(kept)
+            self._order_hold(kept)
             self._emit(-1, "info", "no target in the new plan for "
                                    f"{', '.join(uav_name(k) for k in kept)}: keeps holding")
+
+    def _order_hold(self, uavs: Sequence[int]) -> None:
+        # One order per vehicle: a resume still engaged (a rejoin just before the plan that
+        # took the UAV out) would alternate with the hold and leave it flying.
+        self.resume.release(uavs)
+        self.hold.engage(uavs)
 
     def stopped(self, v: WatchedVehicle) -> bool:
         """No setpoints to `v` (held for the ground's silence, not given back)."""

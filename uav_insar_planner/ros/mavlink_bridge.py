@@ -25,7 +25,8 @@ Subscribes  formation (geometry_msgs/PoseArray, reliable + transient_local, dept
             counted (`bad_plan_messages` on /diagnostics), and the formation flown stays;
             gcs/heartbeat (std_msgs/Header, best effort, ros/gcs_link.py): with the plan
             and start messages, what tells the bridge the ground station is there
-            (`gcs_timeout_s`);
+            (`gcs_timeout_s`); heard again after a hold through a plan other than the one
+            flown (or a heartbeat naming one), the held vehicles wait for that plan;
             formation/start (std_msgs/Header, latched) with pass_start planner: the wall-clock
             start of the flown plan's pass (ros/start_msgs.py, validated, `bad_start_messages`).
 Publishes   uav{K}/mavlink/claim (std_msgs/String, latched) per UAV flown (ros/claims.py);
@@ -103,7 +104,7 @@ class MavlinkBridgeNode(Node):
             ns, topics.mavlink_pose(k)), topics.DEPTH) for k in uavs}
         self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, topics.DEPTH)
         self._last_pose_age: dict[int, float | None] = dict.fromkeys(uavs)
-        self.gcs = GcsLink(self, self.bridge.gcs_heard, ns)
+        self.gcs = GcsLink(self, self.bridge.gcs_heard, ns, lambda: self._gate.current)
         self._gate = PlanGate(self, self._on_plan, swarm_ns=ns,  # validated, one at a time
                               on_message=self.gcs.heard)
         self._starts = (StartFollower(self, ns, lambda: self._gate.current,

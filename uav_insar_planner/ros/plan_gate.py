@@ -22,8 +22,9 @@ the sole publisher of both topics in the ROS graph:
 With `flown_topic` (an agent's `uav{K}/plan`), the plan in use is published there
 (std_msgs/String, latched) as its identity label, for the planner to report which plan each
 agent flies. `prefix` starts every log line (e.g. "uav1: "). The topics are those of
-`swarm_ns` (topics.swarm_namespace; default the node's namespace). `on_message(what)`, when
-given, hears of every valid message (the bridge's ground-station link, ros/gcs_link.py).
+`swarm_ns` (topics.swarm_namespace; default the node's namespace). `on_message(what, stamp)`,
+when given, hears of every valid message and its plan's stamp (the bridge's ground-station
+link, ros/gcs_link.py).
 """
 from __future__ import annotations
 
@@ -123,7 +124,7 @@ class PlanGate:
     def __init__(self, node: Node, on_plan: Callable[[Formation, PowerSchedule], None],
                  prefix: str = "", flown_topic: str | None = None,
                  swarm_ns: str | None = None,
-                 on_message: Callable[[str], None] | None = None) -> None:
+                 on_message: Callable[[str, tuple[int, int]], None] | None = None) -> None:
         self._node, self._on_plan, self._prefix = node, on_plan, prefix
         self._on_message = on_message
         self._pairing = PlanPairing()
@@ -175,7 +176,7 @@ class PlanGate:
 
     def _heard(self, topic: str, stamp: tuple[int, int]) -> None:
         if self._on_message is not None:
-            self._on_message(f"{topic} {stamp[0]}.{stamp[1]:09d}")
+            self._on_message(f"{topic} {stamp[0]}.{stamp[1]:09d}", stamp)
 
     def _check(self) -> None:
         log = self._node.get_logger()

@@ -14,7 +14,8 @@ Publishes (names relative to the node's namespace, except /diagnostics):
   formation/markers        visualization_msgs/MarkerArray, latched: the plan (ros/markers.py)
   formation/markers/flown  visualization_msgs/MarkerArray: the agents' positions and paths
   gcs/heartbeat     std_msgs/Header, best effort, every 0.5 s (ros/gcs_link.py): the ground
-                    station is alive; a bridge with gcs_timeout_s holds without it
+                    station is alive, and the plan it flies (frame_id: the plan's label); a
+                    bridge with gcs_timeout_s holds without it
   /diagnostics      diagnostic_msgs/DiagnosticArray: the plan (OK / ERROR), other planners on
                     `formation` (ERROR, ros/plan_watch.py), the swarm (`planner: swarm`,
                     ros/swarm_watch.py) and, once a second, each UAV's rate margin, position
@@ -109,7 +110,7 @@ class PlannerNode(Node):
         self._plan_id: PlanId | None = None  # the identity _plan was published under
         self._plans = PlanWatch(self)  # other planners, the plan each agent flies
         self._markers = PlannerMarkers(self)
-        self._heartbeat = GcsHeartbeat(self)
+        self._heartbeat = GcsHeartbeat(self, self._published_plan)
         self.create_service(Trigger, topics.REPLAN, self._on_replan)
         self._pending: tuple[Params, str] | None = None
         guard_sets(self)
@@ -234,6 +235,10 @@ class PlannerNode(Node):
         self._publish_diagnostics()
 
     # --- publishing ----------------------------------------------------------------------
+    def _published_plan(self) -> PlanId | None:
+        with self._state_lock:
+            return self._plan_id
+
     def _publish_plan(self, plan: Plan) -> None:
         """Both messages under a new identity (plan_msgs: stamps unique per planner)."""
         with self._state_lock:

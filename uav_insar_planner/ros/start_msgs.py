@@ -78,12 +78,12 @@ class StartFollower:
     """Subscribes `formation/start` of `swarm_ns` and calls `set_start(wall_time_s, label,
     offset_m)`
     for the start of the plan flown (`flown()`, the PlanGate's current), on arrival and on
-    `plan_adopted()`. `dropped` counts the messages refused by validation; `on_message(what)`
-    hears every valid one (the ground station is there: ros/gcs_link.py)."""
+    `plan_adopted()`. `dropped` counts the messages refused by validation; `on_message(what,
+    plan stamp)` hears every valid one (the ground station is there: ros/gcs_link.py)."""
 
     def __init__(self, node: Node, swarm_ns: str, flown: Callable[[], PlanId | None],
                  set_start: Callable[[float, str, float], None], prefix: str = "",
-                 on_message: Callable[[str], None] | None = None) -> None:
+                 on_message: Callable[[str, tuple[int, int]], None] | None = None) -> None:
         self._flown, self._set_start, self._prefix = flown, set_start, prefix
         self._on_message = on_message
         self._starts: dict[PlanId, tuple[float, float]] = {}
@@ -103,7 +103,7 @@ class StartFollower:
                 self._log.warning(self._prefix + line)
             return
         if self._on_message is not None:
-            self._on_message(f"{topics.FORMATION_START} of {plan_id.label}")
+            self._on_message(f"{topics.FORMATION_START} of {plan_id.label}", plan_id.stamp)
         self._starts.pop(plan_id, None)  # (re-inserted: the newest arrival last)
         self._starts[plan_id] = (start, offset)
         while len(self._starts) > KEPT:

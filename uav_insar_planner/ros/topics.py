@@ -147,8 +147,10 @@ INTERFACE: tuple[TopicSpec, ...] = (
               "each agent's latest uav{k}/pose and the path it flew (ros/markers.py)"),
     TopicSpec(GCS_HEARTBEAT, "std_msgs/msg/Header", "GCS_HEARTBEAT_QOS", _PLANNER, _BRIDGE,
               f"the ground station is alive, every {GCS_HEARTBEAT_PERIOD_S:g} s: stamp = the "
-              "planner's wall clock, frame_id = its full node name (ros/gcs_link.py); a bridge "
-              "with gcs_timeout_s holds without it"),
+              "planner's wall clock, frame_id = the label of its current plan (plan /planner "
+              "SEC.NANOSEC), before the first its full node name (ros/gcs_link.py); a bridge "
+              "with gcs_timeout_s holds without it, and after such a hold waits for the plan it "
+              "names"),
     TopicSpec(DIAGNOSTICS, "diagnostic_msgs/msg/DiagnosticArray", "DEPTH", _PLANNER + _BRIDGE,
               _PLANNER, "the planner's plan, formation publishers, swarm and per-UAV statuses; "
               "the bridge's per-vehicle link statuses, which the planner's swarm watch reads"),
