@@ -5,12 +5,12 @@ node, holds exactly the registry's topics and services of each, with its types a
 from __future__ import annotations
 
 import signal
+import socket
 import subprocess
 
 import process_group
 import pytest
 
-from uav_insar_planner.demo.processes import free_udp_ports
 from uav_insar_planner.param_specs.nodes import NODE_SPECS
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.topics import INTERFACE, QOS_PROFILES, TopicSpec
@@ -137,6 +137,20 @@ def _stop(procs: list[subprocess.Popen], timeout: float = 10.0) -> None:
         except subprocess.TimeoutExpired:
             pass
         process_group.kill_group(proc)
+
+
+def free_udp_ports(count: int) -> list[int]:
+    """`count` distinct UDP ports on 127.0.0.1 free now (bound together, released). The
+    bridge binds them a moment later: a port another process takes in between fails the test
+    (the demo's vehicles bind port 0 instead, processes.start_vehicle)."""
+    socks = [socket.socket(socket.AF_INET, socket.SOCK_DGRAM) for _ in range(count)]
+    try:
+        for sock in socks:
+            sock.bind(("127.0.0.1", 0))
+        return [sock.getsockname()[1] for sock in socks]
+    finally:
+        for sock in socks:
+            sock.close()
 
 
 def test_the_running_nodes_create_exactly_the_registry(watcher, procs):

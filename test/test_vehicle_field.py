@@ -6,7 +6,7 @@ loopback UDP."""
 from __future__ import annotations
 
 import math
-import subprocess
+import os
 import time
 
 import numpy as np
@@ -14,7 +14,7 @@ import pytest
 from mavlink_fakes import MAV, FakePeer, wait_until
 from process_group import kill_group
 
-from uav_insar_planner.demo.processes import executable, free_udp_ports
+from uav_insar_planner.demo.processes import start_vehicle
 from uav_insar_sim.physics.gauss_markov import GaussMarkov
 from uav_insar_sim.vehicle.autopilot import KP
 from uav_insar_sim.vehicle.cli import main
@@ -66,12 +66,10 @@ def test_a_hovering_vehicle_reports_a_wandering_position():
     about where it is by about the std, smoothly, the same error in LOCAL_POSITION_NED and
     GLOBAL_POSITION_INT, and velocities without it."""
     sigma, truth = 0.4, np.array([3.0, 4.0, -10.0])
-    (port,) = free_udp_ports(1)
-    proc = subprocess.Popen([*executable("uav-insar-vehicle"), "--sysid", "5", "--listen",
-                             f"udpin:127.0.0.1:{port}", "--airborne",
-                             "--start-ned", *map(str, truth), "--position-noise-std",
-                             str(sigma), "--noise-seed", "3"],
-                            stdout=subprocess.PIPE, text=True, start_new_session=True)
+    proc, port = start_vehicle(["--sysid", "5", "--airborne", "--start-ned", *map(str, truth),
+                                "--position-noise-std", str(sigma), "--noise-seed", "3"],
+                               "127.0.0.1", 0, dict(os.environ), "[vehicle5]")
+    assert port is not None, "the vehicle did not start"
     gcs = FakePeer(255, 191, dest=("127.0.0.1", port), heartbeat_hz=2.0,
                    mav_type=MAV.MAV_TYPE_GCS, autopilot=MAV.MAV_AUTOPILOT_INVALID)
     try:

@@ -73,8 +73,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         if not mission.start_agents():
             return EXIT_CRASH
-        mission.start_planner_and_mavlink()
-        if not mission.wait_for_plan():
+        if not mission.start_planner_and_mavlink() or not mission.wait_for_plan():
             return EXIT_CRASH
         complete, flew_pass, kill_lines = mission.fly()
         mission.print_tables(kill_lines)

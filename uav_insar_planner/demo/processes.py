@@ -6,11 +6,11 @@ either echoed line by line with a prefix, as ros2 launch does, or left in its pi
 """
 from __future__ import annotations
 
+import itertools
 import os
 import random
 import shutil
 import signal
-import socket
 import subprocess
 import sys
 import threading
@@ -63,13 +63,34 @@ def start_process(cmd: Sequence[str], env: dict[str, str],
     proc = subprocess.Popen(list(cmd), env=env, stdout=subprocess.PIPE,
                             stderr=subprocess.STDOUT, text=True, start_new_session=True)
     if echo_prefix is not None:
-        def pump() -> None:
-            for line in proc.stdout:
-                with PRINT_LOCK:
-                    print(f"{echo_prefix} {line.rstrip()}", flush=True)
-
-        threading.Thread(target=pump, daemon=True).start()
+        echo(proc, echo_prefix)
     return proc
+
+
+def echo(proc: subprocess.Popen, prefix: str, *first: str) -> None:
+    """Print the lines `first`, then every line of proc's output as it comes, each after
+    `prefix` (a thread of its own)."""
+    def pump() -> None:
+        for line in itertools.chain(first, proc.stdout):
+            with PRINT_LOCK:
+                print(f"{prefix} {line.rstrip()}", flush=True)
+
+    threading.Thread(target=pump, daemon=True).start()
+
+
+def start_vehicle(args: Sequence[str], host: str, port: int, env: dict[str, str],
+                  echo_prefix: str) -> tuple[subprocess.Popen, int | None]:
+    """Start `uav-insar-vehicle ARGS --listen udpin:HOST:PORT` and wait for its first line,
+    which names the port it bound (`... on udpin:HOST:PORT`): with `port` 0, the one the
+    system chose, taken by nobody else between the choice and the bind (a port found free and
+    released first was once taken in between by a busy machine). Returns the process, its
+    output echoed from then on, and that port (None: it did not start; its lines say why)."""
+    proc = start_process([*executable("uav-insar-vehicle"), *args, "--listen",
+                          f"udpin:{host}:{port}"], env)
+    first = proc.stdout.readline()
+    echo(proc, echo_prefix, first)
+    found = first.rstrip().rsplit(f" on udpin:{host}:", 1)
+    return proc, int(found[1]) if len(found) == 2 and found[1].isdigit() else None
 
 
 def stop_node(proc: subprocess.Popen, timeout: float = STOP_TIMEOUT_S) -> int:
@@ -98,15 +119,3 @@ def stop_nodes(procs: Sequence[subprocess.Popen], timeout: float = STOP_TIMEOUT_
 def random_domain_id() -> int:
     """A random domain id in 1..101 (well inside Fast DDS's 0..232)."""
     return random.randint(1, 101)
-
-
-def free_udp_ports(count: int) -> list[int]:
-    """`count` distinct UDP ports on 127.0.0.1 that are free now (bound together, released)."""
-    socks = [socket.socket(socket.AF_INET, socket.SOCK_DGRAM) for _ in range(count)]
-    try:
-        for sock in socks:
-            sock.bind(("127.0.0.1", 0))
-        return [sock.getsockname()[1] for sock in socks]
-    finally:
-        for sock in socks:
-            sock.close()

@@ -15,11 +15,9 @@ from uav_insar_planner.demo.kill import kill_agent
 from uav_insar_planner.demo.processes import (
     PRINT_LOCK,
     STOP_TIMEOUT_S,
-    executable,
-    free_udp_ports,
     ros_env,
     start_node,
-    start_process,
+    start_vehicle,
     stop_nodes,
 )
 from uav_insar_planner.demo.recorder import recorder_ready, start_recorder, stop_recorder
@@ -74,23 +72,30 @@ def bridge_args(ports: Sequence[int], per_uav_stacks: bool) -> list[list[str]]:
 
 
 def start_mavlink(ports: Sequence[int], pass_s: float, common: Sequence[str],
-                  env: dict[str, str], per_uav_stacks: bool = False) -> list[subprocess.Popen]:
+                  env: dict[str, str], per_uav_stacks: bool = False
+                  ) -> tuple[list[subprocess.Popen], list[int] | None]:
     """One vehicle per port (sysid FIRST_SYSID + k, airborne above agent k's home, listening
-    on 127.0.0.1:ports[k]) and the bridge(s) sending to them (`bridge_args`), the pass
-    `pass_s` long; the vehicles first, so the bridges' first datagrams find them."""
-    procs = [start_process([*executable("uav-insar-vehicle"), "--sysid",
-                            str(FIRST_SYSID + k), "--listen", f"udpin:127.0.0.1:{port}",
-                            "--airborne", "--start-ned", str(VEHICLE_HOME_Y_M),
-                            str(VEHICLE_SPACING_M * k), str(-VEHICLE_START_HEIGHT_M)],
-                           env, f"[vehicle{FIRST_SYSID + k}]")
-             for k, port in enumerate(ports)]
-    for k, wiring in enumerate(bridge_args(ports, per_uav_stacks)):
+    on 127.0.0.1:ports[k], 0: a port the system chooses) and the bridge(s) sending to them
+    (`bridge_args`), the pass `pass_s` long; the vehicles first, so the bridges' first
+    datagrams find them. Returns the processes and the vehicles' ports (None, and no bridge:
+    a vehicle did not start)."""
+    procs, bound = [], []
+    for k, port in enumerate(ports):
+        proc, found = start_vehicle(
+            ["--sysid", str(FIRST_SYSID + k), "--airborne", "--start-ned",
+             str(VEHICLE_HOME_Y_M), str(VEHICLE_SPACING_M * k), str(-VEHICLE_START_HEIGHT_M)],
+            "127.0.0.1", port, env, f"[vehicle{FIRST_SYSID + k}]")
+        procs.append(proc)
+        bound.append(found)
+    if None in bound:
+        return procs, None
+    for k, wiring in enumerate(bridge_args(bound, per_uav_stacks)):
         procs.append(start_node("mavlink_bridge", [
             *common, *wiring, "-p", "velocity_feedforward:=true",
             "-p", f"capture_radius_m:={CAPTURE_RADIUS_M}",
             "-p", f"track_duration_s:={float(pass_s)}"], env,
             f"[{uav_name(k)}/bridge]" if per_uav_stacks else "[bridge]"))
-    return procs
+    return procs, bound
 
 
 def pass_duration_s(params: Params) -> float:
@@ -225,25 +230,32 @@ class Mission:
             return ["-r", f"__ns:=/{uav_name(k)}"]
         return ["-r", f"__node:={agent_name(k)}"]
 
-    def start_planner_and_mavlink(self) -> None:
-        """Start the planner and, unless --no-mavlink, one vehicle per UAV and the bridge."""
+    def start_planner_and_mavlink(self) -> bool:
+        """Start the planner and, unless --no-mavlink, one vehicle per UAV and the bridge;
+        False when a vehicle did not start."""
         args = self.args
         own = [] if args.uav_timeout is None else ["-p", f"uav_timeout_s:={args.uav_timeout}"]
         if not args.no_mavlink:  # the planner starts the pass once every UAV is this close
             own += ["-p", f"capture_radius_m:={CAPTURE_RADIUS_M}"]
         self.procs.append(start_node("planner", [*self.common, *own], self.env, "[planner]"))
         if args.no_mavlink:
-            return
-        self.ports = ([args.mavlink_base_port + PORT_STEP * k for k in self.swarm]
-                      if args.mavlink_base_port else free_udp_ports(len(self.swarm)))
+            return True
+        asked = ([args.mavlink_base_port + PORT_STEP * k for k in self.swarm]
+                 if args.mavlink_base_port else [0] * len(self.swarm))
+        procs, ports = start_mavlink(asked, self.pass_s, self.common, self.env,
+                                     args.per_uav_stacks)
+        self.procs += procs
+        if ports is None:
+            print("demo: a MAVLink vehicle did not start (see its lines above)", flush=True)
+            return False
+        self.ports = ports
         flown_by = ("one bridge per UAV (/uavK/mavlink_bridge, uav_id K; the planner starts "
                     "every pass at one instant)" if args.per_uav_stacks else "the bridge")
         print(f"demo: MAVLink vehicles sysid {FIRST_SYSID}..{FIRST_SYSID + len(self.ports) - 1} on "
               f"UDP ports {', '.join(map(str, self.ports))}, flown by {flown_by} for the whole "
               f"mission (a pass of {self.pass_s:g} s); the agents take their positions from "
               "them (position_source autopilot)", flush=True)
-        self.procs += start_mavlink(self.ports, self.pass_s, self.common, self.env,
-                                    args.per_uav_stacks)
+        return True
 
     def wait_for_plan(self) -> bool:
         """Wait for the first plan and echo its /formation; False when none came (or the

@@ -94,7 +94,10 @@ def main(argv: list[str] | None = None) -> int:
     stop = threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stop.set())
-    print(f"vehicle sysid {args.sysid} ({args.autopilot}) on {args.listen}", flush=True)
+    # The port bound, for `udpin:HOST:0` (what the demo starts it with, then reads here).
+    listen = (args.listen if vehicle.port is None else
+              f"{args.listen.rsplit(':', 1)[0]}:{vehicle.port}")
+    print(f"vehicle sysid {args.sysid} ({args.autopilot}) on {listen}", flush=True)
     try:
         vehicle.run(stop)
     finally:
