@@ -18,10 +18,16 @@ def kill_group(proc: subprocess.Popen, sig: int = signal.SIGKILL) -> None:
         proc.wait(timeout=10)
 
 
+# A demo's own stop: each node's SIGINT, SIGTERM and stack dump (processes.stop_nodes).
+STOP_GRACE_S = 15.0
+
+
 def run(args: Sequence[str], *, timeout: float | None = None, input: str | bytes | None = None,
         capture_output: bool = False, check: bool = False,
         **popen: object) -> subprocess.CompletedProcess:
-    """subprocess.run in a new session: on exit, timeout or error the group is killed."""
+    """subprocess.run in a new session: on exit, timeout or error the group is killed, after
+    a Ctrl-C (`interrupt_group`) when the process still runs: a demo timed out stops the nodes
+    it started in sessions of their own, which a SIGKILL to its group alone left running."""
     if capture_output:
         popen.setdefault("stdout", subprocess.PIPE)
         popen.setdefault("stderr", subprocess.PIPE)
@@ -31,7 +37,7 @@ def run(args: Sequence[str], *, timeout: float | None = None, input: str | bytes
         try:
             out, err = proc.communicate(input, timeout=timeout)
         finally:
-            kill_group(proc)
+            interrupt_group(proc, STOP_GRACE_S)
     done = subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
     if check:
         done.check_returncode()
