@@ -95,8 +95,9 @@ AGENT_SCENARIO_SPECS = tuple(SPEC_BY_NAME[n] for n in (
     "comm_bandwidth_hz", "ref_snr_db", "rate_min_mbps", "rate_margin", "p_com_max_db",
     "e_com_max_j"))
 
-#: The planner's gcs/heartbeat period [s] (ros/gcs_link.py): 2 Hz is ~100 bytes/s on the
-#: radio, and a timeout of a few seconds then spans several heartbeats.
+#: The planner's gcs/heartbeat period [s] (ros/gcs_link.py): a 51-byte message naming the
+#: plan (serialized; about 100 bytes with RTPS, UDP and IP headers), so about 1 kB/s on the
+#: radio, and the shortest timeout spans ten heartbeats.
 GCS_HEARTBEAT_PERIOD_S = 0.1
 #: The smallest non-zero gcs_timeout_s: ten heartbeat periods (at 30 % loss all ten are lost
 #: with probability 6e-6: a hold means the ground is gone, not a lost heartbeat).

@@ -13,7 +13,7 @@ Publishes (names relative to the node's namespace, except /diagnostics):
                     carry the plan's identity (ros/plan_msgs.py)
   formation/markers        visualization_msgs/MarkerArray, latched: the plan (ros/markers.py)
   formation/markers/flown  visualization_msgs/MarkerArray: the agents' positions and paths
-  gcs/heartbeat     std_msgs/Header, best effort, every 0.5 s (ros/gcs_link.py): the ground
+  gcs/heartbeat     std_msgs/Header, best effort, every 0.1 s (ros/gcs_link.py): the ground
                     station is alive, and the plan it flies (frame_id: the plan's label); a
                     bridge with gcs_timeout_s holds without it
   /diagnostics      diagnostic_msgs/DiagnosticArray: the plan (OK / ERROR), other planners on
