@@ -96,7 +96,7 @@ AGENT_SCENARIO_SPECS = tuple(SPEC_BY_NAME[n] for n in (
     "e_com_max_j"))
 
 #: The planner's gcs/heartbeat period [s] (ros/gcs_link.py): a 51-byte message naming the
-#: plan (serialized; about 100 bytes with RTPS, UDP and IP headers), so about 1 kB/s on the
+#: plan (serialized; about 135 bytes with RTPS, UDP and IP headers), so about 1.4 kB/s on the
 #: radio, and the shortest timeout spans ten heartbeats.
 GCS_HEARTBEAT_PERIOD_S = 0.1
 #: The smallest non-zero gcs_timeout_s: ten heartbeat periods (at 30 % loss all ten are lost
