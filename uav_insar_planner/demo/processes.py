@@ -80,17 +80,21 @@ def echo(proc: subprocess.Popen, prefix: str, *first: str) -> None:
 
 def start_vehicle(args: Sequence[str], host: str, port: int, env: dict[str, str],
                   echo_prefix: str) -> tuple[subprocess.Popen, int | None]:
-    """Start `uav-insar-vehicle ARGS --listen udpin:HOST:PORT` and wait for its first line,
-    which names the port it bound (`... on udpin:HOST:PORT`): with `port` 0, the one the
-    system chose, taken by nobody else between the choice and the bind (a port found free and
-    released first was once taken in between by a busy machine). Returns the process, its
-    output echoed from then on, and that port (None: it did not start; its lines say why)."""
+    """Start `uav-insar-vehicle ARGS --listen udpin:HOST:PORT` and wait for the line that
+    names the port it bound (`vehicle sysid ... on udpin:HOST:PORT`): with `port` 0, the one
+    the system chose, taken by nobody else between the choice and the bind (a port found free
+    and released first was once taken in between by a busy machine). Returns the process, its
+    output echoed (from its start), and that port (None: it ended first; its lines say why)."""
     proc = start_process([*executable("uav-insar-vehicle"), *args, "--listen",
                           f"udpin:{host}:{port}"], env)
-    first = proc.stdout.readline()
-    echo(proc, echo_prefix, first)
-    found = first.rstrip().rsplit(f" on udpin:{host}:", 1)
-    return proc, int(found[1]) if len(found) == 2 and found[1].isdigit() else None
+    lines, bound = [], None
+    while bound is None and (line := proc.stdout.readline()):
+        lines.append(line)
+        head, sep, tail = line.rstrip().rpartition(f" on udpin:{host}:")
+        if sep and head.startswith("vehicle sysid ") and tail.isdigit():
+            bound = int(tail)
+    echo(proc, echo_prefix, *lines)
+    return proc, bound
 
 
 def stop_node(proc: subprocess.Popen, timeout: float = STOP_TIMEOUT_S) -> int:
