@@ -142,5 +142,9 @@ def test_a_planner_start_holds_until_its_instant_then_flies_and_a_repeat_keeps_t
     # the same instant under a re-plan's identity, read a moment later: the clock stays
     assert planner_start(track, 1000.0, 11.0, 999.0 + 2e-6, "plan /planner 2.0") == ""
     assert track.t_start == pytest.approx(12.0)
+    # and heard again by a thread held 20 ms between its two clock reads (a busy computer):
+    # the same start, not a new one from a hover
+    assert planner_start(track, 1000.0, 11.0, 999.0 + 0.02, "plan /planner 2.0") == ""
+    assert track.t_start == pytest.approx(12.0)
     late = planner_start(track, 990.0, 11.0, 999.0, "plan /planner 3.000000000")
     assert "ago (joining the pass)" in late and track.t_start == pytest.approx(2.0)

@@ -21,8 +21,10 @@ from uav_insar_planner.mavlink.sequencer import ArmingSequence
 from uav_insar_planner.mavlink.supervision import WatchedVehicle
 from uav_insar_planner.mavlink.trajectory import PassTrajectory, from_hover
 
-# The same start re-published under a re-plan's identity converts to a clock a few
-# microseconds off: below this the running track clock is kept, not nudged.
+# The same start again (re-sent, or re-published under a re-plan's identity), compared as
+# the planner sent it: its wall-clock instant and offset. Never as the clock converted at
+# arrival: a thread delayed between its two clock reads (a busy computer; the GIL switches
+# every 5 ms) moved that by milliseconds, and each repeat restarted the pass from a hover.
 SAME_START_S = 1e-3
 
 
@@ -68,12 +70,13 @@ def planner_start(pass_: PassTrajectory, wall_time_s: float, mono_now: float,
     or the same start again)."""
     if pass_.formation is None:
         return ""
-    t_start = mono_now + (wall_time_s - wall_now)
     t_offset = offset_m / pass_.speed_mps if pass_.speed_mps > 0.0 else 0.0
-    if (pass_.t_start is not None and abs(pass_.t_start - t_start) < SAME_START_S
+    if (pass_.t_start is not None and pass_.start_wall is not None
+            and abs(pass_.start_wall - wall_time_s) < SAME_START_S
             and abs(pass_.t_offset - t_offset) < SAME_START_S):
         return ""
-    pass_.t_start, pass_.t_offset = t_start, t_offset
+    t_start = mono_now + (wall_time_s - wall_now)
+    pass_.t_start, pass_.t_offset, pass_.start_wall = t_start, t_offset, wall_time_s
     pass_.ramp = from_hover(t_start, mono_now)
     ahead = t_start - mono_now
     when = f"in {ahead:.2f} s" if ahead >= 0 else f"{-ahead:.2f} s ago (joining the pass)"

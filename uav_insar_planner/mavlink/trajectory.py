@@ -89,6 +89,7 @@ class PassTrajectory:
         self.formation: list[Vec3 | None] | None = None
         self.t_start: float | None = None
         self.t_offset = 0.0  # s: how far into the pass t_start is (a resumed pass)
+        self.start_wall: float | None = None  # the planner's instant t_start was set from
         self.ramp = True  # the pass starts from a hover at t_start (`ramp_up`)
 
     def set_formation(self, clean: list[Vec3 | None]) -> bool:
@@ -101,7 +102,7 @@ class PassTrajectory:
             for a, b in zip(old, clean, strict=True))
         self.formation = clean
         if not same_start and self.t_start is not None:
-            self.t_start, self.t_offset = None, 0.0
+            self.t_start, self.t_offset, self.start_wall = None, 0.0, None
             return True
         return False
 
