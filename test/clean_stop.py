@@ -5,12 +5,31 @@ before SIGKILL), so a failed check shows where it hung. An agent hung at its sto
 in some thousands of CI stops; a bare `codes == [0, ...]` left only the -9."""
 from __future__ import annotations
 
+import shutil
 import subprocess
 from collections.abc import Sequence
 
 from uav_insar_planner.demo.processes import stop_nodes
 
 TAIL_CHARS = 6000
+GDB_TIMEOUT_S = 60.0
+
+
+def native_stacks(proc: subprocess.Popen) -> None:
+    """Print every thread's native stack of `proc`, about to be SIGKILLed, with gdb when
+    there is one. A node hung inside the middleware holds the GIL there, where its Python
+    stacks end (rclpy's destroy_node, once)."""
+    gdb = shutil.which("gdb")
+    if gdb is None:
+        return
+    try:
+        out = subprocess.run([gdb, "-p", str(proc.pid), "-batch",
+                              "-ex", "set print frame-arguments none",
+                              "-ex", "thread apply all bt"],
+                             capture_output=True, text=True, timeout=GDB_TIMEOUT_S).stdout
+    except subprocess.TimeoutExpired:
+        out = "(gdb did not finish)"
+    print(f"--- native stacks of {_head(proc)}\n{out}")
 
 
 def _head(proc: subprocess.Popen) -> str:
@@ -20,7 +39,7 @@ def _head(proc: subprocess.Popen) -> str:
 def stop_and_read(procs: Sequence[subprocess.Popen]) -> tuple[list[int], list[str]]:
     """stop_nodes(procs), then each one's output (its piped stdout, stderr merged). The tail of
     every output is printed too: pytest shows it when the test fails, whatever failed."""
-    codes = stop_nodes(procs)
+    codes = stop_nodes(procs, before_kill=native_stacks)
     outs = [proc.stdout.read() if proc.stdout is not None else "" for proc in procs]
     for proc, code, out in zip(procs, codes, outs, strict=True):
         print(f"--- exited {code}: {_head(proc)}\n{out[-TAIL_CHARS:]}")

@@ -57,6 +57,7 @@ def _crossing(track: np.ndarray, line: float) -> np.ndarray:
 @pytest.fixture(scope="module")
 def flown(tmp_path_factory):
     """One recorded mission; what a watcher saw of it."""
+    from clean_stop import native_stacks
     from conftest import private_graph
 
     from uav_insar_planner.demo.processes import executable, start_node, start_process, stop_nodes
@@ -94,7 +95,7 @@ def flown(tmp_path_factory):
             w.spin_until(lambda: False, 1.5)
             code, _ = stop_recorder(procs[0])
         finally:
-            codes = stop_nodes(procs)
+            codes = stop_nodes(procs, before_kill=native_stacks)
     # What a process that did not stop cleanly printed: its stacks, when it hung (stop_nodes
     # dumps them before SIGKILL; an agent needed SIGKILL once in CI, and once in the demo).
     unclean = {i: proc.stdout.read()[-4000:] for i, (proc, c) in enumerate(

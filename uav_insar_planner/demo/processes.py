@@ -15,7 +15,7 @@ import subprocess
 import sys
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from uav_insar_planner.exit_codes import STACK_DUMP_SIGNAL
@@ -103,13 +103,17 @@ def stop_node(proc: subprocess.Popen, timeout: float = STOP_TIMEOUT_S) -> int:
     return stop_nodes([proc], timeout)[0]
 
 
-def stop_nodes(procs: Sequence[subprocess.Popen], timeout: float = STOP_TIMEOUT_S) -> list[int]:
+def stop_nodes(procs: Sequence[subprocess.Popen], timeout: float = STOP_TIMEOUT_S,
+               before_kill: Callable[[subprocess.Popen], None] | None = None) -> list[int]:
     """`stop_node` for all of `procs` at once (each signal to all, then one shared wait), so
     they shut down in parallel; returns their exit codes in order. Before SIGKILL, what is
-    still alive gets STACK_DUMP_SIGNAL and STACK_DUMP_S to print its stacks."""
+    still alive gets STACK_DUMP_SIGNAL and STACK_DUMP_S to print its stacks, then
+    `before_kill(proc)` when given (a test's look at its native stacks)."""
     for sig in (signal.SIGINT, signal.SIGTERM, STACK_DUMP_SIGNAL, signal.SIGKILL):
         alive = [p for p in procs if p.poll() is None]
         for proc in alive:
+            if sig == signal.SIGKILL and before_kill is not None:
+                before_kill(proc)
             proc.send_signal(sig)
         end = time.monotonic() + (STACK_DUMP_S if sig == STACK_DUMP_SIGNAL else timeout)
         for proc in alive:
