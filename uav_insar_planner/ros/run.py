@@ -104,10 +104,13 @@ def _ignore_stop_signals() -> None:
 
 
 # The last of a stop, destroying the node and shutting rcl and the middleware down, once took
-# longer than SIGINT's and SIGTERM's five seconds each (an agent, twice in some hundreds of
-# stops under CI load; where, unknown). Past TEARDOWN_MAX_S every thread's stack is printed (by
+# longer than SIGINT's and SIGTERM's five seconds each (agents and once a planner, a few times
+# in thousands of stops under load). Past TEARDOWN_MAX_S every thread's stack is printed (by
 # faulthandler's own thread, which needs no GIL) and, TEARDOWN_EXIT_S later, the process ends
-# with the node's code: its work is done, and a Ctrl-C must end it.
+# with the node's code: its work is done, and a Ctrl-C must end it. Where it was seen, the
+# hang was inside rclpy's destroy_node (Node.destroy_when_not_in_use: the rosout publisher, the
+# node and the DDS participant), which holds the GIL: then only the stacks come out, and the
+# caller's SIGKILL ends the process (the tests print its native stacks first, with gdb).
 TEARDOWN_MAX_S = 3.0
 TEARDOWN_EXIT_S = 0.5
 
