@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import threading
 import time
+from collections.abc import Iterator
+from contextlib import closing, contextmanager
 
 import pytest
 from mavlink_fakes import MAV, wait_until
@@ -52,12 +54,23 @@ def fly(autopilot: str, **config):
     return vehicle, bridge
 
 
+@contextmanager
+def with_ground(autopilot: str) -> Iterator[tuple[SimVehicle, Bridge, GroundStation]]:
+    """`fly`, with the ground station heard; all three stopped on leaving."""
+    vehicle, bridge = fly(autopilot)
+    ground = GroundStation(bridge)
+    try:
+        yield vehicle, bridge, ground
+    finally:
+        ground.close()
+        bridge.stop()
+        vehicle.stop()
+
+
 @pytest.mark.parametrize("autopilot,flying,holding", [("ardupilot", "GUIDED", "LOITER"),
                                                       ("px4", "OFFBOARD", "HOLD")])
 def test_a_short_silence_rejoins_a_long_one_holds_until_the_pass_resumes_where_it_holds(
         autopilot, flying, holding):
-    vehicle, bridge = fly(autopilot)
-    ground = GroundStation(bridge)
     mode_name = "LOITER" if autopilot == "ardupilot" else "AUTO.LOITER"
 
     def silence() -> float:
@@ -67,7 +80,7 @@ def test_a_short_silence_rejoins_a_long_one_holds_until_the_pass_resumes_where_i
         assert bridge.status()[0].phase == f"holding ({mode_name}): ground station silent"
         return time.monotonic() - silent_at
 
-    try:
+    with with_ground(autopilot) as (vehicle, bridge, ground):
         bridge.set_formation(FORMATION)
         assert wait_until(bridge.track_started, 10.0)
         assert wait_until(lambda: bridge.gcs_state().startswith("heard "), 2.0)
@@ -96,10 +109,6 @@ def test_a_short_silence_rejoins_a_long_one_holds_until_the_pass_resumes_where_i
         assert wait_until(lambda: vehicle.mode == flying, 5.0), vehicle.mode
         assert wait_until(lambda: bridge.status()[0].setpoints_sent > sent + 5, 3.0)
         events = [e.text for e in bridge.drain_events()]
-    finally:
-        ground.close()
-        bridge.stop()
-        vehicle.stop()
     assert abs(target_y - held_y) < 1.5, (target_y, held_y)  # no sprint to the old clock
     silent = [e for e in events if e.startswith("ground station silent for ")]
     assert len(silent) == 2 and "last heard: gcs/heartbeat from /test" in silent[0], events
@@ -111,11 +120,9 @@ def test_a_short_silence_rejoins_a_long_one_holds_until_the_pass_resumes_where_i
 
 
 def test_a_mode_a_pilot_chose_during_the_hold_is_not_taken_back():
-    vehicle, bridge = fly("ardupilot")
-    pilot = mavutil.mavlink_connection(f"udpout:127.0.0.1:{vehicle.port}", source_system=255,
-                                       source_component=MAV.MAV_COMP_ID_MISSIONPLANNER)
-    ground = GroundStation(bridge)
-    try:
+    with with_ground("ardupilot") as (vehicle, bridge, ground), closing(mavutil.mavlink_connection(
+            f"udpout:127.0.0.1:{vehicle.port}", source_system=255,
+            source_component=MAV.MAV_COMP_ID_MISSIONPLANNER)) as pilot:
         bridge.set_formation(FORMATION)
         assert wait_until(lambda: bridge.gcs_state().startswith("heard "), 2.0)
         ground.on = False
@@ -133,11 +140,6 @@ def test_a_mode_a_pilot_chose_during_the_hold_is_not_taken_back():
         time.sleep(1.5)
         assert vehicle.mode == "ALT_HOLD"
         events = [e.text for e in bridge.drain_events()]
-    finally:
-        ground.close()
-        pilot.close()
-        bridge.stop()
-        vehicle.stop()
     assert any("a pilot switched it): not taken back to GUIDED" in e for e in events), events
 
 
@@ -145,9 +147,7 @@ def test_heard_again_with_a_plan_not_flown_here_it_holds_until_that_plan_comes()
     """The planner re-planned during the silence (perhaps without this UAV): its heartbeat
     names the new plan, which the lossy radio delivers later. No rejoin to the old plan: the
     vehicle holds, no setpoints, until the new plan is adopted."""
-    vehicle, bridge = fly("ardupilot")
-    ground = GroundStation(bridge)
-    try:
+    with with_ground("ardupilot") as (vehicle, bridge, ground):
         bridge.set_formation(FORMATION)
         assert wait_until(bridge.track_started, 10.0)
         assert wait_until(lambda: bridge.gcs_state().startswith("heard "), 2.0)
@@ -163,10 +163,6 @@ def test_heard_again_with_a_plan_not_flown_here_it_holds_until_that_plan_comes()
         assert wait_until(lambda: vehicle.mode == "GUIDED", 5.0), vehicle.mode
         assert wait_until(lambda: bridge.status()[0].setpoints_sent > sent + 5, 3.0)
         events = [e.text for e in bridge.drain_events()]
-    finally:
-        ground.close()
-        bridge.stop()
-        vehicle.stop()
     waited = [i for i, e in enumerate(events) if e.startswith(
         "the ground station flies a plan not received here yet")]
     rejoined = [i for i, e in enumerate(events) if "rejoins the pass" in e]
