@@ -5,7 +5,6 @@ node, holds exactly the registry's topics and services of each, with its types a
 from __future__ import annotations
 
 import signal
-import socket
 import subprocess
 
 import process_group
@@ -139,24 +138,10 @@ def _stop(procs: list[subprocess.Popen], timeout: float = 10.0) -> None:
         process_group.kill_group(proc)
 
 
-def free_udp_ports(count: int) -> list[int]:
-    """`count` distinct UDP ports on 127.0.0.1 free now (bound together, released). The
-    bridge binds them a moment later: a port another process takes in between fails the test
-    (the demo's vehicles bind port 0 instead, processes.start_vehicle)."""
-    socks = [socket.socket(socket.AF_INET, socket.SOCK_DGRAM) for _ in range(count)]
-    try:
-        for sock in socks:
-            sock.bind(("127.0.0.1", 0))
-        return [sock.getsockname()[1] for sock in socks]
-    finally:
-        for sock in socks:
-            sock.close()
-
-
 def test_the_running_nodes_create_exactly_the_registry(watcher, procs):
-    ports = free_udp_ports(len(UAVS))
-    # udpin: the bridge only listens, so it sends nothing to any vehicle another test runs.
-    connections = ", ".join(f"'udpin:127.0.0.1:{p}'" for p in ports)
+    # udpin on port 0: the bridge only listens, on ports the kernel picks, so it sends
+    # nothing to any vehicle another test runs and takes no port one may want.
+    connections = ", ".join("'udpin:127.0.0.1:0'" for _ in UAVS)
     started = [
         procs("planner", "-p", "num_slots:=8"),
         # position_source autopilot and pass_start planner: the subscriptions they add exist.
