@@ -147,3 +147,47 @@ def test_a_five_uav_fixed_master_swarm_whose_chain_strips_outgrow_its_columns():
                         "fixed-master", "multilook").feasible
     else:
         assert res.blocking
+
+
+def test_the_rest_refined_heaviest_first_bounds_every_rest_position():
+    """chain_packing._refined_rest cuts only the heaviest coarse cells of the rest (|b| below
+    the strip) into fine ones: it must give what cutting every coarse cell gives, and bound
+    the weight of every feasible slave position there (a slave anywhere on the rest, r0
+    anywhere in the interval)."""
+    from uav_insar_planner.solver.global_opt import kernel, slave_ranges
+
+    rng = np.random.default_rng(3)
+    sc, k = chain_packing.relaxed(make_problem(swarm(6), "proposed", "exact"))
+    r0_best = solve_global(swarm(6), "proposed", "exact").formation  # the chain's r0 region
+    r0_mid = float(np.hypot(*(r0_best[0] - (sc.p.x_t, 0.0))))
+    for width in (1e-3, 0.05):
+        r0a, r0b = r0_mid * (1.0 - width), r0_mid * (1.0 + width)
+        cap_b = slave_ranges.c8_cap(sc, k) * r0b
+        b_top = cap_b - min(chain_packing.STRIP_M, chain_packing.STRIP_FRAC * sc.p.d_min, cap_b)
+        lo, up, _, _ = slave_ranges.slave_box(sc, k, r0a, r0b, np.array([sc.th_lo]),
+                                              np.array([sc.th_hi]))
+        u_lo = lo[0] * np.cos(max(abs(sc.th_lo - sc.th0), abs(sc.th_hi - sc.th0)))
+        cols, rows, coarse = chain_packing._rest_cells(sc, k, r0a, r0b, u_lo, up[0], b_top)
+        got = chain_packing._refined_rest(sc, k, r0a, r0b, cols, rows, coarse)
+        # every coarse cell cut
+        n = chain_packing.REST_COARSEN
+        fine_u = np.concatenate([np.linspace(a, b, n + 1)[:-1] for a, b in
+                                 zip(cols[:-1], cols[1:], strict=True)] + [cols[-1:]])
+        fine_b = np.concatenate([np.linspace(a, b, n + 1)[:-1] for a, b in
+                                 zip(rows[:-1], rows[1:], strict=True)] + [rows[-1:]])
+        every = float(np.max(chain_packing._grid_cells(sc, k, r0a, r0b, fine_u, fine_b)))
+        assert got == pytest.approx(every, rel=1e-12)
+        assert got <= float(np.max(coarse))
+        # positions anywhere in the rest, kept where the ray model allows them
+        m = 200_000
+        u = rng.uniform(u_lo, up[0], m)
+        b = rng.uniform(-b_top, b_top, m)
+        r0 = rng.uniform(r0a, r0b, m)
+        theta, r = sc.th0 + np.arctan2(b, u), np.hypot(u, b)
+        with np.errstate(invalid="ignore"):
+            (lo_a, top_a), (lo_b, top_b) = kernel.range_components(sc, k, r0, theta)
+            ok = ((theta >= sc.th_lo) & (theta <= sc.th_hi)
+                  & (((r >= lo_a) & (r <= top_a)) | ((r >= lo_b) & (r <= top_b))))
+        assert ok.sum() > 1000
+        w = kernel.slave_weight(sc, r0[ok], theta[ok], r[ok])
+        assert float(np.max(w)) <= got * (1.0 + 1e-12)

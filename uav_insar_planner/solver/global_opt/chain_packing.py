@@ -44,6 +44,7 @@ CELL_M = 0.01       # column width along the master's line of sight
 REST_CELL_M = 0.1   # the rest's cells: this wide and REST_ROW_M high
 REST_ROW_M = 0.25
 REST_COARSEN = 4  # the rest first on cells this many times larger each way
+REST_BATCH = 16  # coarse cells of the rest cut into fine ones at a time, heaviest first
 COARSE_CELL_M = 0.05  # a first, cheaper pass of each master interval
 SUB_ROWS = 10       # rows of a strip's column for its weight bound
 STRIP_M = 0.1       # strip width below the C8 cap (as a fraction of d_min at most STRIP_FRAC)
@@ -180,10 +181,11 @@ def group_weight_bound(sc: Problem, group: tuple[int, ...], r0a: float, r0b: flo
              if len(cols) > 1 else np.empty(0))
         strips.append((cols, w, lo_b))
     sums = [_strip_sums(w, math.ceil(d_strip / coarse) - 1, m) for _, w, _ in strips]
-    w_rest = _rest_weight(sc, k, r0a, r0b, u_lo, up_all[0], cap_b - delta, REST_COARSEN)
+    rest = _rest_cells(sc, k, r0a, r0b, u_lo, up_all[0], cap_b - delta)
+    w_rest = float(np.max(rest[2])) if rest[2].size else -math.inf
     best, uses_rest = _combine(sums, w_rest, m)
     if uses_rest:  # the coarse cells of the rest count: bound them on the fine ones
-        w_rest = _rest_weight(sc, k, r0a, r0b, u_lo, up_all[0], cap_b - delta, 1)
+        w_rest = _refined_rest(sc, k, r0a, r0b, *rest)
         best, _ = _combine(sums, w_rest, m)
     if cell_m >= coarse or (refine_if is not None and not refine_if(best)):
         return best
@@ -198,14 +200,42 @@ def group_weight_bound(sc: Problem, group: tuple[int, ...], r0a: float, r0b: flo
     return min(best, _combine(sums, w_rest, m)[0])
 
 
-def _rest_weight(sc: Problem, k: int, r0a: float, r0b: float, u_lo: float, u_hi: float,
-                 b_top: float, coarsen: int) -> float:
-    """W_rest: the largest cell bound over |b| <= b_top, on cells `coarsen` times
-    REST_CELL_M x REST_ROW_M."""
-    cols = np.arange(u_lo, u_hi + coarsen * REST_CELL_M, coarsen * REST_CELL_M)
-    rows = np.linspace(-b_top, b_top, max(2, math.ceil(2 * b_top / (coarsen * REST_ROW_M))) + 1)
-    rest = _grid_cells(sc, k, r0a, r0b, cols, rows)
-    return float(np.max(rest)) if rest.size else -math.inf
+def _rest_cells(sc: Problem, k: int, r0a: float, r0b: float, u_lo: float, u_hi: float,
+                b_top: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(column edges, row edges, cell bounds (columns, rows)) of the rest, |b| <= b_top, on
+    cells REST_COARSEN times REST_CELL_M x REST_ROW_M: their largest bound is a W_rest."""
+    cols = np.arange(u_lo, u_hi + REST_COARSEN * REST_CELL_M, REST_COARSEN * REST_CELL_M)
+    rows = np.linspace(-b_top, b_top,
+                       max(2, math.ceil(2 * b_top / (REST_COARSEN * REST_ROW_M))) + 1)
+    return cols, rows, _grid_cells(sc, k, r0a, r0b, cols, rows)
+
+
+def _refined_rest(sc: Problem, k: int, r0a: float, r0b: float, cols: np.ndarray,
+                  rows: np.ndarray, coarse: np.ndarray) -> float:
+    """W_rest on finer cells: the coarse cells of _rest_cells cut REST_COARSEN x REST_COARSEN
+    each, heaviest first, REST_BATCH at a time, until no coarse cell left whole bounds more
+    than the largest fine one. Every point of the rest is then in a fine cell or in a whole
+    coarse cell, each bounded, so the largest of those bounds is a W_rest (the whole coarse
+    cells left are below it)."""
+    flat = coarse.ravel()
+    order = np.argsort(flat)[::-1]
+    order = order[flat[order] > -np.inf]  # empty cells hold no point of the rest
+    frac = np.arange(REST_COARSEN + 1) / REST_COARSEN
+    best = -math.inf
+    for i in range(0, len(order), REST_BATCH):
+        if flat[order[i]] <= best:
+            return best
+        c, r = np.unravel_index(order[i:i + REST_BATCH], coarse.shape)
+        # each coarse cell's own edges, interpolated: the fine cells tile it exactly
+        u = cols[c, None] + (cols[c + 1] - cols[c])[:, None] * frac
+        b = rows[r, None] + (rows[r + 1] - rows[r])[:, None] * frac
+        u[:, -1], b[:, -1] = cols[c + 1], rows[r + 1]
+        fc, fr = np.meshgrid(np.arange(REST_COARSEN), np.arange(REST_COARSEN), indexing="ij")
+        fc, fr = fc.ravel(), fr.ravel()
+        w = _cells(sc, k, r0a, r0b, u[:, fc].ravel(), u[:, fc + 1].ravel(), b[:, fr].ravel(),
+                   b[:, fr + 1].ravel())
+        best = max(best, float(np.max(w)))
+    return best
 
 
 def _combine(sums: list[np.ndarray], w_rest: float, m: int) -> tuple[float, bool]:
