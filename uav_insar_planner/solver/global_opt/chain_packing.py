@@ -221,6 +221,8 @@ def _refined_rest(sc: Problem, k: int, r0a: float, r0b: float, cols: np.ndarray,
     order = np.argsort(flat)[::-1]
     order = order[flat[order] > -np.inf]  # empty cells hold no point of the rest
     frac = np.arange(REST_COARSEN + 1) / REST_COARSEN
+    fc, fr = np.meshgrid(np.arange(REST_COARSEN), np.arange(REST_COARSEN), indexing="ij")
+    fc, fr = fc.ravel(), fr.ravel()  # each fine cell's column and row within its coarse one
     best = -math.inf
     for i in range(0, len(order), REST_BATCH):
         if flat[order[i]] <= best:
@@ -230,8 +232,6 @@ def _refined_rest(sc: Problem, k: int, r0a: float, r0b: float, cols: np.ndarray,
         u = cols[c, None] + (cols[c + 1] - cols[c])[:, None] * frac
         b = rows[r, None] + (rows[r + 1] - rows[r])[:, None] * frac
         u[:, -1], b[:, -1] = cols[c + 1], rows[r + 1]
-        fc, fr = np.meshgrid(np.arange(REST_COARSEN), np.arange(REST_COARSEN), indexing="ij")
-        fc, fr = fc.ravel(), fr.ravel()
         w = _cells(sc, k, r0a, r0b, u[:, fc].ravel(), u[:, fc + 1].ravel(), b[:, fr].ravel(),
                    b[:, fr + 1].ravel())
         best = max(best, float(np.max(w)))
