@@ -43,10 +43,10 @@ from netlab_swarm import (
 )
 
 from uav_insar_planner.demo.processes import executable
-from uav_insar_planner.mavlink.frames import TrackFrame
 from uav_insar_planner.mission_file.geodesy import latlon_to_ned
 from uav_insar_planner.param_specs.nodes import FIRST_SYSID
 from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, uav_name, uavs
+from uav_insar_planner.track.frame import TrackFrame
 from uav_insar_sim.netlab.dds_env import dds_env
 from uav_insar_sim.netlab.lab import NetLab
 

@@ -11,9 +11,10 @@ import pytest
 from rclpy.parameter import Parameter
 
 from uav_insar_planner import load_params, model, solve
-from uav_insar_planner.mavlink.trajectory import RAMP_MPS2
 from uav_insar_planner.ros.mavlink_bridge import MavlinkBridgeNode
 from uav_insar_planner.ros.planner import PlannerNode
+from uav_insar_planner.track.pass_clock import PassClock
+from uav_insar_planner.track.speed_profile import RAMP_MPS2
 from uav_insar_sim.agent_node import AgentNode
 from uav_insar_sim.observed_mission import ObservedMission, interpolate
 
@@ -26,7 +27,7 @@ def test_slots_start_where_the_vehicle_crosses_their_lines():
     mission = ObservedMission(1, params)
     assert mission.observe((0.0, -5.0, 10.0), 0.0) == [] and mission.phase == "wait"
     mission.set_plan((-30.0, 50.0), [1.0, 2.0, 3.0, 4.0], y_start=0.0)
-    mission.set_pass_start(1.0)
+    mission.set_pass_start(PassClock(1.0, params.speed))
     step = params.speed * params.slot_duration_s  # 2.15 m between slot lines
     assert mission.observe((-30.0, -0.5, 50.0), 1.0) == [] and mission.phase == "transit"
     # one observation past two lines: both slots, each at its own crossing point
@@ -46,7 +47,7 @@ def _mission(pass_start_s: float | None = 10.0) -> ObservedMission:
     mission = ObservedMission(1, load_params(overrides=SCENARIO))
     mission.set_plan((-30.0, 50.0), [1.0, 2.0, 3.0, 4.0], y_start=0.0)
     if pass_start_s is not None:
-        mission.set_pass_start(pass_start_s)
+        mission.set_pass_start(PassClock(pass_start_s, mission.params.speed))
     return mission
 
 
@@ -212,7 +213,7 @@ def test_a_pass_start_heard_late_starts_each_slot_where_its_line_was_crossed():
         y = -0.2 if t < 10.0 else -0.2 + v * (t - 10.0)
         assert mission.observe((-30.0, y, 50.0), t) == []
         t = round(t + 0.1, 6)
-    started = mission.set_pass_start(10.0)
+    started = mission.set_pass_start(PassClock(10.0, mission.params.speed))
     assert [s.slot for s in started] == [0, 1, 2] and y > 2 * step
     for n, s in enumerate(started):
         assert s.position[1] == pytest.approx(n * step, abs=1e-9)

@@ -37,10 +37,10 @@ from std_msgs.msg import Float64MultiArray, Header
 
 from uav_insar_planner import load_params, model, solve
 from uav_insar_planner.demo.processes import executable, start_node, start_process
-from uav_insar_planner.mavlink.trajectory import RAMP_MPS2
 from uav_insar_planner.param_specs.nodes import FIRST_SYSID
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.start_msgs import decode_start
+from uav_insar_planner.track.speed_profile import RAMP_MPS2
 from uav_insar_sim.mission import home_position
 
 pytestmark = pytest.mark.timeout(120)

@@ -8,7 +8,7 @@ from mavlink_fakes import MAV, FakePeer, wait_until
 
 from uav_insar_planner.mavlink.bridge import Bridge, BridgeConfig
 from uav_insar_planner.mavlink.setpoints import MASK_POSITION, MASK_POSITION_VELOCITY
-from uav_insar_planner.mavlink.trajectory import BRAKE_MPS2, braked_pass
+from uav_insar_planner.track.speed_profile import BRAKE_MPS2, braked_pass
 
 pytestmark = pytest.mark.timeout(60)
 SYSIDS = (2, 3, 4)

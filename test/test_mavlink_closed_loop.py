@@ -6,7 +6,7 @@ import pytest
 from mavlink_fakes import MAV, wait_until
 
 from uav_insar_planner.mavlink.bridge import Bridge, BridgeConfig
-from uav_insar_planner.mavlink.trajectory import ramp_up
+from uav_insar_planner.track.speed_profile import ramp_up
 from uav_insar_sim.vehicle.simulator import SimVehicle
 
 pytestmark = pytest.mark.timeout(60)

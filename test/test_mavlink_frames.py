@@ -3,7 +3,7 @@ import math
 
 import pytest
 
-from uav_insar_planner.mavlink.frames import TrackFrame
+from uav_insar_planner.track.frame import TrackFrame
 
 
 def close(a, b, tol=1e-9):

@@ -10,7 +10,6 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from mavlink_fakes import MAV
 
-from uav_insar_planner.mavlink.frames import TrackFrame
 from uav_insar_planner.mavlink.guard import FLOAT32_MAX, fits_float32
 from uav_insar_planner.mavlink.link import Link
 from uav_insar_planner.mavlink.setpoints import (
@@ -20,6 +19,7 @@ from uav_insar_planner.mavlink.setpoints import (
     used_values,
 )
 from uav_insar_planner.mavlink.signing import SigningParser, signing_state
+from uav_insar_planner.track.frame import TrackFrame
 
 pytestmark = pytest.mark.timeout(120)
 SETTINGS = settings(max_examples=60, derandomize=True, deadline=None, database=None,

@@ -10,15 +10,17 @@ import pytest
 
 from uav_insar_planner import load_params
 from uav_insar_planner.autopilots.profiles import profile
-from uav_insar_planner.mavlink.catch_up import CATCH_UP_MPS, CatchUp, governed
-from uav_insar_planner.mavlink.frames import TrackFrame
 from uav_insar_planner.mavlink.holds import Holding
-from uav_insar_planner.mavlink.pass_clock import lags, planner_start, resume_where_held
+from uav_insar_planner.mavlink.start_gate import lags, planner_start, resume_where_held
 from uav_insar_planner.mavlink.supervision import WatchedVehicle
-from uav_insar_planner.mavlink.trajectory import RAMP_MPS2, PassTrajectory
 from uav_insar_planner.ros.plan_msgs import PlanId, PlanMessageError
 from uav_insar_planner.ros.start_capture import ON_TRACK_M, POSE_FRESH_S, on_track
 from uav_insar_planner.ros.start_msgs import decode_start, encode_start
+from uav_insar_planner.track.catch_up import CATCH_UP_MPS, CatchUp, governed
+from uav_insar_planner.track.frame import TrackFrame
+from uav_insar_planner.track.pass_clock import PassClock
+from uav_insar_planner.track.speed_profile import RAMP_MPS2
+from uav_insar_planner.track.trajectory import PassTrajectory
 from uav_insar_sim.observed_mission import SPEED_TOLERANCE, ObservedMission
 
 PLAN = PlanId(1796000000, 5, "/planner")
@@ -95,7 +97,7 @@ def test_a_held_uav_rejoins_when_near_its_target_and_says_so_when_too_far_behind
     frame = TrackFrame.from_degrees(0.0, (0.0, 0.0, 0.0))  # along track = north
     pass_ = PassTrajectory(2.0, 0.0)
     pass_.set_formation([(0.0, 0.0, 50.0), (-20.0, 0.0, 50.0)])
-    pass_.t_start, pass_.ramp = 0.0, False  # a pass running for 10 s
+    pass_.clock = PassClock(0.0, 2.0, ramp=False)  # a pass running for 10 s
     near, far = _vehicle(0, 19.0), _vehicle(1, 15.0)  # target at y = 20 at t = 10
     events: list[str] = []
     holding = Holding(profile("ardupilot"), 1.0, [0, 1], lambda k, level, text: events.append(text))
@@ -146,7 +148,7 @@ def test_slots_flown_off_the_planned_speed_are_found():
     params = load_params(overrides={"num_slots": 6, "slot_duration_s": 1.0})
     mission = ObservedMission(0, params)
     mission.set_plan((0.0, 50.0), [1.0] * 6, y_start=0.0)
-    mission.set_pass_start(0.0, None)  # a pass joined at speed: no ramp planned
+    mission.set_pass_start(PassClock(0.0, params.speed, ramp=False))  # joined at speed
     v, t, y, held = params.speed, 0.0, -0.1, 0
     mission.observe((0.0, y, 50.0), t)
     while mission.phase != "done":  # slot 2 held for 3 s, slot 4 flown at twice the speed
@@ -164,7 +166,7 @@ def test_slots_flown_off_the_planned_speed_are_found():
     assert all(abs(d - 1.0) <= SPEED_TOLERANCE for n, d in enumerate(durations) if n not in off)
     assert math.isfinite(mission.end_time_s)
     # from the hover, the plan's target ramps up: slot 0 takes longer by plan, not off speed
-    mission.set_pass_start(0.0, 0.0)
+    mission.set_pass_start(PassClock(0.0, params.speed))
     v = params.speed
     assert mission.line_time(1) == pytest.approx(math.sqrt(2.0 * v / RAMP_MPS2))
     assert mission.line_time(5) == pytest.approx(5.0 + v / (2.0 * RAMP_MPS2))
@@ -185,7 +187,7 @@ def test_a_start_heard_too_late_holds_the_uav_rather_than_sprint():
 def test_a_rejoining_vehicle_catches_up_at_most_1_m_s_faster_than_the_pass():
     pass_ = PassTrajectory(4.3, 0.0)
     pass_.set_formation([(0.0, 0.0, 50.0)])
-    pass_.t_start, pass_.ramp = 0.0, False  # running for 10 s at t = 10
+    pass_.clock = PassClock(0.0, 4.3, ramp=False)  # running for 10 s at t = 10
     catch_ups = {0: CatchUp(10.0, 40.0, 4.3)}  # standing 3 m behind its target (43 m)
     speeds, t = [], 10.0
     while 0 in catch_ups:

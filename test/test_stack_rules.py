@@ -11,14 +11,15 @@ import pytest
 from std_msgs.msg import Header
 
 from uav_insar_planner.mavlink.config import IN_CODE_DEFAULTS, BridgeConfig, from_parameters
-from uav_insar_planner.mavlink.pass_clock import planner_start
-from uav_insar_planner.mavlink.trajectory import RAMP_MPS2, PassTrajectory, ramp_up
+from uav_insar_planner.mavlink.start_gate import planner_start
 from uav_insar_planner.param_specs.nodes import BRIDGE_SPECS
 from uav_insar_planner.ros.claims import Claim, refusal
 from uav_insar_planner.ros.plan_msgs import PlanId, PlanMessageError
 from uav_insar_planner.ros.start_capture import POSE_FRESH_S, all_captured, not_captured
 from uav_insar_planner.ros.start_msgs import PLAUSIBLE_S, decode_start, encode_start
 from uav_insar_planner.swarm import MAX_UAVS
+from uav_insar_planner.track.speed_profile import RAMP_MPS2, ramp_up
+from uav_insar_planner.track.trajectory import PassTrajectory
 
 DEFAULTS = {s.name: s.default for s in BRIDGE_SPECS}
 
@@ -129,11 +130,11 @@ def test_the_start_message_round_trips_and_bad_ones_name_their_field():
 
 
 def test_a_planner_start_holds_until_its_instant_then_flies_and_a_repeat_keeps_the_clock():
-    track = PassTrajectory(speed_mps=4.0, track_duration_s=0.0)
+    track = PassTrajectory(speed_mps=4.0, duration_s=0.0)
     assert planner_start(track, 1000.0, 10.0, 998.0, "plan /planner 1.0") == ""  # no formation
     track.set_formation([(1.0, 0.0, 40.0), None, None])
     text = planner_start(track, 1000.0, 10.0, 998.0, "plan /planner 1.000000000")
-    assert "in 2.00 s" in text and track.t_start == pytest.approx(12.0)
+    assert "in 2.00 s" in text and track.clock.start_s == pytest.approx(12.0)
     assert track.target(0, 11.9)[0] == (1.0, 0.0, 40.0)  # held at the start point
     # from the hover: the target ramps up (RAMP_MPS2), then cruises
     assert track.target(0, 13.0)[0] == pytest.approx((1.0, ramp_up(1.0, 4.0)[0], 40.0))
@@ -141,10 +142,10 @@ def test_a_planner_start_holds_until_its_instant_then_flies_and_a_repeat_keeps_t
     assert ramp_up(8.0, 4.0)[:2] == pytest.approx((4.0 * (8.0 - 2.0 / RAMP_MPS2), 4.0))
     # the same instant under a re-plan's identity, read a moment later: the clock stays
     assert planner_start(track, 1000.0, 11.0, 999.0 + 2e-6, "plan /planner 2.0") == ""
-    assert track.t_start == pytest.approx(12.0)
+    assert track.clock.start_s == pytest.approx(12.0)
     # and heard again by a thread held 20 ms between its two clock reads (a busy computer):
     # the same start, not a new one from a hover
     assert planner_start(track, 1000.0, 11.0, 999.0 + 0.02, "plan /planner 2.0") == ""
-    assert track.t_start == pytest.approx(12.0)
+    assert track.clock.start_s == pytest.approx(12.0)
     late = planner_start(track, 990.0, 11.0, 999.0, "plan /planner 3.000000000")
-    assert "ago (joining the pass)" in late and track.t_start == pytest.approx(2.0)
+    assert "ago (joining the pass)" in late and track.clock.start_s == pytest.approx(2.0)

@@ -65,7 +65,6 @@ from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension
 from uav_insar_planner.evaluate import rate_tolerance_bps
 from uav_insar_planner.exit_codes import EXIT_CRASH
 from uav_insar_planner.mavlink.guard import DropLog, finite
-from uav_insar_planner.mavlink.trajectory import from_hover
 from uav_insar_planner.param_specs.nodes import AGENT_SCENARIO_SPECS as SCENARIO_SPECS
 from uav_insar_planner.param_specs.nodes import AGENT_SPECS, MAVLINK_SPECS
 from uav_insar_planner.params import ParamError, params_from_mapping
@@ -82,6 +81,7 @@ from uav_insar_planner.ros.plan_msgs import Formation, PowerSchedule
 from uav_insar_planner.ros.run import run_node
 from uav_insar_planner.ros.start_msgs import StartFollower
 from uav_insar_planner.swarm import uav_name
+from uav_insar_planner.track.pass_clock import PassClock
 from uav_insar_sim.flight import choose_flight
 from uav_insar_sim.vehicle.simulator import SimVehicle
 
@@ -191,21 +191,14 @@ class AgentNode(Node):
                                        f"before the planner's {topics.FORMATION_START}")
 
     def _on_pass_start(self, wall_time_s: float, label: str, offset_m: float = 0.0) -> None:
-        # A resumed pass (`offset_m` past the start line at the instant) runs on the clock of
-        # a pass that had started offset_m / v_y earlier: the slots' lines stay where they are.
-        clock = wall_time_s - offset_m / self.mission.params.speed if offset_m > 0.0 else \
-            wall_time_s
-        if self.mission.pass_start_s == clock:
+        now = time.time()  # (the clock as the bridge flies it: the same rule, the same ramp)
+        clock = PassClock.heard(wall_time_s, now, self.mission.params.speed, offset_m)
+        if clock.same_start(self.mission.clock):
             return
-        # heard before its instant: the bridge ramps its target up from the hover there
-        ramp = offset_m if from_hover(wall_time_s, time.time()) else None
-        late = self.mission.set_pass_start(clock, ramp)
+        late = self.mission.set_pass_start(clock)
         self._late += late
-        ahead = wall_time_s - time.time()
-        when = f"in {ahead:.2f} s" if ahead >= 0 else f"{-ahead:.2f} s ago"
-        where = f", resuming {offset_m:.2f} m past the start line" if offset_m > 0.0 else ""
-        self.get_logger().info(f"{self.uav_name}: pass start {when}, wall clock "
-                               f"{wall_time_s:.3f}{where} ({label}): slots from then on" + (
+        self.get_logger().info(f"{self.uav_name}: pass start {clock.describe(now)} ({label}): "
+                               "slots from then on" + (
                                    f"; {len(late)} slot(s) flown since, from the positions "
                                    "read meanwhile" if late else ""))
 

@@ -28,10 +28,10 @@ from __future__ import annotations
 import time
 from collections.abc import Sequence
 
-from uav_insar_planner.mavlink.frames import TrackFrame
 from uav_insar_planner.param_specs.nodes import FIRST_SYSID
 from uav_insar_planner.params import Params
 from uav_insar_planner.plan import Vec3
+from uav_insar_planner.track.frame import TrackFrame
 from uav_insar_sim.fading import LinkFading
 from uav_insar_sim.mission import Mission, home_position
 from uav_insar_sim.observed_mission import ObservedMission

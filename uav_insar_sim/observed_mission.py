@@ -2,29 +2,30 @@
 
 The agent only watches: it is given the UAV's actual position and when it was read
 (`observe`), and applies the schedule where the plan puts it. The pass runs on one mission
-clock, the planner's pass start (`formation/start`, wall clock, `set_pass_start`), which is
-also when every bridge sets its vehicle moving along the track. Before that instant no slot
-starts, whatever the UAV does: it may climb, cross the track on its way to its formation
-point, or hold that point jittering about the slot 0 line. From that instant on, slot n
-starts at the first position at or past its line y = y_start + n v_y delta_t
-(`SlotSchedule.slot_line`): interpolated onto the line when the observation before was behind
-it, else where the UAV is (it held just ahead of the line). So the slots follow the vehicle's
-real progress whatever its clock or speed, and wherever it took off. The mission is `done`
-once the line after the last slot is reached.
+clock, the planner's pass start (`formation/start`, wall clock: a
+`track.pass_clock.PassClock`, `set_pass_start`), which is also when every bridge sets its
+vehicle moving along the track. Before that instant no slot starts, whatever the UAV does:
+it may climb, cross the track on its way to its formation point, or hold that point
+jittering about the slot 0 line. From that instant on, slot n starts at the first position
+at or past its line y = y_start + n v_y delta_t (`SlotSchedule.slot_line`): interpolated
+onto the line when the observation before was behind it, else where the UAV is (it held just
+ahead of the line). So the slots follow the vehicle's real progress whatever its clock or
+speed, and wherever it took off. The mission is `done` once the line after the last slot is
+reached.
 
-A pass start that arrives late (a lossy radio repairs a lost sample only seconds later) finds
-the UAV already on its way: the positions read since the start (kept for HISTORY_S) are
-replayed, so each slot still starts where the UAV crossed its line, only reported late.
+A pass start that arrives late (a lossy radio repairs a lost sample only seconds later)
+finds the UAV already on its way: the positions read since the start (kept for HISTORY_S)
+are replayed, so each slot still starts where the UAV crossed its line, only reported late.
 
-`lag` tells how far the UAV is behind the mission clock: the pass start passed, its next line
-not reached while the clock says it should have been, for the agent to say so.
+`lag` tells how far the UAV is behind the mission clock: the pass start passed, its next
+line not reached while the clock says it should have been, for the agent to say so.
 
 A slot is flown at the planned speed when the time from its line to the next (`durations`)
-is within SPEED_TOLERANCE of the plan's (or OFF_SPEED_MIN_S, for the position noise): delta_t
-at v_y, longer where the bridge's target ramps up from the hover (`line_time`,
-mavlink.trajectory.ramp_up); one
-flown slower (a hold in it) or faster (a catch-up) is `off_speed`, and the agent says so
-and does not count it as flown at the planned speed.
+is within SPEED_TOLERANCE of the plan's (or OFF_SPEED_MIN_S, for the position noise):
+delta_t at v_y, longer where the bridge's target ramps up from the hover (`line_time`: the
+pass clock's `time_at`, as the bridge flies it); one flown slower (a hold in it) or faster
+(a catch-up) is `off_speed`, and the agent says so and does not count it as flown at the
+planned speed.
 """
 from __future__ import annotations
 
@@ -32,16 +33,13 @@ import math
 from collections import deque
 from collections.abc import Sequence
 
-from uav_insar_planner.mavlink.trajectory import RAMP_MPS2, ramp_up
 from uav_insar_planner.params import Params
 from uav_insar_planner.plan import Vec3
+from uav_insar_planner.track.pass_clock import PassClock, same_line
 from uav_insar_sim.fading import LinkFading
 from uav_insar_sim.offload import ClosedLoopOffload
 from uav_insar_sim.slots import SlotSample, SlotSchedule
 
-# A new plan whose y_start differs by more than this is another pass (as the bridge's
-# trajectory.PassTrajectory): the pass start of the old one no longer applies.
-SAME_Y_START_M = 1e-3
 # Positions kept for a pass start that arrives late: longer than any repair of a lost sample.
 HISTORY_S = 30.0
 # A slot whose line-to-line time is off delta_t by more than this fraction was not flown at
@@ -61,8 +59,7 @@ class ObservedMission(SlotSchedule):
         super().__init__(uav_id, params, fading, controller)
         self._last: Vec3 | None = None
         self._last_t: float | None = None
-        self.pass_start_s: float | None = None  # wall clock; None: not (yet) known
-        self.ramp_from_m: float | None = 0.0  # where the target ramps up (None: no ramp)
+        self.clock: PassClock | None = None  # the pass's, wall clock; None: not (yet) known
         self.slot_times_s: list[float] = []  # wall clock of the observation that started each
         self.end_time_s: float | None = None  # when the line after the last slot was reached
         # each slot's planned duration, fixed when it ends: by the pass clock flown then (a
@@ -74,19 +71,23 @@ class ObservedMission(SlotSchedule):
         """The last observed position (None before the first)."""
         return self._last
 
+    @property
+    def pass_start_s(self) -> float | None:
+        """When the pass's target was, or would have been, at the start line (wall clock;
+        None without a start): no slot starts before."""
+        return None if self.clock is None else self.clock.origin_s()
+
     def set_plan(self, target_xz: tuple[float, float], powers: Sequence[float],
                  y_start: float = 0.0) -> None:
-        if self.target_xz is not None and abs(float(y_start) - self.y_start) > SAME_Y_START_M:
-            self.pass_start_s = None
+        if self.target_xz is not None and not same_line(float(y_start), self.y_start):
+            self.clock = None  # another pass: the old one's start no longer applies
         super().set_plan(target_xz, powers, y_start)
 
-    def set_pass_start(self, wall_time_s: float, ramp_from_m: float | None = 0.0
-                       ) -> list[SlotSample]:
-        """The pass of the flown plan starts (started) at `wall_time_s` (time.time()), its
-        target ramping up from the hover `ramp_from_m` past the start line (None: a running
-        pass joined, no ramp); the slots that the positions read since then start, when it
-        comes late (module doc)."""
-        self.pass_start_s, self.ramp_from_m = float(wall_time_s), ramp_from_m
+    def set_pass_start(self, clock: PassClock) -> list[SlotSample]:
+        """The pass of the flown plan runs on `clock` (wall clock); the slots that the
+        positions read since it started start, when it comes late (module doc)."""
+        self.clock = clock
+        wall_time_s = clock.origin_s()
         since = [(t, q) for t, q in self._history if t >= wall_time_s]
         if not since:
             return []
@@ -140,17 +141,7 @@ class ObservedMission(SlotSchedule):
 
     def line_time(self, n: int) -> float:
         """When the plan's target crosses slot n's line (wall clock; the pass started)."""
-        v = self.params.speed
-        s = n * v * self.params.slot_duration_s
-        r = self.ramp_from_m
-        if r is None or s < r or v <= 0.0:
-            return self.pass_start_s + s / v
-        t_ramp_start = self.pass_start_s + r / v
-        u = s - r  # metres into the ramp
-        d_ramp = v * v / (2.0 * RAMP_MPS2)
-        if u <= d_ramp:
-            return t_ramp_start + math.sqrt(2.0 * u / RAMP_MPS2)
-        return t_ramp_start + u / v + ramp_up(v / RAMP_MPS2, v)[2]
+        return self.clock.time_at(self.slot_line(n) - self.y_start)
 
     def durations(self) -> list[float]:
         """Each slot's time from its line to the next (the last one's to the line after

@@ -21,10 +21,10 @@ from uav_insar_planner.demo.processes import (
     stop_nodes,
 )
 from uav_insar_planner.demo.recorder import recorder_ready, start_recorder, stop_recorder
-from uav_insar_planner.mavlink.trajectory import ramp_delay_s
 from uav_insar_planner.param_specs.nodes import FIRST_SYSID, PORT_STEP
 from uav_insar_planner.report.flown import MavlinkPass, mavlink_table, rate_table, summary
 from uav_insar_planner.swarm import MASTER, MAX_UAVS, agent_name, uav_name, uavs
+from uav_insar_planner.track.speed_profile import ramp_delay_s
 
 if TYPE_CHECKING:
     from uav_insar_planner.params import Params

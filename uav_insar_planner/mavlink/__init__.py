@@ -1,12 +1,11 @@
 """MAVLink side of the planner, free of ROS, one concern per module (what differs per
-autopilot flavour is `uav_insar_planner.autopilots.profiles`):
+autopilot flavour is `uav_insar_planner.autopilots.profiles`; the track frame, the pass and
+its clock are `uav_insar_planner.track`):
 
-- `frames`: track frame <-> local NED.
 - `link`: one transport per endpoint with counted, tolerant parsing.
 - `guard`: values representable going out, finite coming in; counted, rate-limited drops.
 - `signing`: MAVLink 2 message signing with the key from a file.
 - `config`: `BridgeConfig` and its validation.
-- `trajectory`: the pass each UAV flies and when it starts.
 - `setpoints`: SET_POSITION_TARGET_LOCAL_NED and its type masks.
 - `supervision`: heartbeats, lost and found vehicles, positions read back.
 - `report`: the bridge's events and per-UAV snapshots.
@@ -15,8 +14,7 @@ autopilot flavour is `uav_insar_planner.autopilots.profiles`):
   the heartbeat shows it.
 - `holds`: who holds and why (the planner's mission stop, the ground station's silence), and
   how a held UAV rejoins.
-- `pass_clock`: when the pass starts (capture gate or the planner's instant), where it resumes.
-- `catch_up`: the gentle catch-up of a UAV that rejoins a running pass.
+- `start_gate`: when the pass starts (capture gate or the planner's instant), where it resumes.
 - `flight_state`: the formation and hold state the bridge serves (`FlightState`).
 - `io_thread`: one I/O loop in a daemon thread (`IoThread`: the bridge's, the simulated
   vehicle's).

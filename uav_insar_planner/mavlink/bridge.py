@@ -5,7 +5,7 @@ Contract (each point's detail is in the module named):
 - One MAVLink link per distinct connection string; several UAVs may share one (a router),
   each addressed by its sysid and the component its heartbeat came from (`link`).
 - Setpoints in MAV_FRAME_LOCAL_NED at `setpoint_rate_hz` (`setpoints`) along the pass
-  (`trajectory`), started by the capture gate or the planner's instant (`pass_clock`).
+  (`track.trajectory`), started by the capture gate or the planner's instant (`start_gate`).
   Where the autopilot ignores setpoints outside its flight mode (ArduPilot: GUIDED) none go
   to a vehicle not in it (nor during its takeoff); else (PX4) the stream never stops: OFFBOARD
   needs it before and on return (`autopilots.profiles`). `uav_id` >= 0: one vehicle, UAV `uav_id`.
@@ -38,7 +38,6 @@ from dataclasses import replace
 
 from uav_insar_planner.mavlink.config import BridgeConfig
 from uav_insar_planner.mavlink.flight_state import FlightState
-from uav_insar_planner.mavlink.frames import TrackFrame
 from uav_insar_planner.mavlink.guard import DropLog
 from uav_insar_planner.mavlink.io_thread import IoThread
 from uav_insar_planner.mavlink.link import MAV, Link, LinkStats, Source, open_links
@@ -53,6 +52,7 @@ from uav_insar_planner.mavlink.setpoints import (
 from uav_insar_planner.mavlink.supervision import WatchedVehicle, is_vehicle_heartbeat
 from uav_insar_planner.plan import Vec3
 from uav_insar_planner.swarm import MAX_UAVS
+from uav_insar_planner.track.frame import TrackFrame
 
 __all__ = ["Bridge", "BridgeConfig", "BridgeEvent", "VehicleStatus"]
 
@@ -142,12 +142,11 @@ class Bridge(IoThread):
 
     def track_started(self) -> bool:
         with self._lock:
-            t_start = self._flight.pass_.t_start
-            return t_start is not None and self._clock() >= t_start
+            return self._flight.pass_.running(self._clock())
 
     def set_start(self, wall_time_s: float, label: str, offset_m: float = 0.0) -> None:
         """pass_start "planner": plan `label`'s pass starts at `wall_time_s` (time.time()),
-        `offset_m` past its start line (pass_clock.planner_start)."""
+        `offset_m` past its start line (start_gate.planner_start)."""
         if self.config.pass_start != "planner":
             return
         with self._lock:

@@ -3,17 +3,18 @@ sequences, the catch-ups after a rejoin and the separation warnings.
 
 No I/O and not thread-safe: the bridge (`bridge.Bridge`) feeds it what it hears and sends the
 commands it asks for, under its lock. Each point's detail is in the module named:
-- The pass (`trajectory`), started by the capture gate or the planner's instant
-  (`pass_clock`); the setpoint target of each vehicle (`target_to_send`), none where the
+- The pass (`track.trajectory`), started by the capture gate or the planner's instant
+  (`start_gate`); the setpoint target of each vehicle (`target_to_send`), none where the
   autopilot ignores them (`autopilots.profiles`: `setpoints_in_flight_only`), a held
-  vehicle or one catching up gently (`catch_up`).
+  vehicle or one catching up gently (`track.catch_up`).
 - Holds (`holds`): the planner's mission stop (every pose NaN) and the ground station's
   silence; a held vehicle at most `holds.REJOIN_S` of the pass behind its target rejoins when
   the ground is heard again or a new start or plan comes, one farther behind keeps holding
   and is reported `behind` (under pass_start "capture" a new plan resumes the pass where the
   swarm holds).
 - Optional arm_and_takeoff (`sequencer`), one sequence per UAV a plan flies.
-- Two planned UAVs closer than `min_separation_m` are warned about (`separation`).
+- Two planned UAVs closer than `min_separation_m` are warned about
+  (`track.formation.separation`).
 """
 from __future__ import annotations
 
@@ -22,22 +23,23 @@ from collections.abc import Callable, Sequence
 from dataclasses import replace
 
 from uav_insar_planner.autopilots.profiles import profile
-from uav_insar_planner.mavlink.catch_up import CATCH_UP_FROM_M, CatchUp, governed
 from uav_insar_planner.mavlink.config import BridgeConfig
-from uav_insar_planner.mavlink.frames import TrackFrame
 from uav_insar_planner.mavlink.holds import REJOIN_S, Holding
 from uav_insar_planner.mavlink.mode_orders import ModeOrder
-from uav_insar_planner.mavlink.pass_clock import (
+from uav_insar_planner.mavlink.report import VehicleStatus, vehicle_status
+from uav_insar_planner.mavlink.sequencer import ArmingSequence
+from uav_insar_planner.mavlink.start_gate import (
     capture_start,
     lags,
     planner_start,
     resume_where_held,
 )
-from uav_insar_planner.mavlink.report import VehicleStatus, vehicle_status
-from uav_insar_planner.mavlink.sequencer import ArmingSequence
 from uav_insar_planner.mavlink.supervision import WatchedVehicle
-from uav_insar_planner.mavlink.trajectory import PassTrajectory, clean_formation, separation
 from uav_insar_planner.plan import Vec3
+from uav_insar_planner.track.catch_up import CATCH_UP_FROM_M, CatchUp, governed
+from uav_insar_planner.track.formation import clean_formation, separation
+from uav_insar_planner.track.frame import TrackFrame
+from uav_insar_planner.track.trajectory import PassTrajectory
 
 Emit = Callable[[int, str, str], None]  # (uav or -1 for the swarm, level, text)
 SendCommand = Callable[[WatchedVehicle, int, Sequence[float], int], None]
@@ -55,7 +57,6 @@ class FlightState:
         self._count, self._emit, self._send_command = count, emit, send_command
         self.pass_ = PassTrajectory(config.speed_mps, config.track_duration_s)
         self._start_label = ""  # the plan whose pass start the track clock is (planner)
-        self._start_wall: float | None = None  # that start's instant as the planner sent it
         self._catch_up: dict[int, CatchUp] = {}  # vehicles catching up after a rejoin
         self._separation = [""] * count
         self.sequences: dict[int, ArmingSequence] = {}  # per UAV, once arm_and_takeoff ran
@@ -93,8 +94,7 @@ class FlightState:
     def set_start(self, wall_time_s: float, now: float, label: str, offset_m: float) -> None:
         """pass_start "planner": see `Bridge.set_start`."""
         text = planner_start(self.pass_, wall_time_s, now, time.time(), label, offset_m)
-        flying = self.pass_.formation is not None
-        self._start_label, self._start_wall = (label, wall_time_s) if flying else ("", None)
+        self._start_label = label if self.pass_.formation is not None else ""
         if text:  # held ones near their targets rejoin, ones too late to keep up hold
             self._emit(-1, "info", text)
             self._rejoin(now, "a new pass start", late=True)
@@ -135,7 +135,7 @@ class FlightState:
                                 self.sequences.get(v.uav), self._separation[v.uav])
         held = self.holding.phase(v)
         return replace(status, phase=held or status.phase, pass_plan=self._start_label,
-                       pass_start_s=None if self.pass_.t_start is None else self._start_wall,
+                       pass_start_s=None if self.pass_.sent is None else self.pass_.sent.start_s,
                        behind=self.holding.behind.get(v.uav, ""))
 
     def _rejoin(self, now: float, why: str, here: bool = False, late: bool = False) -> None:
@@ -150,7 +150,7 @@ class FlightState:
         given = self.holding.rejoin(self.vehicles, lag, rejoin_m, why)
         if late:
             self.holding.fall_back(self.vehicles, lag, rejoin_m, why)
-        for v in self.vehicles:  # behind a moving target: a gentle catch-up (`catch_up`)
+        for v in self.vehicles:  # behind a moving target: a gentle catch-up (`track.catch_up`)
             if (v.uav in given or late and not self.holding.stopped(v)) and (
                     lag[v.uav] or 0.0) > CATCH_UP_FROM_M:
                 y = self.frame.from_ned(*v.position_ned)[1]

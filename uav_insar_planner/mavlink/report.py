@@ -4,11 +4,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from uav_insar_planner.mavlink.frames import TrackFrame
 from uav_insar_planner.mavlink.sequencer import ArmingSequence
 from uav_insar_planner.mavlink.supervision import WatchedVehicle, phase
-from uav_insar_planner.mavlink.trajectory import PassTrajectory
 from uav_insar_planner.plan import Vec3
+from uav_insar_planner.track.frame import TrackFrame
+from uav_insar_planner.track.trajectory import PassTrajectory
 
 
 @dataclass(frozen=True)

@@ -11,10 +11,10 @@ from collections.abc import Sequence
 
 from pymavlink import mavutil
 
-from uav_insar_planner.mavlink.frames import TrackFrame
 from uav_insar_planner.mavlink.guard import fits_float32
 from uav_insar_planner.mavlink.link import MAV
 from uav_insar_planner.plan import Vec3
+from uav_insar_planner.track.frame import TrackFrame
 
 _T = mavutil.mavlink
 POSITION_BITS = (_T.POSITION_TARGET_TYPEMASK_X_IGNORE | _T.POSITION_TARGET_TYPEMASK_Y_IGNORE

@@ -31,7 +31,7 @@ Unused params: null where QGroundControl writes NaN (the waypoints' yaw), 0 wher
 (the coordinate of an item without one: its `_setDefaultsForCommand`).
 
 Track frame (x across-track, y along-track, z up) -> local NED about the home with
-`mavlink.frames.TrackFrame` (bearing of y from north), NED -> latitude / longitude with
+`track.frame.TrackFrame` (bearing of y from north), NED -> latitude / longitude with
 `geodesy` (tangent-plane approximation; its error bound is there). The file format is
 QGroundControl's (`fileType` Plan, version 1; mission version 2), as MAVSDK's
 `mission_raw.import_qgroundcontrol_mission` reads it.
@@ -43,8 +43,8 @@ from dataclasses import dataclass
 from datetime import datetime, timedelta
 
 from uav_insar_planner.autopilots.profiles import profile
-from uav_insar_planner.mavlink.frames import TrackFrame
 from uav_insar_planner.mission_file.geodesy import ned_to_latlon
+from uav_insar_planner.track.frame import TrackFrame
 
 VEHICLE_TYPE = 2  # MAV_TYPE_QUADROTOR
 ENDS = ("hold", "rtl")

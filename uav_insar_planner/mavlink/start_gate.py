@@ -1,31 +1,25 @@
-"""When the pass starts: every UAV of the gate captured at its start point, or the planner's
-instant.
+"""When the bridge's pass starts: every UAV of the gate captured at its start point, or the
+planner's instant.
 
 pass_start "capture": a bridge that sees every vehicle starts the pass itself once each
 linked UAV with a target (whose arming did not fail) reports a fresh position within
-`capture_radius_m` of its start point; radius 0 starts at once.
+`capture_radius_m` of its start point (track.capture); radius 0 starts at once.
 pass_start "planner" (a stack per UAV: no bridge sees the others): the planner sees every UAV
 captured and publishes one wall-clock start a little in the future (ros/formation_start.py);
-`planner_start` turns it into the bridge's monotonic track clock, so every bridge starts at
-the same instant as far as the hosts' clocks agree (GNSS time / chrony: an offset dt puts a
-UAV v_y dt along track).
+`planner_start` flies it on the bridge's monotonic clock (track.trajectory.PassTrajectory
+.start_from), so every bridge starts at the same instant as far as the hosts' clocks agree
+(GNSS time / chrony: an offset dt puts a UAV v_y dt along track).
 """
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
 
 from uav_insar_planner.mavlink.config import BridgeConfig
-from uav_insar_planner.mavlink.frames import TrackFrame
 from uav_insar_planner.mavlink.sequencer import ArmingSequence
 from uav_insar_planner.mavlink.supervision import WatchedVehicle
-from uav_insar_planner.mavlink.trajectory import PassTrajectory, from_hover
-
-# The same start again (re-sent, or re-published under a re-plan's identity), compared as
-# the planner sent it: its wall-clock instant and offset. Never as the clock converted at
-# arrival: a thread delayed between its two clock reads (a busy computer; the GIL switches
-# every 5 ms) moved that by milliseconds, and each repeat restarted the pass from a hover.
-SAME_START_S = 1e-3
+from uav_insar_planner.track.capture import outside
+from uav_insar_planner.track.frame import TrackFrame
+from uav_insar_planner.track.trajectory import PassTrajectory
 
 
 def captured(gate: Sequence[WatchedVehicle], pass_: PassTrajectory, frame: TrackFrame,
@@ -39,9 +33,9 @@ def captured(gate: Sequence[WatchedVehicle], pass_: PassTrajectory, frame: Track
     for v in gate:
         if not v.position_fresh(now, max_age_s):
             return False
-        start = frame.to_ned(*pass_.start_pose(v.uav))
-        if not math.dist(start, v.position_ned) <= capture_radius_m:
-            return False  # (written so that a NaN distance never counts as inside)
+        if outside(v.position_ned, frame.to_ned(*pass_.start_pose(v.uav)),
+                   capture_radius_m) is not None:
+            return False
     return True
 
 
@@ -50,7 +44,7 @@ def capture_start(vehicles: Sequence[WatchedVehicle], sequences: Mapping[int, Ar
                   config: BridgeConfig) -> bool:
     """pass_start "capture": start the track of `pass_` at `now` (True) when the gate, every
     linked vehicle with a target whose arming (`sequences`) did not fail, is `captured`."""
-    if (pass_.t_start is not None or pass_.formation is None
+    if (pass_.clock is not None or pass_.formation is None
             or config.pass_start == "planner"):
         return False
     gate = [v for v in vehicles if pass_.start_pose(v.uav) is not None and v.linked
@@ -58,31 +52,22 @@ def capture_start(vehicles: Sequence[WatchedVehicle], sequences: Mapping[int, Ar
     if not captured(gate, pass_, frame, now, config.capture_radius_m,
                     config.heartbeat_timeout_s):
         return False
-    pass_.t_start, pass_.ramp = now, True
+    pass_.start_now(now)
     return True
 
 
 def planner_start(pass_: PassTrajectory, wall_time_s: float, mono_now: float,
                   wall_now: float, label: str, offset_m: float = 0.0) -> str:
-    """Set the track clock of `pass_` to the wall-clock instant `wall_time_s` (read against
+    """Fly the planner's start at the wall-clock instant `wall_time_s` (read against
     `wall_now`, time.time(), at monotonic `mono_now`), the pass `offset_m` past its start
     line then (a resumed pass); the event text, "" when nothing changed (no formation yet,
     or the same start again)."""
     if pass_.formation is None:
         return ""
-    t_offset = offset_m / pass_.speed_mps if pass_.speed_mps > 0.0 else 0.0
-    if (pass_.t_start is not None and pass_.start_wall is not None
-            and abs(pass_.start_wall - wall_time_s) < SAME_START_S
-            and abs(pass_.t_offset - t_offset) < SAME_START_S):
+    sent = pass_.start_from(wall_time_s, offset_m, mono_now, wall_now)
+    if sent is None:
         return ""
-    t_start = mono_now + (wall_time_s - wall_now)
-    pass_.t_start, pass_.t_offset, pass_.start_wall = t_start, t_offset, wall_time_s
-    pass_.ramp = from_hover(t_start, mono_now)
-    ahead = t_start - mono_now
-    when = f"in {ahead:.2f} s" if ahead >= 0 else f"{-ahead:.2f} s ago (joining the pass)"
-    where = f", resuming {offset_m:.2f} m past the start line" if offset_m > 0.0 else ""
-    return (f"pass start from the planner ({label}): {when}, wall clock "
-            f"{wall_time_s:.3f}{where}")
+    return f"pass start from the planner ({label}): {sent.describe(wall_now)}"
 
 
 def lags(vehicles: Sequence[WatchedVehicle], pass_: PassTrajectory, frame: TrackFrame,
@@ -95,7 +80,7 @@ def lags(vehicles: Sequence[WatchedVehicle], pass_: PassTrajectory, frame: Track
         target = pass_.target(v.uav, now)
         if target is None or v.position_ned is None:
             out[v.uav] = None
-        elif pass_.t_start is None or now < pass_.t_start:
+        elif not pass_.running(now):
             out[v.uav] = 0.0
         else:
             out[v.uav] = target[0][1] - frame.from_ned(*v.position_ned)[1]
@@ -108,9 +93,9 @@ def resume_where_held(pass_: PassTrajectory, held_lags: Sequence[float | None]) 
     the held vehicles' `lags`), and the swarm goes on from there at the planned speed; the
     event text, "" when nothing moved."""
     behind = [lag for lag in held_lags if lag is not None]
-    if pass_.t_start is None or not behind or max(behind) <= 0.0 or pass_.speed_mps <= 0.0:
+    if pass_.clock is None or not behind or max(behind) <= 0.0 or pass_.speed_mps <= 0.0:
         return ""
     shift = max(behind) / pass_.speed_mps
-    pass_.t_start += shift
+    pass_.clock = pass_.clock.shifted(shift)
     return (f"the pass resumes where the swarm holds: its clock {shift:.2f} s later "
             f"({max(behind):.2f} m)")

@@ -1,4 +1,4 @@
-"""Track frame `insar_track` <-> MAVLink local NED.
+"""Track frame `insar_track` <-> local NED (MAVLink's LOCAL_POSITION_NED frame, mavros' too).
 
 Track frame: x = range / across-track, y = azimuth / along-track, z = up (metres).
 The along-track axis points at bearing psi from north (clockwise, radians inside), and the

@@ -1,15 +1,15 @@
 """A vehicle that rejoins a running pass from a hover catches up gently, never sprinting.
 
 Its target is not the pass clock's at once (which is ahead of it, and moving at v_y while it
-stands): it starts where the vehicle is and ramps up (trajectory.ramp_up, RAMP_MPS2) to
+stands): it starts where the vehicle is and ramps up (speed_profile.ramp_up, RAMP_MPS2) to
 v_y + CATCH_UP_MPS, until it meets the clock's target; from then on the vehicle flies the
 pass. Losing ground while accelerating and winning it back at 1 m/s, a vehicle 1 m behind
 is back in about 10 s at Table I's 4.3 m/s.
 """
 from __future__ import annotations
 
-from uav_insar_planner.mavlink.trajectory import ramp_up
 from uav_insar_planner.plan import Vec3
+from uav_insar_planner.track.speed_profile import ramp_up
 
 CATCH_UP_MPS = 1.0  # issue 27: never faster than the planned speed + 1 m/s
 CATCH_UP_FROM_M = 0.3  # closer behind, the position controller closes the gap unaided
