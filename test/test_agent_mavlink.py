@@ -17,6 +17,7 @@ from uav_insar_planner.track.pass_clock import PassClock
 from uav_insar_planner.track.speed_profile import RAMP_MPS2
 from uav_insar_sim.agent_node import AgentNode
 from uav_insar_sim.observed_mission import ObservedMission, interpolate
+from uav_insar_sim.slots import Phase
 
 pytestmark = pytest.mark.timeout(60)
 SCENARIO = {"num_slots": 4, "slot_duration_s": 0.5}
@@ -25,14 +26,14 @@ SCENARIO = {"num_slots": 4, "slot_duration_s": 0.5}
 def test_slots_start_where_the_vehicle_crosses_their_lines():
     params = load_params(overrides=SCENARIO)
     mission = ObservedMission(1, params)
-    assert mission.observe((0.0, -5.0, 10.0), 0.0) == [] and mission.phase == "wait"
+    assert mission.observe((0.0, -5.0, 10.0), 0.0) == [] and mission.phase == Phase.WAIT
     mission.set_plan((-30.0, 50.0), [1.0, 2.0, 3.0, 4.0], y_start=0.0)
     mission.set_pass_start(PassClock(1.0, params.speed))
     step = params.speed * params.slot_duration_s  # 2.15 m between slot lines
-    assert mission.observe((-30.0, -0.5, 50.0), 1.0) == [] and mission.phase == "transit"
+    assert mission.observe((-30.0, -0.5, 50.0), 1.0) == [] and mission.phase == Phase.TRANSIT
     # one observation past two lines: both slots, each at its own crossing point
     started = mission.observe((-29.0, step + 0.5, 52.0), 1.1)
-    assert [s.slot for s in started] == [0, 1] and mission.phase == "track"
+    assert [s.slot for s in started] == [0, 1] and mission.phase == Phase.TRACK
     assert started[1].position == pytest.approx(
         interpolate((-30.0, -0.5, 50.0), (-29.0, step + 0.5, 52.0), step))
     expected = model.fdma_rate(2.0, model.distance_to_station(
@@ -40,7 +41,7 @@ def test_slots_start_where_the_vehicle_crosses_their_lines():
     assert started[1].rate_bps == pytest.approx(float(expected))
     assert mission.observe((-29.0, step, 52.0), 1.2) == []  # backwards: nothing
     assert [s.slot for s in mission.observe((-29.0, 4 * step, 52.0), 1.3)] == [2, 3]
-    assert mission.phase == "done"
+    assert mission.phase == Phase.DONE
 
 
 def _mission(pass_start_s: float | None = 10.0) -> ObservedMission:
@@ -67,7 +68,7 @@ def test_no_slot_before_the_pass_start_wherever_the_uav_took_off(take_off_y):
     while t < 9.95:
         assert mission.observe((-30.0, float(rng.normal(0.0, 0.15)), 50.0), t) == []
         t += 0.1
-    assert mission.samples == [] and mission.phase == "transit"
+    assert mission.samples == [] and mission.phase == Phase.TRANSIT
     # the pass starts: the first position at or past the line starts slot 0
     held = (-30.0, -0.12, 50.0)
     assert mission.observe(held, 10.0) == []  # at the start, still behind the line
@@ -108,7 +109,7 @@ def test_no_pass_start_no_slot_and_the_lag_is_told():
     mission.observe((-30.0, step - 1.0, 50.0), 14.0)
     assert mission.lag(14.0) == (1, pytest.approx(14.0 - due), pytest.approx(1.0))
     mission.observe((-30.0, 4 * step, 50.0), 14.1)
-    assert mission.phase == "done" and mission.lag(20.0) is None
+    assert mission.phase == Phase.DONE and mission.lag(20.0) is None
 
 
 def test_a_new_pass_needs_a_new_start():

@@ -22,6 +22,7 @@ from uav_insar_planner.track.pass_clock import PassClock
 from uav_insar_planner.track.speed_profile import RAMP_MPS2
 from uav_insar_planner.track.trajectory import PassTrajectory
 from uav_insar_sim.observed_mission import SPEED_TOLERANCE, ObservedMission
+from uav_insar_sim.slots import Phase
 
 PLAN = PlanId(1796000000, 5, "/planner")
 
@@ -151,7 +152,7 @@ def test_slots_flown_off_the_planned_speed_are_found():
     mission.set_pass_start(PassClock(0.0, params.speed, ramp=False))  # joined at speed
     v, t, y, held = params.speed, 0.0, -0.1, 0
     mission.observe((0.0, y, 50.0), t)
-    while mission.phase != "done":  # slot 2 held for 3 s, slot 4 flown at twice the speed
+    while mission.phase != Phase.DONE:  # slot 2 held for 3 s, slot 4 flown at twice the speed
         hold = y >= 2.5 * v and held < 30
         held += hold
         y += 0.0 if hold else (2.0 if 4 * v <= y < 5 * v else 1.0) * v * 0.1

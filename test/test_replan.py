@@ -12,6 +12,7 @@ from uav_insar_planner import load_params, model, solve
 from uav_insar_planner.evaluate import evaluate
 from uav_insar_planner.replanning import plans
 from uav_insar_planner.replanning.triggers import SATURATED_MISSES, ReplanTriggers
+from uav_insar_sim.slots import Phase
 
 
 @pytest.fixture(scope="module")
@@ -246,7 +247,7 @@ def test_a_nan_target_in_mid_flight_holds_and_flies_no_more_slots(table1):
         t += 0.5
         m.advance(t)
     m.set_plan((np.nan, np.nan), np.zeros(p.num_slots))
-    assert m.phase == "hold"
+    assert m.phase == Phase.HOLD
     flown = len(m.samples)
     m.advance(t + 5.0)  # brakes from 4.3 m/s at 3 m/s^2: at rest within 1.5 s
     here = m.state.position.copy()
@@ -254,7 +255,7 @@ def test_a_nan_target_in_mid_flight_holds_and_flies_no_more_slots(table1):
     m.advance(t + 60.0)
     assert len(m.samples) == flown and np.array_equal(m.state.position, here)
     m.set_plan(tuple(plan.formation[1]), plan.p_com_w[1])  # hold is final
-    assert m.phase == "hold"
+    assert m.phase == Phase.HOLD
     idle = Mission(2, p, 10.0, 3.0)
     idle.set_plan((np.nan, np.nan), np.zeros(p.num_slots))
-    assert idle.phase == "idle"  # not flown from the start: idle, as before
+    assert idle.phase == Phase.IDLE  # not flown from the start: idle, as before

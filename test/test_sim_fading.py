@@ -8,6 +8,7 @@ from uav_insar_planner.params_file import load_params
 from uav_insar_planner.solver.power import schedules
 from uav_insar_sim.fading import LinkFading
 from uav_insar_sim.mission import Mission
+from uav_insar_sim.slots import Phase
 from uav_insar_sim.wind import Wind
 
 N = 12
@@ -62,7 +63,7 @@ def test_shadowing_is_lognormal_with_the_std_and_decorrelates_with_distance():
 
 def fly(m, until=300.0, step=0.37):
     t = 0.0
-    while m.phase != "done" and t < until:
+    while m.phase != Phase.DONE and t < until:
         t += step
         m.advance(t)
     return m
@@ -87,7 +88,7 @@ def test_steady_wind_displaces_the_uav_downwind_and_its_accel_limit_sets_how_far
         m = Mission(0, p, 10.0, accel, wind=Wind(wind, gust, 2.0, seed=1))
         m.set_plan(FORMATION[0], power[0])
         fly(m)
-        assert [s.slot for s in m.samples] == list(range(N)) and m.phase == "done"
+        assert [s.slot for s in m.samples] == list(range(N)) and m.phase == Phase.DONE
         return np.array([s.position[0] - FORMATION[0, 0] for s in m.samples])
 
     soft, stiff = offsets(3.0), offsets(6.0)

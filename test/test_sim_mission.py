@@ -7,6 +7,7 @@ from uav_insar_planner.params_file import load_params
 from uav_insar_planner.schemes import planned_rate_bps
 from uav_insar_planner.solver.power import schedules
 from uav_insar_sim.mission import Mission
+from uav_insar_sim.slots import Phase
 
 N = 12
 FORMATION = np.array([[-40.0, 60.0], [-35.0, 58.0], [-45.0, 62.0]])
@@ -20,7 +21,7 @@ def scenario():
 
 def fly(mission, until=300.0, step=0.37):
     phases, t = [mission.phase], mission.t
-    while mission.phase != "done" and t < until:
+    while mission.phase != Phase.DONE and t < until:
         t += step
         mission.advance(t)
         if mission.phase != phases[-1]:
@@ -33,9 +34,9 @@ def fly(mission, until=300.0, step=0.37):
 def test_noise_free_mission_flies_every_slot_on_the_model_grid_at_the_planned_rate(scenario, k):
     p, power = scenario
     m = Mission(k, p, max_speed=10.0, max_accel=3.0)
-    assert m.advance(5.0) == [] and m.phase == "wait"
+    assert m.advance(5.0) == [] and m.phase == Phase.WAIT
     m.set_plan(FORMATION[k], power[k])
-    assert fly(m) == ["transit", "track", "done"]
+    assert fly(m) == [Phase.TRANSIT, Phase.TRACK, Phase.DONE]
     assert [s.slot for s in m.samples] == list(range(N))
     for n, s in enumerate(m.samples):
         assert s.position == pytest.approx((FORMATION[k, 0], p.y_track[n], FORMATION[k, 1]),
@@ -84,6 +85,6 @@ def test_unflown_uav_stays_idle_and_slow_agents_are_refused(scenario):
     m = Mission(2, p, 10.0, 3.0)
     m.set_plan((float("nan"), float("nan")), power[2])
     m.advance(100.0)
-    assert m.phase == "idle" and m.samples == []
+    assert m.phase == Phase.IDLE and m.samples == []
     with pytest.raises(ValueError, match="max_speed_mps"):
         Mission(0, p, max_speed=p.speed / 2, max_accel=3.0)

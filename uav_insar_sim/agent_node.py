@@ -83,6 +83,7 @@ from uav_insar_planner.ros.start_msgs import StartFollower
 from uav_insar_planner.swarm import uav_name
 from uav_insar_planner.track.pass_clock import PassClock
 from uav_insar_sim.flight import choose_flight
+from uav_insar_sim.slots import Phase
 from uav_insar_sim.vehicle.simulator import SimVehicle
 
 TICK_PERIOD_S = 0.05  # wall clock; the mission clock advances time_scale times faster
@@ -178,13 +179,13 @@ class AgentNode(Node):
                                       f"{self.mission.params.num_slots}; flying the plan's {n}")
         self.flight.set_plan(x, y, z, powers)
         self.get_logger().info(f"{self.uav_name}: flying {power.plan_id}")
-        if not self._announced and self.mission.phase == "transit":
+        if not self._announced and self.mission.phase is Phase.TRANSIT:
             self._announced = True
             self.get_logger().info(f"{self.uav_name}: plan received, {self.flight.how} to "
                                    f"x={x:.3f} m, z={z:.3f} m for {n} slots")
         if self._starts is not None:
             self._starts.plan_adopted()
-            if (self.mission.pass_start_s is None and self.mission.phase == "transit"
+            if (self.mission.pass_start_s is None and self.mission.phase is Phase.TRANSIT
                     and not self._told_no_start):
                 self._told_no_start = True
                 self.get_logger().info(f"{self.uav_name}: no pass start yet: no slot starts "
@@ -293,18 +294,18 @@ class AgentNode(Node):
 
     def _log_phase(self) -> None:
         log = self.get_logger()
-        if self._phase == "track":
+        if self._phase is Phase.TRACK:
             since = ""
             if self.flight.observed and self.mission.slot_times_s:
                 since = (f", {self.mission.slot_times_s[0] - self.mission.pass_start_s:+.2f} s "
                          "from the pass start")
             log.info(f"{self.uav_name}: {self.flight.track_started_text()}{since}")
-        elif self._phase == "hold":
+        elif self._phase is Phase.HOLD:
             log.warning(f"{self.uav_name}: the plan took this UAV out in mid-flight (NaN target): "
                         f"holding position after {len(self.mission.samples)} slots")
-        elif self._phase == "idle":
+        elif self._phase is Phase.IDLE:
             log.info(f"{self.uav_name}: this scheme does not fly {self.uav_name}; holding at home")
-        elif self._phase == "done":
+        elif self._phase is Phase.DONE:
             samples = self.mission.samples
             met = sum(s.margin_bps >= -self._rate_tol for s in samples)
             worst = min(s.margin_bps for s in samples) / 1e6 if samples else float("nan")

@@ -36,7 +36,7 @@ from uav_insar_sim.fading import LinkFading
 from uav_insar_sim.mission import Mission, home_position
 from uav_insar_sim.observed_mission import ObservedMission
 from uav_insar_sim.offload import ClosedLoopOffload
-from uav_insar_sim.slots import SlotSample
+from uav_insar_sim.slots import Phase, SlotSample
 from uav_insar_sim.vehicle.simulator import SimVehicle
 from uav_insar_sim.wind import Wind
 
@@ -66,7 +66,7 @@ class SelfFlight:
     def set_plan(self, x: float, y: float, z: float, powers: Sequence[float]) -> None:
         # The plan's y is not used: the run-up always puts slot 0 at y = 0.
         self.mission.set_plan((x, z), powers)
-        if self._wall_t0 is None and self.mission.phase == "transit":
+        if self._wall_t0 is None and self.mission.phase is Phase.TRANSIT:
             self._wall_t0 = time.monotonic()
 
     def tick(self) -> list[SlotSample]:

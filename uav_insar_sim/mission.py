@@ -34,7 +34,7 @@ from uav_insar_sim.physics.kinematics import (
     slot_start,
     step_toward,
 )
-from uav_insar_sim.slots import SlotSample, SlotSchedule
+from uav_insar_sim.slots import Phase, SlotSample, SlotSchedule
 from uav_insar_sim.wind import Wind
 
 # Integration step on the mission clock; slot starts are hit exactly regardless.
@@ -97,7 +97,7 @@ class Mission(SlotSchedule):
         return started
 
     def _next_slot_time(self) -> float | None:
-        if self.phase != "track" or self.all_flown:
+        if self.phase is not Phase.TRACK or self.all_flown:
             return None
         p = self.params
         return self._track_t0 + slot_start(len(self.samples), p.speed, self.max_accel,
@@ -108,13 +108,13 @@ class Mission(SlotSchedule):
             self._step_in_wind(h)
             return
         p = self.params
-        if self.phase == "transit":
+        if self.phase is Phase.TRANSIT:
             x, z = self.target_xz
             runup = np.array([x, -runup_distance(p.speed, self.max_accel), z])
             self.state = step_toward(self.state, runup, h, self.max_speed, self.max_accel)
             if np.array_equal(self.state.position, runup) and not self.state.velocity.any():
-                self.phase, self._track_t0 = "track", self.t + h
-        elif self.phase == "track":
+                self.phase, self._track_t0 = Phase.TRACK, self.t + h
+        elif self.phase is Phase.TRACK:
             tau = self.t + h - self._track_t0
             y, vy = runup_and_cruise(tau, p.speed, self.max_accel)
             xz = PointMass(self.state.position[[0, 2]], self.state.velocity[[0, 2]])
@@ -123,21 +123,21 @@ class Mission(SlotSchedule):
                                    np.array([xz.velocity[0], vy, xz.velocity[1]]))
             end = slot_start(self.num_slots, p.speed, self.max_accel, p.slot_duration_s)
             if self.all_flown and tau >= end - 1e-9:
-                self.phase = "done"
-        elif self.phase in ("done", "hold") and self.state.velocity.any():
+                self.phase = Phase.DONE
+        elif self.phase.over and self.state.velocity.any():
             # A velocity command of zero: brake at max_accel to a hover straight ahead.
             self.state = step_toward(self.state, None, h, self.max_speed, self.max_accel)
 
     def _step_in_wind(self, h: float) -> None:
         p, wind = self.params, self.wind.step(h)
         target, v_t = None, None
-        if self.phase == "transit":
+        if self.phase is Phase.TRANSIT:
             x, z = self.target_xz
             target = np.array([x, -runup_distance(p.speed, self.max_accel), z])
-        elif self.phase == "track":
+        elif self.phase is Phase.TRACK:
             y, vy = runup_and_cruise(self.t + h - self._track_t0, p.speed, self.max_accel)
             target, v_t = np.array([self.target_xz[0], y, self.target_xz[1]]), (0.0, vy, 0.0)
-        elif self.phase in ("done", "hold"):
+        elif self.phase.over:
             if self._hold is None:
                 self._hold = self.state.position + np.array(
                     [0.0, runup_distance(max(self.state.velocity[1], 0.0), self.max_accel),
@@ -147,14 +147,14 @@ class Mission(SlotSchedule):
             air = step_toward(self.state, target, h, self.max_speed, self.max_accel, v_t)
             self.state = PointMass(self.state.position + (air.velocity + wind) * h,
                                    air.velocity)
-        if self.phase == "transit":
+        if self.phase is Phase.TRANSIT:
             gap = float(np.linalg.norm(self.state.position - target))
             if gap <= self.wind.settled_offset_m(self.max_accel) + ARRIVAL_M:
-                self.phase, self._track_t0 = "track", self.t + h
-        elif self.phase == "track" and self.all_flown:
+                self.phase, self._track_t0 = Phase.TRACK, self.t + h
+        elif self.phase is Phase.TRACK and self.all_flown:
             end = slot_start(self.num_slots, p.speed, self.max_accel, p.slot_duration_s)
             if self.t + h - self._track_t0 >= end - 1e-9:
-                self.phase = "done"
+                self.phase = Phase.DONE
 
     def _disturbed(self, rng: np.random.Generator) -> Vec3:
         pos = self.state.position

@@ -38,7 +38,7 @@ from uav_insar_planner.plan import Vec3
 from uav_insar_planner.track.pass_clock import PassClock, same_line
 from uav_insar_sim.fading import LinkFading
 from uav_insar_sim.offload import ClosedLoopOffload
-from uav_insar_sim.slots import SlotSample, SlotSchedule
+from uav_insar_sim.slots import Phase, SlotSample, SlotSchedule
 
 # Positions kept for a pass start that arrives late: longer than any repair of a lost sample.
 HISTORY_S = 30.0
@@ -109,7 +109,7 @@ class ObservedMission(SlotSchedule):
         before, self._last = self._last, here
         before_t, self._last_t = self._last_t, wall_time_s
         started: list[SlotSample] = []
-        if (self.phase not in ("transit", "track") or self.pass_start_s is None
+        if (not self.phase.under_way or self.pass_start_s is None
                 or wall_time_s < self.pass_start_s):
             return started
         while not self.all_flown:
@@ -126,7 +126,7 @@ class ObservedMission(SlotSchedule):
                                          self.pass_start_s))
             self._plan_ended(len(self.slot_times_s) - 2)
         if self.all_flown and here[1] >= self.slot_line(self.num_slots):
-            self.phase = "done"
+            self.phase = Phase.DONE
             line = self.slot_line(self.num_slots)
             crossed = before is not None and before_t is not None and before[1] < line
             self.end_time_s = (before_t + (line - before[1]) / (here[1] - before[1])
@@ -160,7 +160,7 @@ class ObservedMission(SlotSchedule):
         """(next slot n, seconds since the clock put the UAV on its line, metres still to go
         to it) while the pass has started and the UAV has not reached slot n's line by its
         time pass_start + n delta_t; None otherwise (no start yet, on time, done, held)."""
-        if (self.pass_start_s is None or self.phase not in ("transit", "track")
+        if (self.pass_start_s is None or not self.phase.under_way
                 or self.all_flown):
             return None
         n = len(self.samples)

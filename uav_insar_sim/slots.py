@@ -1,10 +1,10 @@
 """The one slot scheduler of an agent: which P_com[k][n] applies in which slot, and the rate
 achieved there.
 
-Phases: `wait` (no plan yet) -> `transit` (plan known, before the track) -> `track` (slots
-running) -> `done` (every slot flown). `idle` means the plan does not fly this UAV
-(single-baseline's U2); `hold` that a plan in mid-flight took it out (NaN target): it
-stops where it is and flies no more slots. Slot n belongs at the along-track line
+The agent's phase (`Phase`): WAIT (no plan yet) -> TRANSIT (plan known, before the track) ->
+TRACK (slots running) -> DONE (every slot flown). IDLE means the plan does not fly this UAV
+(single-baseline's U2); HOLD that a plan in mid-flight took it out (NaN target): it stops
+where it is and flies no more slots. Slot n belongs at the along-track line
 y = y_start + n v_y delta_t (the model's y[n]). A position source decides when the UAV is
 there and calls `start_slot` with where it actually is: `mission.Mission` flies the UAV
 itself on the mission clock, `observed_mission.ObservedMission` watches a vehicle something
@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from enum import Enum
 
 from uav_insar_planner import model
 from uav_insar_planner.params import Params
@@ -49,6 +50,27 @@ class SlotSample:
         return self.rate_bps - self.rate_min_bps
 
 
+class Phase(Enum):
+    """Where an agent's mission is (module doc); the value is the word its log uses."""
+
+    WAIT = "wait"
+    TRANSIT = "transit"
+    TRACK = "track"
+    DONE = "done"
+    IDLE = "idle"
+    HOLD = "hold"
+
+    @property
+    def under_way(self) -> bool:
+        """Flying the plan: on its way to the track, or on it."""
+        return self in (Phase.TRANSIT, Phase.TRACK)
+
+    @property
+    def over(self) -> bool:
+        """Nothing more to fly: every slot flown, or taken out in mid-flight."""
+        return self in (Phase.DONE, Phase.HOLD)
+
+
 class SlotSchedule:
     """The plan and the slots of agent `uav_id` under `params` (SI), over the link `fading`
     (None: the paper's), with the closed-loop `controller` (None: open loop)."""
@@ -59,7 +81,7 @@ class SlotSchedule:
         self.params = params
         self.fading = fading
         self.controller = controller
-        self.phase = "wait"
+        self.phase = Phase.WAIT
         self.y_start = 0.0
         self.target_xz: tuple[float, float] | None = None
         self.powers: list[float] = []
@@ -83,16 +105,16 @@ class SlotSchedule:
         planner's hold plan, or this UAV taken out of the plan: stop where it is, start no
         more slots). Ignored once the mission is done or holding.
         """
-        if self.phase in ("done", "hold"):
+        if self.phase.over:
             return
         if not all(math.isfinite(v) for v in target_xz):
-            self.phase = "hold" if self.phase in ("transit", "track") else "idle"
+            self.phase = Phase.HOLD if self.phase.under_way else Phase.IDLE
             return
         self.target_xz = (float(target_xz[0]), float(target_xz[1]))
         self.powers = [float(p) for p in powers]
         self.y_start = float(y_start)
-        if self.phase in ("wait", "idle"):
-            self.phase = "transit"
+        if self.phase in (Phase.WAIT, Phase.IDLE):
+            self.phase = Phase.TRANSIT
 
     def slot_line(self, n: int) -> float:
         """Along-track position y at which slot n starts (n = num_slots: the pass's end)."""
@@ -144,7 +166,7 @@ class SlotSchedule:
         if self.controller is not None:
             self.controller.observe(position, power, rate)
         self.samples.append(sample)
-        self.phase = "track"
+        self.phase = Phase.TRACK
         return sample
 
 
