@@ -45,6 +45,7 @@ from datetime import datetime, timedelta
 from uav_insar_planner.autopilots.profiles import profile
 from uav_insar_planner.mission_file.geodesy import ned_to_latlon
 from uav_insar_planner.track.frame import TrackFrame
+from uav_insar_planner.track.passes import TrackPass
 
 VEHICLE_TYPE = 2  # MAV_TYPE_QUADROTOR
 ENDS = ("hold", "rtl")
@@ -123,8 +124,9 @@ def mission_items(home: Home, flight: Pass, x: float, z: float, start: datetime 
     track origin; `start` is the NAV_DELAY time (ArduPilot), None for PX4's hold."""
     nan = math.nan
     alt = z + home.alt_m if frame == "amsl" else z
-    begin = (*track_to_latlon(home, flight.bearing_deg, x, -flight.run_up_m), alt)
-    finish = (*track_to_latlon(home, flight.bearing_deg, x, flight.length_m), alt)
+    line = TrackPass(x, 0.0, flight.length_m, run_in_m=flight.run_up_m)
+    begin = (*track_to_latlon(home, flight.bearing_deg, *line.entry), alt)
+    finish = (*track_to_latlon(home, flight.bearing_deg, *line.point(flight.length_m)), alt)
     # yaw 0 on the loiters, not NaN: ArduPilot refuses a NaN param4 on every command but a few
     wait = ((CMD_LOITER_UNLIM, [0.0, 0.0, 0.0, 0.0, *begin], frame) if start is None else
             (CMD_DELAY, [-1.0, start.hour, start.minute, start.second, 0.0, 0.0, 0.0], None))

@@ -59,14 +59,14 @@ def braked_pass(elapsed: float, speed: float, duration: float) -> tuple[float, f
 
 
 def braked_time_s(distance_m: float, speed: float, duration: float) -> float:
-    """When `braked_pass`'s target is `distance_m` along (the inverse of its offset; inf at
-    or beyond the end of a finite pass; `speed` > 0)."""
+    """When `braked_pass`'s target is `distance_m` along (the inverse of its offset; inf
+    beyond the end of a finite pass, where it stops; `speed` > 0)."""
     if duration <= 0.0:
         return distance_m / speed
-    if distance_m >= speed * duration:
+    if distance_m > speed * duration:
         return math.inf
     t_brake, decel = _braking(speed, duration)
     if distance_m <= speed * t_brake:
         return distance_m / speed
     rest = distance_m - speed * t_brake
-    return t_brake + (speed - math.sqrt(speed * speed - 2.0 * decel * rest)) / decel
+    return t_brake + (speed - math.sqrt(max(speed * speed - 2.0 * decel * rest, 0.0))) / decel
