@@ -33,13 +33,12 @@ from uav_insar_planner.mavlink.pass_clock import (
     planner_start,
     resume_where_held,
 )
-from uav_insar_planner.mavlink.report import VehicleStatus, vehicle_status
+from uav_insar_planner.mavlink.report import Emit, VehicleStatus, vehicle_status
 from uav_insar_planner.mavlink.sequencer import ArmingSequence
 from uav_insar_planner.mavlink.supervision import WatchedVehicle
 from uav_insar_planner.mavlink.trajectory import PassTrajectory, clean_formation, separation
 from uav_insar_planner.plan import Vec3
 
-Emit = Callable[[int, str, str], None]  # (uav or -1 for the swarm, level, text)
 SendCommand = Callable[[WatchedVehicle, int, Sequence[float], int], None]
 
 
