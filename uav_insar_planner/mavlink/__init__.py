@@ -14,7 +14,7 @@ autopilot flavour is `uav_insar_planner.autopilots.profiles`):
 - `mode_orders`: DO_SET_MODE into the hold mode or back into the flight mode, resent until
   the heartbeat shows it.
 - `holds`: who holds and why (the planner's mission stop, the ground station's silence), and
-  how a held UAV rejoins.
+  how a held UAV rejoins; `hold_states`: its states and transitions as plain values.
 - `pass_clock`: when the pass starts (capture gate or the planner's instant), where it resumes.
 - `catch_up`: the gentle catch-up of a UAV that rejoins a running pass.
 - `flight_state`: the formation and hold state the bridge serves (`FlightState`).

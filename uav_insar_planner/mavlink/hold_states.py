@@ -11,7 +11,9 @@ states (`Hold`), all but FLYING:
     HELD_SILENT     Silence: every UAV, whatever it was          ground station silent
     HELD_WAITING    Heard again after a Silence                  waiting for the pass
     HELD_BEHIND     a Rejoin finding it too far behind, or       its `behind` text
-                    without a target; a late start (FallBack)
+                    without a target; a late start (FallBack);
+                    a Plan giving a HELD_NO_TARGET one a target
+                    when a Rejoin had found it so
     HELD_NO_TARGET  a Plan giving no target to a UAV held for    no target in the plan
                     a silence (or rejoined since, no plan yet)
 
