@@ -13,7 +13,7 @@ its clock are `uav_insar_planner.track`):
 - `mode_orders`: DO_SET_MODE into the hold mode or back into the flight mode, resent until
   the heartbeat shows it.
 - `holds`: who holds and why (the planner's mission stop, the ground station's silence), and
-  how a held UAV rejoins.
+  how a held UAV rejoins; `hold_states`: its states and transitions as plain values.
 - `start_gate`: when the pass starts (capture gate or the planner's instant), where it resumes.
 - `flight_state`: the formation and hold state the bridge serves (`FlightState`).
 - `io_thread`: one I/O loop in a daemon thread (`IoThread`: the bridge's, the simulated

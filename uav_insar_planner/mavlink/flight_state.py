@@ -26,7 +26,7 @@ from uav_insar_planner.autopilots.profiles import profile
 from uav_insar_planner.mavlink.config import BridgeConfig
 from uav_insar_planner.mavlink.holds import REJOIN_S, Holding
 from uav_insar_planner.mavlink.mode_orders import ModeOrder
-from uav_insar_planner.mavlink.report import VehicleStatus, vehicle_status
+from uav_insar_planner.mavlink.report import Emit, VehicleStatus, vehicle_status
 from uav_insar_planner.mavlink.sequencer import ArmingSequence
 from uav_insar_planner.mavlink.start_gate import (
     capture_start,
@@ -41,7 +41,6 @@ from uav_insar_planner.track.formation import clean_formation, separation
 from uav_insar_planner.track.frame import TrackFrame
 from uav_insar_planner.track.trajectory import PassTrajectory
 
-Emit = Callable[[int, str, str], None]  # (uav or -1 for the swarm, level, text)
 SendCommand = Callable[[WatchedVehicle, int, Sequence[float], int], None]
 
 

@@ -1,21 +1,23 @@
 """Who holds, and why: the planner's mission stop and the ground station's silence, and how a
-held UAV gets back into the pass.
+held UAV gets back into the pass. The states and their transitions are `hold_states` (plain
+values, `hold_states.step`); `Holding` feeds them the bridge's calls and applies the actions
+to its two mode orders and its event sink.
 
 The bridge feeds it each new plan (`on_plan`, with the clean formation), everything heard
 from the ground station (`gcs_heard`) and its clock (`check`); it asks which mode order is due
-for a vehicle (`order_due`) and whether its setpoints are stopped (`stopped`). Not
+for a vehicle (`order_due`) and whether it is held (`stopped`: its setpoints stop). Not
 thread-safe: the bridge holds its lock.
 
 - Mission stop: a formation with every pose NaN after one with targets (`replanning.plans`)
   engages the hold order (`mode_orders.hold_order`: LOITER / AUTO.LOITER) for every vehicle; a
   later plan releases it for the UAVs it gives a target, which stay in their hold mode until the
   pilot or a GCS switches them back.
-- Ground station silent (`gcs_timeout_s` > 0): the clock starts with the first gcs/heartbeat
-  (before one was matched, silence is not loss: a lossy radio may take seconds to match the
-  best-effort heartbeat, while the reliable plan is already there). From then on anything
-  counts: a heartbeat, a plan message, a start message. Silent for longer than
-  `gcs_timeout_s`: the setpoints to every vehicle stop and the hold order is engaged for
-  every vehicle, with one event saying how long it was silent and what was last heard.
+- Ground station silent (`gcs_timeout_s` > 0, `GcsWatch`): the clock starts with the first
+  gcs/heartbeat (before one was matched, silence is not loss: a lossy radio may take seconds to
+  match the best-effort heartbeat, while the reliable plan is already there). From then on
+  anything counts: a heartbeat, a plan message, a start message. Silent for longer than
+  `gcs_timeout_s`: every vehicle is held (no setpoints, the hold order), with one event saying
+  how long it was silent and what was last heard.
 - Getting back (`rejoin`, called by the bridge when the ground is heard again and when a new
   start or plan comes): a held vehicle whose target, on the pass clock it flies, is at most
   `rejoin_m` ahead of where it stands rejoins the pass: its setpoints resume, and if it is
@@ -31,15 +33,30 @@ thread-safe: the bridge holds its lock.
 """
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 
 from uav_insar_planner.autopilots.profiles import AutopilotProfile
+from uav_insar_planner.mavlink.hold_states import (
+    Event,
+    FallBack,
+    HeardAgain,
+    Hold,
+    Holds,
+    OrderHold,
+    OrderResume,
+    Plan,
+    Rejoin,
+    ReleaseHold,
+    Seen,
+    Silence,
+    Tell,
+    step,
+)
 from uav_insar_planner.mavlink.mode_orders import ModeOrder, hold_order, resume_order
+from uav_insar_planner.mavlink.report import Emit
 from uav_insar_planner.mavlink.supervision import WatchedVehicle
 from uav_insar_planner.plan import Vec3
-from uav_insar_planner.swarm import uav_name
 
-Emit = Callable[[int, str, str], None]  # (uav or -1 for the swarm, level, text)
 # A held UAV rejoins when its target is at most this much of the pass (speed_mps * REJOIN_S)
 # ahead of it: a short hold, caught up in a few seconds; farther behind it would sprint.
 REJOIN_S = 1.0
@@ -95,121 +112,78 @@ class Holding:
                  emit: Emit):
         self.hold, self.resume = hold_order(autopilot), resume_order(autopilot)
         self.gcs = GcsWatch(gcs_timeout_s)
-        self._uavs, self._emit = tuple(uavs), emit
-        self._stopped: set[int] = set()  # setpoints stopped for the ground's silence
-        self.behind: dict[int, str] = {}  # held, too far behind to rejoin: why
-        self._gcs_held: set[int] = set()  # held for a silence, no plan has given a target since
-        self._no_target: set[int] = set()  # of those, held again: a plan gave it no target
+        self.holds = Holds.start(uavs, self.hold.mode.name, self.resume.mode.name)
+        self._emit = emit
+
+    def _apply(self, event: Event) -> None:
+        """Step the state by `event` and carry out its actions."""
+        self.holds, actions = step(self.holds, event)
+        for action in actions:
+            if isinstance(action, OrderHold):
+                # One order per vehicle: a resume still engaged (a rejoin just before the plan
+                # that took the UAV out) would alternate with the hold and leave it flying.
+                self.resume.release(action.uavs)
+                self.hold.engage(action.uavs)
+            elif isinstance(action, ReleaseHold):
+                self.hold.release(action.uavs)
+            elif isinstance(action, OrderResume):
+                self.resume.engage([action.uav])
+            elif isinstance(action, Tell):
+                self._emit(action.uav, action.level, action.text)
 
     @property
-    def held(self) -> bool:
-        """Whether any vehicle is held for the ground's silence."""
-        return bool(self._stopped)
+    def behind(self) -> dict[int, str]:
+        """Held, too far behind (or without a target) to rejoin: why, per UAV."""
+        return {k: u.behind for k, u in self.holds.uavs.items() if u.behind}
+
+    def state(self, uav: int) -> Hold:
+        return self.holds.uavs[uav].state
 
     def gcs_heard(self, what: str, now: float, heartbeat: bool = False) -> bool:
         """True when this ends a silence while vehicles are held (the bridge then calls
         `rejoin`)."""
         back = self.gcs.heard(what, now, heartbeat)
-        if back is not None:
-            self._emit(-1, "info", back)
-        return back is not None and self.held
+        if back is None:
+            return False
+        self._apply(HeardAgain(back))
+        return bool(self.holds.held())
 
     def check(self, now: float) -> None:
+        """The clock moved on: every vehicle held once the ground is silent too long."""
         why = self.gcs.check(now)
-        if why is None:
-            return
-        self._stopped = set(self._uavs)
-        self._gcs_held, self._no_target = set(self._uavs), set()
-        self.behind = {}
-        self._order_hold(self._uavs)
-        self._emit(-1, "warn", f"{why}: stopping the setpoints and commanding "
-                               f"{self.hold.mode.name} to every vehicle")
+        if why is not None:
+            self._apply(Silence(why))
+
+    def _seen(self, vehicles: Sequence[WatchedVehicle],
+              lags: Mapping[int, float | None]) -> tuple[Seen, ...]:
+        return tuple(Seen(v.uav, lags.get(v.uav), v.mode,
+                          self.hold.reached(v) or self.resume.reached(v)) for v in vehicles)
 
     def rejoin(self, vehicles: Sequence[WatchedVehicle], lags: Mapping[int, float | None],
                rejoin_m: float, why: str) -> list[int]:
         """Give back every held vehicle whose target is at most `rejoin_m` ahead of it
         (`lags`, metres along track; None: no target or no position), see the module doc;
         `why` names the occasion for the log; the UAVs given back."""
-        given: list[int] = []
-        if self.gcs.silent:
-            return given  # still silent: nothing is given back
-        for v in vehicles:
-            if v.uav not in self._stopped:
-                continue
-            lag = lags.get(v.uav)
-            if lag is not None and lag <= rejoin_m:
-                self._give_back(v, f"{why}: rejoins the pass, {max(lag, 0.0):.2f} m behind its "
-                                   f"target (rejoin limit {rejoin_m:.2f} m)")
-                given.append(v.uav)
-                continue
-            text = ("no target in the plan flown: keeps holding" if lag is None else
-                    f"{lag:.2f} m behind its target, more than the {rejoin_m:.2f} m it may "
-                    "catch up: cannot keep the pass, keeps holding")
-            if self.behind.get(v.uav) != text:
-                self.behind[v.uav] = text
-                self._emit(v.uav, "warn", f"{why}: {text}")
-        return given
+        before = set(self.holds.held())
+        self._apply(Rejoin(self._seen(vehicles, lags), rejoin_m, why))
+        return [v.uav for v in vehicles if v.uav in before and not self.state(v.uav).held]
 
     def fall_back(self, vehicles: Sequence[WatchedVehicle], lags: Mapping[int, float | None],
                   rejoin_m: float, why: str) -> None:
         """A pass start heard late (after a lossy radio's repair): each flying vehicle more
         than `rejoin_m` behind its target holds rather than sprint, reported `behind`."""
-        for v in vehicles:
-            lag = lags.get(v.uav)
-            if v.uav in self._stopped or lag is None or lag <= rejoin_m:
-                continue
-            self._stopped.add(v.uav)
-            self._order_hold([v.uav])
-            self.behind[v.uav] = (f"{lag:.2f} m behind its target, more than the "
-                                  f"{rejoin_m:.2f} m it may catch up: cannot keep the pass, "
-                                  "keeps holding")
-            self._emit(v.uav, "warn", f"{why}: {self.behind[v.uav]} ({self.hold.mode.name}, "
-                                      "no sprint)")
-
-    def _give_back(self, v: WatchedVehicle, text: str) -> None:
-        self._stopped.discard(v.uav)
-        self.behind.pop(v.uav, None)
-        self.hold.release([v.uav])
-        if self.hold.reached(v) or self.resume.reached(v):
-            # (still in the flying mode as last heard: the hold order may be on its way)
-            self.resume.engage([v.uav])
-            text += f"; {self.hold.mode.name} -> {self.resume.mode.name}"
-        else:
-            text += (f"; in {v.mode}, not the {self.hold.mode.name} the bridge commanded (a "
-                     f"pilot switched it): not taken back to {self.resume.mode.name}")
-        self._emit(v.uav, "info", text)
+        self._apply(FallBack(self._seen(vehicles, lags), rejoin_m, why))
 
     def on_plan(self, formation: Sequence[Vec3 | None], flown_before: bool) -> None:
         """A new plan identity with this formation: the mission stop (every pose NaN), or the
         end of it for the UAVs given a target. A ground-silence hold is not ended here: the
         bridge calls `rejoin` with the new plan's targets."""
-        targets = {k for k, p in enumerate(formation) if p is not None}
-        if not targets:
-            if flown_before and not self.held:
-                self._order_hold(self._uavs)
-                self._emit(-1, "warn", "every pose NaN: the mission stopped; commanding "
-                                       f"{self.hold.mode.name} to every vehicle")
-            return
-        self.hold.release(targets - self._stopped)
-        self._gcs_held -= targets
-        self._no_target -= targets
-        kept = sorted(self._gcs_held - self._no_target)
-        if kept:  # (lost meanwhile: the survivors' plan gives it NaN; never into their way)
-            self._no_target.update(kept)
-            self._stopped.update(kept)
-            self._order_hold(kept)
-            self._emit(-1, "info", "no target in the new plan for "
-                                   f"{', '.join(uav_name(k) for k in kept)}: keeps holding")
-
-    def _order_hold(self, uavs: Sequence[int]) -> None:
-        # One order per vehicle: a resume still engaged (a rejoin just before the plan that
-        # took the UAV out) would alternate with the hold and leave it flying.
-        self.resume.release(uavs)
-        self.hold.engage(uavs)
+        targets = frozenset(k for k, p in enumerate(formation) if p is not None)
+        self._apply(Plan(targets, flown_before))
 
     def stopped(self, v: WatchedVehicle) -> bool:
-        """No setpoints to `v` (held for the ground's silence, not given back)."""
-        return v.uav in self._stopped
+        """Whether `v` is held: no setpoints go to it."""
+        return self.state(v.uav).held
 
     def order_due(self, v: WatchedVehicle, now: float) -> ModeOrder | None:
         """The mode order to send `v` now (then call its `sent`), or None."""
@@ -219,16 +193,5 @@ class Holding:
         return None
 
     def phase(self, v: WatchedVehicle) -> str:
-        """The UAV's phase while the ground-silence hold holds it ("" otherwise)."""
-        if v.uav not in self._stopped:
-            return ""
-        if v.uav in self._no_target:
-            return (f"holding ({self.hold.mode.name}) since the ground station fell silent: no "
-                    "target in the current plan")
-        if self.gcs.silent:
-            return f"holding ({self.hold.mode.name}): ground station silent"
-        if v.uav in self.behind:
-            return f"holding ({self.hold.mode.name}): {self.behind[v.uav]}"
-        return (f"holding ({self.hold.mode.name}): ground station heard again, waiting for "
-                "the pass to resume")
-
+        """The UAV's phase while held ("" otherwise)."""
+        return self.holds.phase(v.uav)

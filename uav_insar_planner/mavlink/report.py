@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from uav_insar_planner.mavlink.sequencer import ArmingSequence
@@ -9,6 +10,9 @@ from uav_insar_planner.mavlink.supervision import WatchedVehicle, phase
 from uav_insar_planner.plan import Vec3
 from uav_insar_planner.track.frame import TrackFrame
 from uav_insar_planner.track.trajectory import PassTrajectory
+
+# The bridge's event sink (uav or -1 for the swarm, level, text): what becomes a BridgeEvent.
+Emit = Callable[[int, str, str], None]
 
 
 @dataclass(frozen=True)
