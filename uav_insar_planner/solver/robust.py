@@ -121,7 +121,7 @@ def _c7_raised(p: Params, a: float) -> float:
     sines = c7_sines(p)
     if sines is None or a == 0.0:
         return p.coherence_rg_min
-    bp = p.radar_bandwidth_hz / p.center_frequency_hz
+    bp = p.fractional_bandwidth
     ends = [math.asin(min(sines[0], 1.0)) + a]
     if sines[1] < 1.0:
         ends.append(math.asin(sines[1]) - a)
