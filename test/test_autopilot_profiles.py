@@ -32,6 +32,16 @@ def test_the_simulators_modes_round_trip_through_the_heartbeat(name):
     assert not v.autopilot.hold.shown_by(flight.custom_mode)
 
 
+def test_each_flavour_names_its_mav_autopilot_once_as_pymavlink_does():
+    """AutopilotProfile.mav_autopilot is both the .plan's firmwareType and the simulator's
+    HEARTBEAT.autopilot; the plain ints are pymavlink's MAV_AUTOPILOT values."""
+    from uav_insar_planner.mavlink.link import MAV
+
+    assert PROFILES["ardupilot"].mav_autopilot == MAV.MAV_AUTOPILOT_ARDUPILOTMEGA
+    assert PROFILES["px4"].mav_autopilot == MAV.MAV_AUTOPILOT_PX4
+    assert all(not hasattr(v, "mav_autopilot") for v in VEHICLE_PROFILES.values())
+
+
 def test_an_unknown_flavour_is_refused_naming_the_allowed_ones():
     with pytest.raises(ValueError, match=r"^autopilot: 'arduplane' is not allowed; expected "
                                          r"one of ardupilot, px4$"):

@@ -94,6 +94,44 @@ def test_worst_case_bound_brackets_the_rim_search():
         pytest.approx(evaluate(p, plan.formation, plan.p_com_w, plan.scheme).sigma_h))
 
 
+def test_robust_slacks_run_once_per_plan_of_the_search(monkeypatch):
+    """robust_slacks checks each plan of the floor search once (robust.py) and the chosen
+    plan's slacks are those, not computed again by solver.robust_plan."""
+    import uav_insar_planner.solver as solver_package
+    from uav_insar_planner.solver import worst_case
+
+    tightenings, checked, plans = [], [], []
+    real_tightened, real_backend = robust.tightened, solver_package.backend
+
+    def tightened(*args, **kwargs):
+        tightenings.append(real_tightened(*args, **kwargs))
+        return tightenings[-1]
+
+    def counted_backend(name):
+        run = real_backend(name)
+
+        def counted(q, *args, **kwargs):
+            res = run(q, *args, **kwargs)
+            if res.feasible and any(q is t for t in tightenings):
+                plans.append(res)
+            return res
+        return counted
+
+    def spy(*args, **kwargs):
+        checked.append(args)
+        return robust_slacks(*args, **kwargs)
+
+    monkeypatch.setattr(robust, "tightened", tightened)
+    monkeypatch.setattr(solver_package, "backend", counted_backend)
+    for module in (robust, worst_case, solver_package):
+        monkeypatch.setattr(module, "robust_slacks", spy, raising=False)
+    p = default_params().replace(nav_error_m=0.25)
+    plan = solve(p)
+    assert plan.feasible, plan.message
+    assert plans and len(checked) == len(plans)
+    assert plan.robust_constraints == robust_slacks(p, plan.formation, plan.p_com_w, plan.scheme)
+
+
 def test_large_error_is_proved_infeasible_naming_the_constraints():
     plan = solve(default_params().replace(nav_error_m=30.0))
     assert not plan.feasible

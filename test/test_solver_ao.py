@@ -87,7 +87,7 @@ def test_proposition2_equivalence(gamma_rg_min):
     """C7 (eq. 10 with X of eq. 11) holds iff C7a (theta <= theta_0) / C7b (theta > theta_0)."""
     p = default_params().replace(coherence_rg_min=gamma_rg_min)
     alpha_a, alpha_b = c7_slopes(p)
-    bp = p.radar_bandwidth_hz / p.center_frequency_hz
+    bp = p.fractional_bandwidth
     for theta in np.radians(np.linspace(0.5, 89.5, 1781)):
         g = float(model.coherence_baseline(model.chi(p.theta0, theta), bp))
         if abs(g - gamma_rg_min) < 1e-9:

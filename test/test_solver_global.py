@@ -243,7 +243,7 @@ def test_infeasible_static_power_names_c9():
 
 def _fused_sigma(p, q, slaves):
     gm = model.gamma_m(p)
-    bp = p.radar_bandwidth_hz / p.center_frequency_hz
+    bp = p.fractional_bandwidth
     r0 = model.slant_range(q[0, 0], q[0, 1], p.x_t)
     inv = 0.0
     for k in slaves:
@@ -263,7 +263,7 @@ def _fused_sigma(p, q, slaves):
 def _constraints(p, q, scheme, slaves):
     """C1..C11 as g(x) >= 0 from the model functions (C9-C11 via the cheapest schedule)."""
     gm = model.gamma_m(p)
-    bp = p.radar_bandwidth_hz / p.center_frequency_hz
+    bp = p.fractional_bandwidth
     uavs = (0, *slaves)
     out = []
     r0 = model.slant_range(q[0, 0], q[0, 1], p.x_t)

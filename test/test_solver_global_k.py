@@ -45,7 +45,7 @@ def flown(p, scheme):
 def pair_sigma(p, q0, qk, objective="exact"):
     """sigma_h,k of the pair (master, slave k) from model.py (eqs. 3-14)."""
     gm = model.gamma_m(p)
-    bp = p.radar_bandwidth_hz / p.center_frequency_hz
+    bp = p.fractional_bandwidth
     r0 = model.slant_range(q0[0], q0[1], p.x_t)
     rk = model.slant_range(qk[0], qk[1], p.x_t)
     b = model.perpendicular_baseline(q0[0], q0[1], qk[0], qk[1], p.theta0)
@@ -72,7 +72,7 @@ def violations(p, q, p_com, scheme):
     uavs = flown(p, scheme)
     bad = [f"row{k} not NaN" for k in range(len(q)) if k not in uavs and np.isfinite(q[k]).any()]
     gm = model.gamma_m(p)
-    bp = p.radar_bandwidth_hz / p.center_frequency_hz
+    bp = p.fractional_bandwidth
     r0 = model.slant_range(q[0, 0], q[0, 1], p.x_t)
     if scheme == "fixed-master":
         bad += ["q0 != q0_fixed"] * (not np.allclose(q[0], p.master_fixed, atol=POS_TOL))
@@ -207,7 +207,7 @@ def _g(p, q, scheme):
     """C1-C11 as g >= 0 in the positions; C9-C11 through the cheapest schedule."""
     uavs = flown(p, scheme)
     gm = model.gamma_m(p)
-    bp = p.radar_bandwidth_hz / p.center_frequency_hz
+    bp = p.fractional_bandwidth
     r0 = model.slant_range(q[0, 0], q[0, 1], p.x_t)
     out = []
     for k in uavs:

@@ -55,7 +55,7 @@ def pair_metrics(p: Params, q0: np.ndarray, qk: np.ndarray) -> dict[str, float]:
     snr0 = float(model.snr_monostatic(r0, gm))
     snrk = float(model.snr_bistatic(r0, rk, gm))
     g_snr = float(model.coherence_snr(snr0, snrk))
-    bp = p.radar_bandwidth_hz / p.center_frequency_hz
+    bp = p.fractional_bandwidth
     g_rg = float(model.coherence_baseline(model.chi(p.theta0, theta_k), bp))
     g = float(model.coherence_total(g_rg, g_snr, p.coherence_other))
     h_amb = float(model.height_of_ambiguity(p.wavelength, r0, p.theta0, b_perp))

@@ -113,6 +113,11 @@ class Params:
         return params_from_mapping(merged, known=self, changed=frozenset(user_values))
 
     @property
+    def fractional_bandwidth(self) -> float:
+        """B_p = B_Rg / f_0, the radar's fractional bandwidth in gamma_Rg (eq. 10)."""
+        return self.radar_bandwidth_hz / self.center_frequency_hz
+
+    @property
     def y_track(self):
         """y[n] = (n - 1) v_y delta_t for n = 1..N (equation (1)), as a numpy array."""
         import numpy as np

@@ -95,8 +95,9 @@ class AutopilotProfile:
     #: no setpoints outside `flight` nor during the arming sequence (the autopilot ignores
     #: them); else the stream never stops (the mode needs it before and on return)
     setpoints_in_flight_only: bool
-    #: a `.plan`'s firmwareType (MAV_AUTOPILOT)
-    firmware_type: int
+    #: its MAV_AUTOPILOT value: HEARTBEAT.autopilot (the simulator's) and a `.plan`'s
+    #: firmwareType (plain ints, as pymavlink's MAV_AUTOPILOT_*: no MAVLink library here)
+    mav_autopilot: int
     #: a mission file waits for a UTC time (NAV_DELAY); else it holds until MISSION_START
     mission_waits_for_utc: bool
 
@@ -118,14 +119,14 @@ PROFILES = {
         "ardupilot", flight=copter_mode("GUIDED"), hold=copter_mode("LOITER"),
         arming_steps=("wait for position", "mode", "arm", "takeoff", "climb"),
         stream_before_flight_s=0.0, setpoints_in_flight_only=True,
-        firmware_type=3, mission_waits_for_utc=True),  # MAV_AUTOPILOT_ARDUPILOTMEGA
+        mav_autopilot=3, mission_waits_for_utc=True),  # MAV_AUTOPILOT_ARDUPILOTMEGA
     "px4": AutopilotProfile(
         "px4", flight=px4_mode("OFFBOARD", "OFFBOARD", PX4_MAIN_MODE_MASK),
         hold=px4_mode("HOLD", "AUTO.LOITER"),
         arming_steps=("wait for position", "stream setpoints", "mode", "arm"),
         # PX4 wants > 1 s of setpoints before OFFBOARD; the margin is for jitter
         stream_before_flight_s=1.2, setpoints_in_flight_only=False,
-        firmware_type=12, mission_waits_for_utc=False),  # MAV_AUTOPILOT_PX4
+        mav_autopilot=12, mission_waits_for_utc=False),  # MAV_AUTOPILOT_PX4
 }
 AUTOPILOTS = tuple(PROFILES)
 

@@ -56,7 +56,7 @@ class BridgeConfig:
     - setpoint_rate_hz: PX4 leaves offboard below 2 Hz.
     - readiness_timeout_s: FAILED / TEMPORARILY_REJECTED arming checks are retried meanwhile;
       a cold-booting ArduCopter needs ~45 s.
-    - signing_key_file, gcs_timeout_s: `signing` and `holding` do the work; gcs_timeout_s is
+    - signing_key_file, gcs_timeout_s: `signing` and `holds` do the work; gcs_timeout_s is
       0 (off) or at least GCS_TIMEOUT_MIN_S.
     - pass_start: "capture" (the bridge's own capture gate) or "planner" (`Bridge.set_start`,
       the planner's formation/start, which the agents' slots follow too).

@@ -151,7 +151,7 @@ def plan_document(home: Home, flight: Pass, x: float, z: float, start: datetime 
     if start is None and flavour.mission_waits_for_utc:
         raise ValueError(f"start: None; an {autopilot} file waits for a UTC time (NAV_DELAY)")
     return {"fileType": "Plan", "version": 1, "groundStation": "QGroundControl",
-            "mission": {"version": 2, "firmwareType": flavour.firmware_type,
+            "mission": {"version": 2, "firmwareType": flavour.mav_autopilot,
                         "vehicleType": VEHICLE_TYPE, "cruiseSpeed": flight.speed_mps,
                         "hoverSpeed": flight.speed_mps,
                         "globalPlanAltitudeMode": ALTITUDE_FRAMES[frame][1],

@@ -24,7 +24,7 @@ Publishes (names relative to the node's namespace, except /diagnostics):
 Subscribes, for K = 0..num_uavs-1 of the scenario (more when a larger num_uavs is set),
 uav{K}/pose (PoseStamped), uav{K}/achieved_rate (Float64, bit/s), uav{K}/plan; the
 swarm watch (swarm_watch.py: lost UAVs, saturated closed loops, the re-plans they call for)
-also uav{K}/offload and /diagnostics; the pass start (pass_start.py) uav{K}/mavlink/pose, and
+also uav{K}/offload and /diagnostics; the pass start (formation_start.py) uav{K}/mavlink/pose, and
 publishes formation/start (std_msgs/Header, latched: the wall-clock start of the pass and the
 plan it starts) once every flown UAV is captured. Planner-only parameters: uav_timeout_s,
 capture_radius_m, start_delay_s (param_specs.nodes.PLANNER_SPECS).

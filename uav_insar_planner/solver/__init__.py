@@ -36,7 +36,6 @@ from uav_insar_planner.params import (
 from uav_insar_planner.plan import Plan
 from uav_insar_planner.solver import robust
 from uav_insar_planner.solver.result import SolverResult
-from uav_insar_planner.solver.worst_case import robust_slacks
 
 
 class SolverFailure(RuntimeError):
@@ -130,13 +129,14 @@ def new_warm_start(solver: str) -> object | None:
 
 
 def robust_plan(plan: Plan, params: Params, answer: robust.RobustAnswer) -> Plan:
-    """`plan` with the worst case of robust.solve's answer, checked over the error disks
-    (worst_case.robust_slacks); a plan failing that check is reported infeasible."""
+    """`plan` with the worst case of robust.solve's answer and the worst-case slacks it
+    computed for this plan over the error disks (`RobustAnswer.held`, worst_case.robust_slacks,
+    not run again here); a plan failing that check is reported infeasible."""
     plan = replace(plan, nav_error_m=params.nav_error_m, worst_lower_bound_m=answer.lower_bound,
                    worst_certificate=answer.certificate)
     if answer.worst is None or not plan.feasible:
         return replace(plan, sigma_h_worst_m=float("nan"))
-    held = robust_slacks(params, plan.formation, plan.p_com_w, plan.scheme)
+    held = answer.held
     plan = replace(plan, sigma_h_worst_m=answer.worst.upper, robust_constraints=held,
                    worst_gap=(answer.worst.upper - answer.lower_bound) / answer.worst.upper)
     if answer.worst.upper == float("inf"):

@@ -75,7 +75,7 @@ class Problem:
 def make_problem(p: Params, scheme: str, objective: str,
                  off: frozenset[str] = frozenset()) -> Problem:
     th0 = p.theta0
-    bp = p.radar_bandwidth_hz / p.center_frequency_hz
+    bp = p.fractional_bandwidth
     ox, oz = p.ground_station[0] - p.x_t, p.ground_station[2]
     disk = tuple(station_radius_sq(p, k, scheme, off) for k in uavs(p.num_uavs))
     pr = Problem(p=p, scheme=scheme, objective=objective, off=off,
@@ -101,8 +101,7 @@ def c7_sines(p: Params) -> tuple[float, float] | None:
     (2 - h)/h sin(theta_0) <= sin(theta) <= h/(2 - h) sin(theta_0) with h the X at which
     gamma_Rg = gamma_Rg^min (the upper one +inf for h >= 2); None when even X = 1
     (theta = theta_0) misses the threshold."""
-    h = model.coherence_baseline_inverse(p.coherence_rg_min,
-                                         p.radar_bandwidth_hz / p.center_frequency_hz)
+    h = model.coherence_baseline_inverse(p.coherence_rg_min, p.fractional_bandwidth)
     if h < 1.0:
         return None
     s0 = math.sin(p.theta0)

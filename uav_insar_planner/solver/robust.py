@@ -32,7 +32,7 @@ range, but the worst case gains from a longer one (b_perp - 2e grows with r_0). 
 range floor f (a raised S_min, `tightened(floor_m=f)`) is searched on a grid and the plan with
 the least certified worst case (solver/worst_case.py) is returned: `sigma_h_worst_m`, an upper
 bound of sigma_h over the disks. Every plan is checked by `worst_case.robust_slacks` before it
-is returned.
+is returned, once: the answer keeps the chosen plan's slacks (`RobustAnswer.held`).
 
 Lower bound (the gap). Two relaxations of (P_e), each solved by the back end, whose certified
 lower bounds bound (P_e) from below; the larger is reported:
@@ -65,7 +65,12 @@ from uav_insar_planner import model
 from uav_insar_planner.params import Params
 from uav_insar_planner.solver.problem import c7_sines, make_problem
 from uav_insar_planner.solver.result import SolverResult
-from uav_insar_planner.solver.worst_case import WorstCase, robust_slacks, worst_sigma
+from uav_insar_planner.solver.worst_case import (
+    ConstraintStatus,
+    WorstCase,
+    robust_slacks,
+    worst_sigma,
+)
 
 # The master-range floors tried: this many on a geometric grid up to the master interval's top
 # (at most FLOOR_SPAN times the least range), then as many between the best's neighbours.
@@ -85,6 +90,8 @@ class RobustAnswer:
     worst: WorstCase | None
     lower_bound: float
     certificate: str
+    #: robust_slacks of `result`'s plan, computed once while searching; None with no plan.
+    held: dict[str, ConstraintStatus] | None = None
 
 
 def _master_least_range(p: Params, scheme: str) -> float:
@@ -121,7 +128,7 @@ def _c7_raised(p: Params, a: float) -> float:
     sines = c7_sines(p)
     if sines is None or a == 0.0:
         return p.coherence_rg_min
-    bp = p.radar_bandwidth_hz / p.center_frequency_hz
+    bp = p.fractional_bandwidth
     ends = [math.asin(min(sines[0], 1.0)) + a]
     if sines[1] < 1.0:
         ends.append(math.asin(sines[1]) - a)
@@ -188,16 +195,18 @@ def solve(p: Params, scheme: str, objective: str, run: Backend) -> RobustAnswer:
             f"{p.nav_error_m:g} m of its point: " + relax.message)), None, math.inf,
             "robust problem infeasible: its relaxation (C1, C4, C5, C9-C11 tightened by e) "
             f"is: {relax.certificate}")
-    tried: dict[float, tuple[float, SolverResult, WorstCase] | None] = {}
+    tried: dict[float, tuple[float, SolverResult, WorstCase,
+                             dict[str, ConstraintStatus]] | None] = {}
 
     def attempt(floor: float) -> None:
         res = run(tightened(p, scheme, floor), scheme, objective)
         if not res.feasible:
             tried[floor] = None
             return
-        ok = all(c.ok for c in robust_slacks(p, res.formation, res.p_com, scheme).values())
+        held = robust_slacks(p, res.formation, res.p_com, scheme)
         worst = worst_sigma(p, res.formation, scheme, SEARCH_TOL)
-        tried[floor] = (worst.upper, res, worst) if ok else None
+        tried[floor] = (worst.upper, res, worst, held) if all(
+            c.ok for c in held.values()) else None
 
     grid = _floors(p, scheme, objective)
     for f in grid:
@@ -215,7 +224,7 @@ def solve(p: Params, scheme: str, objective: str, run: Backend) -> RobustAnswer:
         if float(f) not in tried:
             attempt(float(f))
     done = {f: v for f, v in tried.items() if v is not None}
-    _, res, _ = done[min(done, key=lambda f: done[f][0])]
+    _, res, _, held = done[min(done, key=lambda f: done[f][0])]
     worst = worst_sigma(p, res.formation, scheme)
     # the relaxations bound sigma_h only when sigma_h is what the back end minimised
     lower = math.nan
@@ -224,4 +233,4 @@ def solve(p: Params, scheme: str, objective: str, run: Backend) -> RobustAnswer:
                     run(moved_relaxation(p, scheme, objective), scheme, objective).lower_bound)
     return RobustAnswer(res, worst, lower, (
         f"branch and bound over {worst.squares} squares of the master's error disk, each "
-        "slave's disk by monotone bounds"))
+        "slave's disk by monotone bounds"), held)

@@ -122,7 +122,7 @@ def _slave_pieces(p: Params, k: int, scheme: str, fam: frozenset[str], q0: np.nd
     if "C6" in fam:
         hi = np.minimum(hi, model.slave_range_max(p, r0))
     if "C7" in fam:
-        bp = p.radar_bandwidth_hz / p.center_frequency_hz
+        bp = p.fractional_bandwidth
         g_rg = model.coherence_baseline(model.chi(p.theta0, thetas), bp)
         hi = np.where(g_rg >= p.coherence_rg_min, hi, -np.inf)
     if "C8" in fam:

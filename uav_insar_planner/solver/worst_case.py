@@ -69,7 +69,7 @@ class WorstCase:
 
 
 def _gamma_rg(p: Params, theta):
-    bp = p.radar_bandwidth_hz / p.center_frequency_hz
+    bp = p.fractional_bandwidth
     return model.coherence_baseline(model.chi(p.theta0, theta), bp)
 
 

@@ -27,8 +27,8 @@ from uav_insar_sim.vehicle.parameters import Param, copter_params, px4_params
 class VehicleProfile:
     """One flavour of the simulated multicopter (see the module doc)."""
 
-    autopilot: AutopilotProfile  # the bridge's view: the mode it flies in, ...
-    mav_autopilot: int  # HEARTBEAT.autopilot
+    #: the bridge's view: the mode it flies in, ..., its MAV_AUTOPILOT (HEARTBEAT.autopilot)
+    autopilot: AutopilotProfile
     #: mode name -> HEARTBEAT.custom_mode, and (custom_mode, main, sub) -> mode name or None
     custom_mode: Callable[[str], int]
     mode_named: Callable[[int, int, int], str | None]
@@ -60,8 +60,7 @@ class VehicleProfile:
 
 VEHICLE_PROFILES = {
     "ardupilot": VehicleProfile(
-        profile("ardupilot"), MAV.MAV_AUTOPILOT_ARDUPILOTMEGA,
-        custom_mode=COPTER_MODES.__getitem__,
+        profile("ardupilot"), custom_mode=COPTER_MODES.__getitem__,
         mode_named=lambda custom, main, sub: copter_mode_name(custom),
         ground_mode="STABILIZE", boot_fallback_mode="STABILIZE", refuses_while_booting=False,
         mode_change_clears_target=True, unknown_mode=MAV.MAV_RESULT_FAILED,
@@ -75,7 +74,7 @@ VEHICLE_PROFILES = {
         mission_start_from_item=False, version=(4, 7, 0, MAV.FIRMWARE_VERSION_TYPE_DEV),
         bytewise_params=False, params=copter_params),
     "px4": VehicleProfile(
-        profile("px4"), MAV.MAV_AUTOPILOT_PX4, custom_mode=px4_custom_mode,
+        profile("px4"), custom_mode=px4_custom_mode,
         mode_named=lambda custom, main, sub: px4_mode_name(main, sub),
         ground_mode="POSCTL", boot_fallback_mode=None, refuses_while_booting=True,
         mode_change_clears_target=False, unknown_mode=MAV.MAV_RESULT_UNSUPPORTED,

@@ -195,7 +195,7 @@ class Telemetry:
             state = M.MAV_STATE_ACTIVE
         else:
             state = M.MAV_STATE_STANDBY
-        return self.mav.heartbeat_encode(M.MAV_TYPE_QUADROTOR, p.mav_autopilot, flags,
+        return self.mav.heartbeat_encode(M.MAV_TYPE_QUADROTOR, p.autopilot.mav_autopilot, flags,
                                          p.custom_mode(ap.mode), state)
 
     def sys_status(self, now: float) -> MAV.MAVLink_message:
