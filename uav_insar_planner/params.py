@@ -45,6 +45,11 @@ class ParamError(ValueError):
         super().__init__("\n".join(self.problems))
 
 
+def fractional_bandwidth(radar_bandwidth_hz: float, center_frequency_hz: float) -> float:
+    """B_p = B_Rg / f_0 (eq. 10), of `Params` or of the values being checked into one."""
+    return radar_bandwidth_hz / center_frequency_hz
+
+
 @dataclass(frozen=True)
 class Params:
     """Validated scenario in SI units (metres, seconds, watts, bit/s, radians, linear ratios):
@@ -115,7 +120,7 @@ class Params:
     @property
     def fractional_bandwidth(self) -> float:
         """B_p = B_Rg / f_0, the radar's fractional bandwidth in gamma_Rg (eq. 10)."""
-        return self.radar_bandwidth_hz / self.center_frequency_hz
+        return fractional_bandwidth(self.radar_bandwidth_hz, self.center_frequency_hz)
 
     @property
     def y_track(self):
@@ -261,7 +266,7 @@ def validate(values: Mapping[str, Any],
                 f"max(z_min/cos theta_0, S_min cos theta_0/Theta_3dB) >= {MASTER_RANGE_MIN_M:g}"
                 f" m, not {least:.3g} m (nearer, the optimum moves onto the target, r_0 -> 0,"
                 " where eqs. 8-9's SNR diverges and no formation attains it)")
-    fractional = clean["radar_bandwidth_hz"] / clean["center_frequency_hz"]
+    fractional = fractional_bandwidth(clean["radar_bandwidth_hz"], clean["center_frequency_hz"])
     if not FRACTIONAL_BANDWIDTH_MIN <= fractional < 2.0:
         problems.append(
             f"radar_bandwidth_hz: value {clean['radar_bandwidth_hz']!r} is not allowed; "
