@@ -135,8 +135,10 @@ class FormationStart:
         for action in actions:
             if isinstance(action, Publish):
                 self._publish(encode_start(action.clock, action.plan), action.clock.start_s)
+            elif isinstance(action, Log) and action.level == "warning":
+                log.warning(action.text)  # (rclpy: one severity per call site)
             elif isinstance(action, Log):
-                (log.warning if action.level == "warning" else log.info)(action.text)
+                log.info(action.text)
             elif isinstance(action, DeclareLost):
                 self._declare_lost(action.k, action.why)
 
