@@ -1,5 +1,5 @@
 """The planner's one start of the pass for the whole formation (`formation/start`), for
-bridges that each fly one UAV (their side: mavlink/pass_clock.py's `planner_start`).
+bridges that each fly one UAV (their side: mavlink/start_gate.py's `planner_start`).
 
 No per-UAV bridge sees the other vehicles, so none can tell when the formation is complete.
 The planner can: it watches uav{K}/mavlink/pose of every UAV the current plan flies and the
