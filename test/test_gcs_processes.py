@@ -19,7 +19,7 @@ from clean_stop import assert_clean, stop_and_read
 from diagnostic_msgs.msg import DiagnosticStatus
 from std_srvs.srv import Trigger
 
-from uav_insar_planner.ros.formation_start import RESTARTED_DELAY_S
+from uav_insar_planner.ros.start_states import RESTARTED_DELAY_S
 from uav_insar_sim.vehicle.simulator import SimVehicle
 
 pytestmark = pytest.mark.timeout(90)

@@ -29,8 +29,9 @@ PLAN = PlanId(1796000000, 5, "/planner")
 
 def test_a_start_carries_its_resume_offset_and_a_bad_one_is_refused():
     now = 1796000010.0
-    assert decode_start(encode_start(int(now * 1e9), PLAN), now)[1:] == (pytest.approx(now), 0.0)
-    msg = encode_start(int(now * 1e9), PLAN, 31.2)
+    assert decode_start(encode_start(PassClock(now, 4.3), PLAN), now)[1:] == (
+        pytest.approx(now), 0.0)
+    msg = encode_start(PassClock(now, 4.3, 31.2), PLAN)
     assert msg.frame_id == f"{PLAN.label} at 31.200 m"
     plan_id, _, offset = decode_start(msg, now)
     assert plan_id == PLAN and offset == pytest.approx(31.2)

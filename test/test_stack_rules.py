@@ -18,6 +18,7 @@ from uav_insar_planner.ros.plan_msgs import PlanId, PlanMessageError
 from uav_insar_planner.ros.start_capture import POSE_FRESH_S, all_captured, not_captured
 from uav_insar_planner.ros.start_msgs import PLAUSIBLE_S, decode_start, encode_start
 from uav_insar_planner.swarm import MAX_UAVS
+from uav_insar_planner.track.pass_clock import PassClock
 from uav_insar_planner.track.speed_profile import RAMP_MPS2, ramp_up
 from uav_insar_planner.track.trajectory import PassTrajectory
 
@@ -114,7 +115,8 @@ def test_the_start_message_round_trips_and_bad_ones_name_their_field():
     now = time.time()
     plan = PlanId(1_700_000_000, 5, "/planner")
     wall_ns = int(now * 1e9) + 2_000_000_000
-    got_plan, got_start, offset = decode_start(encode_start(wall_ns, plan), now)
+    got_plan, got_start, offset = decode_start(encode_start(PassClock(wall_ns * 1e-9, 4.3), plan),
+                                               now)
     assert got_plan == plan and got_start == pytest.approx(wall_ns * 1e-9, abs=1e-6)
     assert offset == 0.0
     for frame_id, sec, nanosec, field in (

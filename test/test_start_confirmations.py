@@ -24,7 +24,7 @@ WAIT_S = 20.0  # the planner's start_confirm_wait_s
 
 
 def _awaited(since: float = 100.0) -> AwaitedStart:
-    return AwaitedStart(round(START_S * 1e9), 5.0, since, WAIT_S)
+    return AwaitedStart(START_S, 5.0, since, WAIT_S)
 
 
 @pytest.mark.parametrize("value", ["", None, "nan", "inf", "-inf", "1e400", "soon", "1,5"])
@@ -66,6 +66,6 @@ def test_after_the_longest_wait_the_start_stands_and_the_missing_are_named():
 
 
 def test_a_start_moved_later_keeps_its_delay_and_when_the_wait_began():
-    moved = _awaited(since=100.0).later(round((START_S + 2.0) * 1e9))
-    assert moved.start_ns * 1e-9 == pytest.approx(START_S + 7.0)
+    moved = _awaited(since=100.0).later(START_S + 2.0)
+    assert moved.start_s == pytest.approx(START_S + 7.0)
     assert moved.since == 100.0 and moved.delay_s == 5.0 and moved.wait_s == WAIT_S

@@ -3,22 +3,22 @@ their bridges publish: each captured at its start point, or (a planner started a
 their tracks past the start line, and the rearmost of them.
 
 Poses are (monotonic time heard, (x, y, z) in the track frame) per UAV; a start point is
-(x_k, y_start, z_k).
+(x_k, y_start, z_k). The capture test is the bridge's (track/capture.py).
 """
 from __future__ import annotations
 
 import math
 
+from uav_insar_planner.plan import Vec3
 from uav_insar_planner.ros import topics
+from uav_insar_planner.track.capture import outside
 
 # Bridges publish a pose per LOCAL_POSITION_NED, ~10 Hz: older than this is a silent UAV.
 POSE_FRESH_S = 1.0
 ON_TRACK_M = 2.0  # a held copter drifts in wind: wider than the default capture radius
 
-Point = tuple[float, float, float]
 
-
-def not_captured(starts: dict[int, Point], poses: dict[int, tuple[float, Point]],
+def not_captured(starts: dict[int, Vec3], poses: dict[int, tuple[float, Vec3]],
                  now: float, radius_m: float) -> dict[int, str]:
     """Why each UAV of `starts` is not captured (no pose fresher than POSE_FRESH_S at `now`,
     monotonic, or farther than `radius_m` from its start), by UAV; empty when all are."""
@@ -29,13 +29,12 @@ def not_captured(starts: dict[int, Point], poses: dict[int, tuple[float, Point]]
             why[k] = f"no {topics.mavlink_pose(k)} yet"
         elif now - seen[0] > POSE_FRESH_S:
             why[k] = f"no {topics.mavlink_pose(k)} for {now - seen[0]:.1f} s"
-        elif not (radius_m <= 0.0 or math.dist(seen[1], start) <= radius_m):
-            # (written so that a NaN distance never counts as inside)
-            why[k] = f"{math.dist(seen[1], start):.2f} m from its start point"
+        elif (far := outside(seen[1], start, radius_m)) is not None:
+            why[k] = f"{far:.2f} m from its start point"
     return why
 
 
-def on_track(starts: dict[int, Point], poses: dict[int, tuple[float, Point]],
+def on_track(starts: dict[int, Vec3], poses: dict[int, tuple[float, Vec3]],
               speeds: dict[int, float], now: float, length_m: float
               ) -> tuple[int, float, float] | None:
     """(rearmost UAV, its distance past the start line, its along-track speed) when every UAV
@@ -56,7 +55,7 @@ def on_track(starts: dict[int, Point], poses: dict[int, tuple[float, Point]],
     return rear, past[rear], speeds.get(rear, 0.0)
 
 
-def all_captured(starts: dict[int, Point], poses: dict[int, tuple[float, Point]],
+def all_captured(starts: dict[int, Vec3], poses: dict[int, tuple[float, Vec3]],
                  now: float, radius_m: float) -> bool:
     """Whether every UAV of `starts` has a pose (monotonic time, position) fresher than
     POSE_FRESH_S at `now` within `radius_m` of its start; False with nothing to start."""

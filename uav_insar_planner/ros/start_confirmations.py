@@ -25,31 +25,32 @@ import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, replace
 
+from uav_insar_planner.track.pass_clock import same_instant
+
 # Bridges report once a second: a start heard more than this before its instant is confirmed
 # by then in most cases; one heard later moves the start by a few seconds, harmlessly.
 CONFIRM_MARGIN_S = 0.5
 # Bridges report once a second: a report older than this says nothing, of the start a bridge
 # flies or of its being behind (formation_start.py).
 REPORT_FRESH_S = 3.0
-SAME_INSTANT_S = 0.002  # bridges report the instant with 1 ms resolution
 
 WAIT, CONFIRMED, LATER, GIVE_UP = "wait", "confirmed", "later", "give up"
 
 
 @dataclass(frozen=True)
 class AwaitedStart:
-    """A published resumed start awaiting its confirmations: its instant (wall clock, ns),
+    """A published resumed start awaiting its confirmations: its instant (wall clock, s),
     how long before it it was sent (`delay_s`), when the first instant of this resume was sent
     (monotonic) and how long it waits for them at most (`wait_s`)."""
 
-    start_ns: int
+    start_s: float
     delay_s: float
     since: float
     wait_s: float
 
-    def later(self, now_ns: int) -> AwaitedStart:
-        """The same resume `delay_s` from `now_ns`."""
-        return replace(self, start_ns=now_ns + round(self.delay_s * 1e9))
+    def later(self, wall_now: float) -> AwaitedStart:
+        """The same resume `delay_s` from `wall_now` (time.time())."""
+        return replace(self, start_s=wall_now + self.delay_s)
 
 
 def reported_instant(value: str | None) -> float | None:
@@ -70,7 +71,7 @@ def unconfirmed(uavs: Iterable[int], reports: Mapping[int, tuple[float, float]],
     for k in uavs:
         heard = reports.get(k)
         if (heard is None or now - heard[0] > REPORT_FRESH_S
-                or abs(heard[1] - start_s) > SAME_INSTANT_S):
+                or not same_instant(heard[1], start_s)):
             out.append(k)
     return sorted(out)
 
@@ -80,7 +81,7 @@ def verdict(awaited: AwaitedStart, uavs: Iterable[int],
             wall_now: float) -> tuple[str, list[int]]:
     """(what to do, the UAVs not confirmed): WAIT before the check, CONFIRMED when none is
     missing, else LATER, or GIVE_UP past its `wait_s` (module docstring)."""
-    start_s = awaited.start_ns * 1e-9
+    start_s = awaited.start_s
     if wall_now < start_s - CONFIRM_MARGIN_S:
         return WAIT, []
     missing = unconfirmed(uavs, reports, start_s, now)

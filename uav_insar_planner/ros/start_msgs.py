@@ -31,6 +31,7 @@ from std_msgs.msg import Header
 from uav_insar_planner.mavlink.guard import DropLog
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.plan_msgs import DROP_LOG_PERIOD_S, PlanId, PlanMessageError
+from uav_insar_planner.track.pass_clock import PassClock
 
 # A day: far beyond any pass and clock offset worth flying with, close enough to catch a host
 # whose clock was never set.
@@ -40,12 +41,13 @@ MAX_OFFSET_M = 1e6  # far beyond any pass (the bridge's origin limit is 1e5 m)
 _RESUME = re.compile(r"^(.*) at (\d{1,7}\.\d{3}) m$")
 
 
-def encode_start(wall_time_ns: int, plan_id: PlanId, offset_m: float = 0.0) -> Header:
-    """The start message of `plan_id` at `wall_time_ns` (time.time_ns()), the pass then
-    `offset_m` past its start line (0: a pass from the start line)."""
+def encode_start(clock: PassClock, plan_id: PlanId) -> Header:
+    """The start message of `plan_id` for `clock` (wall clock): stamp its `start_s`, the pass
+    then `offset_m` past its start line (0: a pass from the start line)."""
+    offset_m = clock.offset_m
     label = plan_id.label if offset_m <= 0.0 else f"{plan_id.label} at {offset_m:.3f} m"
     msg = Header(frame_id=label)
-    msg.stamp.sec, msg.stamp.nanosec = divmod(int(wall_time_ns), 1_000_000_000)
+    msg.stamp.sec, msg.stamp.nanosec = divmod(round(clock.start_s * 1e9), 1_000_000_000)
     return msg
 
 
