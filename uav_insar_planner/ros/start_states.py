@@ -57,7 +57,7 @@ from uav_insar_planner.track.pass_clock import PassClock, same_line
 # within a few seconds of each other, DDS repairs included. Longer alone: it is left behind.
 BEHIND_GRACE_S = 4.0
 # A swarm still flying is resumed on an instant this far in the past (more than the bridges'
-# trajectory.JOIN_GRACE_S): they take it as a running pass and do not ramp up from a hover.
+# track.pass_clock.JOIN_GRACE_S): they take it as a running pass and do not ramp up from a hover.
 MOVING_BACKDATE_S = 1.0
 # A planner started again hears the UAVs' poses before every bridge has found it (DDS
 # discovers each direction on its own): a resume from the hover then starts no sooner than
