@@ -1,0 +1,1 @@
+"""Survey an area: strips, sorties and speed (no ROS, no MAVLink)."""

@@ -1,0 +1,111 @@
+"""A survey's strips grouped, in flight order, into sorties that fit a battery.
+
+A sortie is one flight from take-off at home to landing there:
+
+    climb      max_k z_k / climb_mps                  (the formation climbs over home)
+    transit    home -> the first strip's entry         at transit_mps
+    strips     each: a settle of `settle_s` at its entry (the capture and the start's
+               delay), then its run-in, imaged part and run-out on its pass clock, and the
+               turn to the next one (track.passes.MissionPasses, transits at transit_mps)
+    return     the last strip's stop -> home           at transit_mps
+    descent    max_k z_k / descent_mps
+
+Distances are the master's ground track in the survey frame (home at the origin); the slaves
+fly beside it, a few tens of metres off, which the reserve covers. Strips are added to the
+sortie in flight order while its flight time stays within endurance x (1 - reserve); a strip
+that does not fit even alone is refused, naming it and the time it needs.
+"""
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from uav_insar_planner.track.passes import MissionPasses, TrackPass
+
+# Below the autopilots' defaults (ArduCopter: 2.5 m/s up, 1.5 m/s down, 10 m/s across; PX4:
+# 3, 1, 5 m/s), so the times are ones a vehicle keeps in wind.
+CLIMB_MPS = 2.0
+DESCENT_MPS = 1.0
+TRANSIT_MPS = 5.0
+# At each strip's entry: the formation captured (a copter settles in a few seconds) and the
+# planner's start delay (start_delay_s, 2 s).
+SETTLE_S = 8.0
+
+
+@dataclass(frozen=True)
+class FlightSpeeds:
+    """How a sortie flies outside its strips (SI): climb, descent, transit; the settle at each
+    strip's entry."""
+
+    climb_mps: float = CLIMB_MPS
+    descent_mps: float = DESCENT_MPS
+    transit_mps: float = TRANSIT_MPS
+    settle_s: float = SETTLE_S
+
+    def __post_init__(self) -> None:
+        for name in ("climb_mps", "descent_mps", "transit_mps"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise ValueError(f"{name}: value {value!r} is not allowed; expected a finite "
+                                 "speed > 0 m/s")
+        if not (math.isfinite(self.settle_s) and self.settle_s >= 0.0):
+            raise ValueError(f"settle_s: value {self.settle_s!r} is not allowed; expected a "
+                             "finite time >= 0 s")
+
+
+@dataclass(frozen=True)
+class Sortie:
+    """One flight: the indices of its strips (in the survey's strip order) and its legs [s]."""
+
+    strips: tuple[int, ...]
+    climb_s: float
+    transit_s: float
+    strips_s: float
+    return_s: float
+    descent_s: float
+
+    @property
+    def flight_time_s(self) -> float:
+        return self.climb_s + self.transit_s + self.strips_s + self.return_s + self.descent_s
+
+
+def sortie_of(strips: Sequence[TrackPass], indices: Sequence[int], height_m: float,
+              speed_mps: float, fly: FlightSpeeds) -> Sortie:
+    """The sortie flying strips[i] for i in `indices`, in that order, at `height_m` (the
+    highest UAV's) and v_y `speed_mps`."""
+    chosen = tuple(strips[i] for i in indices)
+    passes = MissionPasses(chosen, speed_mps, fly.transit_mps)
+    last_stop = chosen[-1].stop(speed_mps)
+    return Sortie(
+        strips=tuple(indices), climb_s=height_m / fly.climb_mps,
+        transit_s=math.dist((0.0, 0.0), chosen[0].entry) / fly.transit_mps,
+        strips_s=passes.duration_s() + fly.settle_s * len(chosen),
+        return_s=math.dist(last_stop, (0.0, 0.0)) / fly.transit_mps,
+        descent_s=height_m / fly.descent_mps)
+
+
+def plan_sorties(strips: Sequence[TrackPass], height_m: float, speed_mps: float,
+                 budget_s: float, fly: FlightSpeeds = FlightSpeeds()) -> list[Sortie]:
+    """`strips` (survey frame, home at the origin, in flight order) in sorties of at most
+    `budget_s` each (module docstring); ValueError (one line) when one strip alone does not
+    fit."""
+    sorties: list[Sortie] = []
+    current: list[int] = []
+    for i in range(len(strips)):
+        trial = sortie_of(strips, current + [i], height_m, speed_mps, fly)
+        if trial.flight_time_s <= budget_s:
+            current.append(i)
+            continue
+        if current:
+            sorties.append(sortie_of(strips, current, height_m, speed_mps, fly))
+        alone = sortie_of(strips, [i], height_m, speed_mps, fly)
+        if alone.flight_time_s > budget_s:
+            raise ValueError(
+                f"endurance_min: value {budget_s / 60.0:.3g} min of flight (after the "
+                f"reserve) is not allowed; expected at least {alone.flight_time_s / 60.0:.3g} "
+                f"min, what strip {i} alone takes (climb, transit, strip, return, descent)")
+        current = [i]
+    if current:
+        sorties.append(sortie_of(strips, current, height_m, speed_mps, fly))
+    return sorties
