@@ -107,7 +107,9 @@ def default_start(now: datetime, xz: dict[int, tuple[float, float]], run_up_m: f
     return t.replace(microsecond=0) + timedelta(seconds=1 if t.microsecond else 0)
 
 
-def _item(seq: int, command: int, params: list[float], frame: str | None) -> dict:
+def mission_item(seq: int, command: int, params: list[float], frame: str | None) -> dict:
+    """One QGroundControl SimpleItem: a position item in the height `frame` (ALTITUDE_FRAMES),
+    or with `frame` None a MAV_FRAME_MISSION one; NaN params become null."""
     item = {"type": "SimpleItem", "command": command,
             "frame": FRAME_MISSION if frame is None else ALTITUDE_FRAMES[frame][0],
             "params": [None if math.isnan(p) else p for p in params],
@@ -138,7 +140,7 @@ def mission_items(home: Home, flight: Pass, x: float, z: float, start: datetime 
         items.append((CMD_LOITER_UNLIM, [0.0, 0.0, 0.0, 0.0, *finish], frame))
     else:
         items.append((CMD_RTL, [0.0] * 7, None))
-    return [_item(i + 1, cmd, [float(p) for p in params], f)
+    return [mission_item(i + 1, cmd, [float(p) for p in params], f)
             for i, (cmd, params, f) in enumerate(items)]
 
 
@@ -150,12 +152,20 @@ def plan_document(home: Home, flight: Pass, x: float, z: float, start: datetime 
     start = start if flavour.mission_waits_for_utc else None
     if start is None and flavour.mission_waits_for_utc:
         raise ValueError(f"start: None; an {autopilot} file waits for a UTC time (NAV_DELAY)")
+    return plan_json(home, mission_items(home, flight, x, z, start, end, frame),
+                     flight.speed_mps, autopilot, frame)
+
+
+def plan_json(home: Home, items: list[dict], speed_mps: float, autopilot: str,
+              frame: str) -> dict:
+    """The whole `.plan` JSON object around mission `items` (geofence and rally points
+    empty)."""
     return {"fileType": "Plan", "version": 1, "groundStation": "QGroundControl",
-            "mission": {"version": 2, "firmwareType": flavour.mav_autopilot,
-                        "vehicleType": VEHICLE_TYPE, "cruiseSpeed": flight.speed_mps,
-                        "hoverSpeed": flight.speed_mps,
+            "mission": {"version": 2, "firmwareType": profile(autopilot).mav_autopilot,
+                        "vehicleType": VEHICLE_TYPE, "cruiseSpeed": speed_mps,
+                        "hoverSpeed": speed_mps,
                         "globalPlanAltitudeMode": ALTITUDE_FRAMES[frame][1],
                         "plannedHomePosition": [home.lat_deg, home.lon_deg, home.alt_m],
-                        "items": mission_items(home, flight, x, z, start, end, frame)},
+                        "items": items},
             "geoFence": {"version": 2, "circles": [], "polygons": []},
             "rallyPoints": {"version": 2, "points": []}}
