@@ -1,0 +1,1 @@
+"""Survey an area with the swarm: the speed to fly it at (speed.py)."""
