@@ -224,8 +224,11 @@ def read_area(text: str, home: Home) -> Area:
     distance = np.hypot(ne[:, 0], ne[:, 1])
     if distance.max() > MAX_DISTANCE_M:
         i = int(np.argmax(distance))
+        swapped = math.hypot(*latlon_to_ned(home.lat_deg, home.lon_deg, *lonlat[i]))
+        hint = "; GeoJSON puts the longitude first" if swapped <= MAX_DISTANCE_M else ""
         raise _refuse(f"area.coordinates[0][{i}]", list(lonlat[i]), f"a vertex within "
-                      f"{MAX_DISTANCE_M:.0f} m of the home (it is {distance[i]:.0f} m away)")
+                      f"{MAX_DISTANCE_M:.0f} m of the home (it is {distance[i]:.0f} m away"
+                      f"{hint})")
     spread = np.linalg.svd(ne - ne.mean(axis=0), compute_uv=False)[1] / math.sqrt(len(ne))
     crossing = self_intersection(ne) if spread > 1e-3 else None  # a line folds onto itself
     if crossing is not None:
