@@ -16,7 +16,9 @@ Along a band the strip images the y-extent of the area's intersection with the b
 set is the projection onto y of the intersection's boundary, made of the area's edges clipped
 to the band and the band's two edge lines clipped to the area (`band_intervals`). A concave
 area can leave gaps along y: a gap up to S_0 long is flown over (imaging at most one swath
-width outside the area), a longer one splits the band into separate strips.
+width outside the area), a longer one splits the band into separate strips. Every band meets
+the area: the polygon is connected, so it spans every x in [x_min, x_max], and each band of
+the fewest covers a part of that range of positive width; no band goes without a strip.
 
 Order: boustrophedon, band after band across track, directions alternating, a band's strips
 flown one after the other in its direction; of the four such orders (start at either side,
