@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -18,6 +19,7 @@ from uav_insar_planner.survey.strips import (
     strip_count,
     total_length_m,
 )
+from uav_insar_planner.track.passes import TrackPass
 
 HOME = Home(47.5, 8.5, 420.0)
 S0, LOOK, OVERLAP, RUN_IN = 100.0, 80.0, 0.1, 25.0
@@ -110,9 +112,6 @@ def test_a_swath_on_the_wrong_side_is_caught_by_the_coverage_check():
     assert len(uncovered(area, strips, 0.5 * S0, 5.0)) > 100
     assert len(uncovered(area, strips, S0, 5.0)) == 0
     # the same tracks seen from the other side (direction flipped, line unchanged)
-    from dataclasses import replace
-
-    from uav_insar_planner.track.passes import TrackPass
     flipped = [replace(s, direction=-s.direction, track=TrackPass(
         s.track.x_m, s.track.y_start_m + s.direction * s.track.length_m, s.track.length_m,
         -s.direction)) for s in strips]
