@@ -35,13 +35,25 @@ def test_the_science_imports_nothing_of_ros_or_mavlink():
     """Every module flat at the top of the package is the science (or a convention of the
     whole suite: swarm.py, exit_codes.py) and imports nothing of ROS or MAVLink."""
     science = sorted(PLANNER.glob("*.py")) + sorted((PLANNER / "solver").rglob("*.py"))
-    for folder in ("bag", "report", "study", "replanning", "param_specs"):
+    for folder in ("bag", "report", "study", "replanning", "param_specs", "survey"):
         science += sorted((PLANNER / folder).rglob("*.py"))
     for path in science:
         text = path.read_text()
         assert not ROS_IMPORT.search(text), path
         assert not re.search(r"^\s*(?:import|from)\s+(pymavlink|uav_insar_planner\.(ros|"
                              r"mavlink))\b", text, re.MULTILINE), path
+
+
+def test_the_layers_below_the_survey_never_import_it():
+    """survey/ lays passes out of the track and mission-file layers; the model, the solvers,
+    the track, the MAVLink bridge and the simulator know nothing of surveys."""
+    below = [PLANNER / "model.py", *(PLANNER / "solver").rglob("*.py"),
+             *(PLANNER / "track").rglob("*.py"), *(PLANNER / "mavlink").rglob("*.py"),
+             *(ROOT / "uav_insar_sim").rglob("*.py")]
+    offenders = [str(p.relative_to(ROOT)) for p in below if re.search(
+        r"^\s*(?:import|from)\s+uav_insar_planner(?:\.survey\b|\s+import\s+survey\b)",
+        p.read_text(), re.MULTILINE)]
+    assert len(below) > 20 and not offenders, offenders
 
 
 def test_no_product_file_over_380_lines():
