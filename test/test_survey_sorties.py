@@ -6,8 +6,14 @@ import math
 
 import pytest
 
-from uav_insar_planner.survey.sorties import FlightSpeeds, plan_sorties, sortie_of
-from uav_insar_planner.track.passes import TrackPass, min_run_in_m
+from uav_insar_planner.survey.sorties import (
+    FlightSpeeds,
+    plan_sorties,
+    sortie_of,
+    strip_starts_s,
+)
+from uav_insar_planner.track.passes import TrackPass, min_run_in_m, run_out_m
+from uav_insar_planner.track.speed_profile import RAMP_MPS2
 
 V, LENGTH, SPACING, HEIGHT = 4.3, 200.0, 40.0, 60.0
 RUN_IN = min_run_in_m(V) + 2.0
@@ -36,6 +42,13 @@ def test_strips_go_in_order_into_sorties_that_fit_the_budget():
         math.dist((0.0, 0.0), strips[2].entry) / fly.transit_mps)
     assert sorties[1].return_s == pytest.approx(
         math.dist(strips[3].stop(V), (0.0, 0.0)) / fly.transit_mps)
+    # each strip starts once the one before has stopped, the turn is flown and it settled
+    starts = strip_starts_s(strips, sorties[0], V, fly)
+    assert starts[0] == pytest.approx(sorties[0].climb_s + sorties[0].transit_s + fly.settle_s)
+    turn = math.dist(strips[0].stop(V), strips[1].entry) / fly.transit_mps
+    # run-in, strip and run-out at v_y, and half of v/a lost to the ramp and to the brake each
+    stop0 = starts[0] + (RUN_IN + LENGTH + run_out_m(V)) / V + V / RAMP_MPS2
+    assert starts[1] == pytest.approx(stop0 + turn + fly.settle_s, abs=1e-6)
     # a bigger battery takes them all at once
     assert [s.strips for s in plan_sorties(strips, HEIGHT, V, 1e6, fly)] == [(0, 1, 2, 3, 4)]
 

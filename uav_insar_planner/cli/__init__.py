@@ -47,12 +47,14 @@ def verbs() -> dict[str, ModuleType]:
         report,
         solve,
         start_missions,
+        survey,
         sweep,
     )
 
     return {"solve": solve, "sweep": sweep, "map": param_map, "plot-formation": plot_formation,
             "montecarlo": montecarlo, "export-mission": export_mission, "echo": echo,
-            "record": record, "report": report, "start-missions": start_missions}
+            "record": record, "report": report, "start-missions": start_missions,
+            "survey": survey}
 
 
 def build_parser(table: dict[str, ModuleType]) -> tuple[argparse.ArgumentParser,

@@ -76,8 +76,10 @@ def _missing_parents(folder: Path) -> list[Path]:
     return missing[::-1]
 
 
-def replace_files(folder: Path, texts: Mapping[str, str], stale: Iterable[str]) -> list[str]:
-    """Write `texts` (name -> content) into `folder` and remove the `stale` names present,
+def replace_files(folder: Path, texts: Mapping[str, str | bytes], stale: Iterable[str]
+                  ) -> list[str]:
+    """Write `texts` (name -> content: text, or bytes as they are) into `folder` and remove the
+    `stale` names present,
     all or nothing; returns the stale names removed. When any step fails, every step is
     undone and OSError is raised with `filename` the name (of `texts` or `stale`, or the
     folder) whose step failed."""
@@ -92,7 +94,8 @@ def replace_files(folder: Path, texts: Mapping[str, str], stale: Iterable[str]) 
             path.mkdir()
         for current, text in texts.items():
             temp = folder / f".{current}.{token}.new"
-            with open(temp, "x", encoding="utf-8") as f:
+            binary = isinstance(text, bytes)
+            with open(temp, "xb" if binary else "x", encoding=None if binary else "utf-8") as f:
                 temps[current] = temp  # (ours from here: removed again on failure)
                 f.write(text)
         for current in [*texts, *stale]:

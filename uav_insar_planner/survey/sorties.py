@@ -109,3 +109,13 @@ def plan_sorties(strips: Sequence[TrackPass], height_m: float, speed_mps: float,
     if current:
         sorties.append(sortie_of(strips, current, height_m, speed_mps, fly))
     return sorties
+
+
+def strip_starts_s(strips: Sequence[TrackPass], sortie: Sortie, speed_mps: float,
+                   fly: FlightSpeeds = FlightSpeeds()) -> list[float]:
+    """When each strip of `sortie` starts its pass, in seconds from take-off: after the climb,
+    the transit, and a settle at each entry (the passes' clocks laid end to end)."""
+    chosen = tuple(strips[i] for i in sortie.strips)
+    clocks = MissionPasses(chosen, speed_mps, fly.transit_mps).schedule(0.0)
+    return [sortie.climb_s + sortie.transit_s + (j + 1) * fly.settle_s + c.start_s
+            for j, c in enumerate(clocks)]
