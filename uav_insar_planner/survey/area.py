@@ -233,8 +233,9 @@ def read_area(text: str, home: Home) -> Area:
     crossing = self_intersection(ne) if spread > 1e-3 else None  # a line folds onto itself
     if crossing is not None:
         i, j = crossing
-        raise _refuse("area.coordinates[0]", [list(p) for p in lonlat], f"a simple ring (its "
-                      f"edges from vertices {list(lonlat[i])} and {list(lonlat[j])} meet)")
+        raise _refuse("area.coordinates[0]", [list(p) for p in lonlat], "a simple ring; this "
+                      f"one is self-intersecting: its edges from vertex {i} and from vertex {j} "
+                      "meet")
     signed = shoelace_m2(ne)
     if abs(signed) < MIN_AREA_M2:
         raise _refuse("area.coordinates[0]", [list(p) for p in lonlat],
