@@ -47,6 +47,8 @@ from uav_insar_planner.mission_file.geodesy import latlon_to_ned
 from uav_insar_planner.param_specs.nodes import FIRST_SYSID
 from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, uav_name, uavs
 from uav_insar_planner.track.frame import TrackFrame
+from uav_insar_planner.track.pass_clock import PassClock
+from uav_insar_planner.track.passes import run_in_m
 from uav_insar_sim.netlab.dds_env import dds_env
 from uav_insar_sim.netlab.lab import NetLab
 
@@ -284,7 +286,10 @@ def figures(flight: Flight) -> dict:
         return float(evaluate(params, xz, record.power, report.scheme).sigma_h)
 
     rates = [r for k in UAVS for r in per_uav[k]["rates_bps"]]
+    v = params.speed  # when the pass clock puts the target on slot 0's line, after the run-in
+    due = PassClock(0.0, v, -run_in_m(v)).time_at(0.0)
     return {"starts": starts, "times": flight.times, "uav": per_uav, "planned_xz": planned,
+            "slot0_due_s": due,
             "rate_min_bps": params.rate_min_bps, "tolerance_bps": tol,
             "met_share": (sum(len(per_uav[k]["rates_bps"]) - len(per_uav[k]["missed"])
                               for k in UAVS) / len(rates)) if rates else 0.0,

@@ -1,16 +1,17 @@
 """Per-UAV stacks whose vehicles take off where the field allows (issue 26, item 1): in one
-swarm, one behind the track start, one BESIDE it (holding its formation point at y = 0, its
-reported position jittering back and forth across the slot 0 line) and one ahead of it (it
-flies back); in another, all on the ground at y = 0, armed and taken off by their bridges,
-climbing and crossing to their formation points on that line. Real
+swarm, one behind the track start, one BESIDE it (at its formation point at y = 0, its
+reported position jittering back and forth across the slot 0 line until it flies back to its
+entry, the start of its run-in) and one ahead of it (it flies back); in another, all on the
+ground at y = 0, armed and taken off by their bridges, climbing and crossing to their entries. Real
 processes on localhost: the planner; per UAV a `uav-insar-vehicle` with GNSS-like position
 noise and a light wind, a `mavlink_bridge` with `uav_id` K in /uavK, and an agent with
 `position_source:=autopilot` in /uavK.
 
-Asserted, for each take-off place: every agent flies every slot once, in order; none starts
-slot 0 before the planner's pass start (formation/start), and each starts it when its
-autopilot's track first reaches the line after it (soon: within the ramp from the hover and a
-slot of lag); each rate is the plan's power's FDMA rate where the autopilot was (its
+Asserted, for each take-off place: every agent flies every slot once, in order, and all at
+the planned speed, slot 0 included (the run-in: issue 40); none starts slot 0 before the
+planner's pass start (formation/start), and each starts it when its autopilot's track first
+reaches the line after it, when the pass clock puts the target there (within a slot of lag);
+each rate is the plan's power's FDMA rate where the autopilot was (its
 uavK/mavlink/pose track: the first position at or past the slot's line after the start,
 interpolated onto the line when the one before was behind it); every agent says "mission
 complete".
@@ -21,7 +22,6 @@ by side.
 """
 from __future__ import annotations
 
-import math
 import re
 import signal
 import subprocess
@@ -40,7 +40,8 @@ from uav_insar_planner.demo.processes import executable, start_node, start_proce
 from uav_insar_planner.param_specs.nodes import FIRST_SYSID
 from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.start_msgs import decode_start
-from uav_insar_planner.track.speed_profile import RAMP_MPS2
+from uav_insar_planner.track.pass_clock import PassClock
+from uav_insar_planner.track.passes import run_in_m
 from uav_insar_sim.mission import home_position
 
 pytestmark = pytest.mark.timeout(120)
@@ -57,7 +58,6 @@ NOISE_TAU_S = 1.0
 WIND_NED = (0.0, 0.5, 0.0)  # across the track: each holds 0.33 m off its point (E = x)
 BASE_PORT = 29600  # vehicle K of case c: BASE_PORT + 20 c + K
 RUN_TIMEOUT_S = 60.0
-RAMP_TO_LINE_S = math.sqrt(2 * 3 * NOISE_STD_M / RAMP_MPS2)
 CROSSING_TOL_S = 0.15  # a reading or two: the test's own subscription may miss one
 SINCE_START = re.compile(r"slot 0 started at y = (-?[\d.]+) m .*, ([+-][\d.]+) s from the "
                          r"pass start")
@@ -200,7 +200,9 @@ def test_every_agent_flies_every_slot_once_in_order(flown):
     for k in flown["uavs"]:
         assert [int(o[0]) for o in flown["offloads"][k]] == list(range(N)), k
         assert len(flown["rates"][k]) == N, k
-        assert f"uav{k}: mission complete: {N} slots flown" in flown["logs"][f"agent{k}"]
+        # every slot at the planned speed, slot 0 too: the run-in brought it to v_y
+        assert (f"uav{k}: mission complete: {N} slots flown, {N} at the planned speed"
+                in flown["logs"][f"agent{k}"]), flown["logs"][f"agent{k}"][-1500:]
     bad = {n: [line for line in log.splitlines() if "ERROR" in line]
            for n, log in flown["logs"].items()}
     assert not any(bad.values()), bad
@@ -239,23 +241,23 @@ def test_no_slot_before_the_pass_start(flown):
         crossing = line_crossing(flown["tracks"][k], t0, slot_line(flown, 0))
         assert since == pytest.approx(crossing - t0, abs=CROSSING_TOL_S), (since, crossing - t0,
                                                                             log)
-        # ... and soon: a vehicle held three noise sigmas behind the line, its target ramping
-        # up from the hover, reaches it in RAMP_TO_LINE_S, and within a slot more of lag
-        assert -0.05 <= since < RAMP_TO_LINE_S + flown["params"].slot_duration_s, log
+        # ... when the pass clock puts its target on the line, after the run-in from the
+        # entry (three noise sigmas either way), within a slot of lag
+        v = flown["params"].speed
+        due = PassClock(0.0, v, -run_in_m(v)).time_at(0.0)
+        assert due - 3 * NOISE_STD_M / v <= since < due + flown["params"].slot_duration_s, log
         assert y0 >= 0.0, log
     print(f"{flown['case']}: slot 0 at {np.round(offsets, 3)} s from the pass start")
 
 
-def test_beside_the_start_the_reported_position_crossed_the_line_before_it(flown):
-    """What the old gate started slot 0 on: holding at y = 0, the reported position crossed
-    the slot 0 line forward before the pass start (a crossing the field test must contain)."""
-    t0 = pass_start(flown)
-    crossings = {}
+def test_beside_the_start_the_uav_waited_at_its_entry_not_on_the_line(flown):
+    """Beside the start (y = 0), where the reported position jitters across the slot 0 line,
+    the UAV flew back to its entry: just before the pass start it stood a run-in behind the
+    line, so slot 0 waits for the pass and is flown at v_y."""
+    t0, v = pass_start(flown), flown["params"].speed
     for k in (k for k in flown["uavs"] if STARTS[flown["case"]][k][0] == 0.0):
-        ys = [y for t, _, y, _ in flown["tracks"][k] if t < t0]
-        crossings[k] = sum(a < 0.0 <= b for a, b in zip(ys[:-1], ys[1:], strict=True))
-    print(f"forward crossings of y = 0 before the pass start: {crossings}")
-    assert sum(crossings.values()) > 0, crossings
+        ys = [y for t, _, y, _ in flown["tracks"][k] if t0 - 1.0 <= t < t0]
+        assert ys and max(ys) < -run_in_m(v) + 3 * NOISE_STD_M + 1.0, (k, ys)
 
 
 def test_each_rate_is_where_the_autopilot_was_after_the_start(flown):

@@ -35,8 +35,13 @@ def test_a_start_carries_its_resume_offset_and_a_bad_one_is_refused():
     assert msg.frame_id == f"{PLAN.label} at 31.200 m"
     plan_id, _, offset = decode_start(msg, now)
     assert plan_id == PLAN and offset == pytest.approx(31.2)
-    for bad in (f"{PLAN.label} at -3.000 m", f"{PLAN.label} at 1e9 m", f"{PLAN.label} at x m",
-                f"{PLAN.label} at 99999999.000 m"):
+    # a pass from the hover: its targets wait at the run-in's entry, before the start line
+    msg = encode_start(PassClock(now, 4.3, -8.163), PLAN)
+    assert msg.frame_id == f"{PLAN.label} at -8.163 m"
+    assert decode_start(msg, now)[2] == pytest.approx(-8.163)
+    for bad in (f"{PLAN.label} at -99999999.000 m", f"{PLAN.label} at 1e9 m",
+                f"{PLAN.label} at x m", f"{PLAN.label} at 99999999.000 m",
+                f"{PLAN.label} at --3.000 m"):
         msg.frame_id = bad
         with pytest.raises(PlanMessageError) as err:
             decode_start(msg, now)

@@ -105,10 +105,10 @@ def test_the_planner_starts_only_with_every_flown_uav_fresh_and_inside_the_radiu
     assert not all_captured({}, near, now, 1.0)  # nothing flown: no start
     # what the planner says while it waits: who, and why
     assert not_captured(starts, near, now, 1.0) == {}
-    assert not_captured(starts, near, now, 0.5) == {1: "0.62 m from its start point"}
+    assert not_captured(starts, near, now, 0.5) == {1: "0.62 m from its entry"}
     assert not_captured(starts, {0: near[0]}, now, 1.0) == {1: "no uav1/mavlink/pose yet"}
     assert not_captured(starts, stale, now, 1.0) == {1: "no uav1/mavlink/pose for 1.1 s"}
-    assert not_captured(starts, nan, now, 1.0) == {1: "nan m from its start point"}
+    assert not_captured(starts, nan, now, 1.0) == {1: "nan m from its entry"}
 
 
 def test_the_start_message_round_trips_and_bad_ones_name_their_field():

@@ -26,6 +26,7 @@ from uav_insar_planner.ros.start_states import (
     step,
 )
 from uav_insar_planner.track.pass_clock import SAME_LINE_M, PassClock
+from uav_insar_planner.track.passes import run_in_m
 
 
 @dataclass(frozen=True)
@@ -42,6 +43,7 @@ SPEED, LENGTH, DELAY, RADIUS, WAIT = 4.3, 172.0, 2.0, 1.0, 20.0
 WALL0 = 1_796_000_000.0  # wall clock at monotonic 0
 POINTS = [(-27.0, 10.0, 47.0), (-35.0, 10.0, 48.0), (-43.0, 10.0, 49.0)]
 PLAN, REPLAN = _Plan("plan /planner 1.000000001"), _Plan("plan /planner 2.000000002")
+RUN_IN = run_in_m(SPEED)  # the UAVs wait for the pass at their entries, this far before it
 
 
 def _now(t: float) -> Now:
@@ -57,6 +59,11 @@ def _seen(t: float, along: dict[int, float], *, reports: tuple[BridgeReport, ...
     return Observed(poses, speeds or {}, reports, lost, RADIUS, DELAY, WAIT, bridged)
 
 
+def _waiting(along: dict[int, float]) -> dict[int, float]:
+    """`along[k]` m past UAV k's entry, as `_seen` takes it (past its start point)."""
+    return {k: d - RUN_IN for k, d in along.items()}
+
+
 def _planned(t: float = 0.0, plan: _Plan = PLAN, points=POINTS) -> StartState:
     state, actions = step(StartState(), NewPlan(plan, points, SPEED, LENGTH), _now(t))
     assert state.phase is Phase.AWAITING_CAPTURE and actions == ()
@@ -64,7 +71,7 @@ def _planned(t: float = 0.0, plan: _Plan = PLAN, points=POINTS) -> StartState:
 
 
 def _started(t: float = 1.0) -> StartState:
-    state, actions = step(_planned(), _seen(t, {0: 0.0, 1: 0.3, 2: -0.2}), _now(t))
+    state, actions = step(_planned(), _seen(t, _waiting({0: 0.0, 1: 0.3, 2: -0.2})), _now(t))
     assert state.phase is Phase.STARTED and isinstance(actions[0], Publish)
     return state
 
@@ -85,39 +92,43 @@ def test_no_plan_nothing_happens():
 def test_every_flown_uav_captured_starts_the_pass_once_at_now_plus_the_delay():
     state = _planned()
     # one outside the radius: no start yet
-    state, actions = step(state, _seen(1.0, {0: 0.0, 1: 1.5, 2: 0.0}), _now(1.0))
+    state, actions = step(state, _seen(1.0, _waiting({0: 0.0, 1: 1.5, 2: 0.0})), _now(1.0))
     assert state.phase is Phase.AWAITING_CAPTURE and actions == ()
-    state, actions = step(state, _seen(2.0, {0: 0.0, 1: 0.3, 2: -0.2}), _now(2.0))
+    state, actions = step(state, _seen(2.0, _waiting({0: 0.0, 1: 0.3, 2: -0.2})), _now(2.0))
     assert state.phase is Phase.STARTED
-    clock = PassClock(WALL0 + 2.0 + DELAY, SPEED)
+    clock = PassClock(WALL0 + 2.0 + DELAY, SPEED, -RUN_IN)  # from the hover at the entries
     assert actions == (Publish(clock, PLAN), Log("info", (
-        f"every flown UAV (uav0, uav1, uav2) within 1 m of its start: the pass starts in 2 s, "
+        f"every flown UAV (uav0, uav1, uav2) within 1 m of its entry: the pass starts in 2 s, "
         f"wall clock {WALL0 + 4.0:.3f} ({PLAN.label})")))
     assert state.started == {PLAN.label}
     # started: captured again later is no second start
-    assert step(state, _seen(3.0, {0: 0.0, 1: 0.0, 2: 0.0}), _now(3.0))[1] == ()
+    assert step(state, _seen(3.0, _waiting({0: 0.0, 1: 0.0, 2: 0.0})), _now(3.0))[1] == ()
+    # at the start points, a run-in ahead of the entries: not captured
+    state, actions = step(_planned(), _seen(4.0, {0: 0.0, 1: 0.0, 2: 0.0}), _now(4.0))
+    assert state.phase is Phase.AWAITING_CAPTURE and actions == ()
 
 
 def test_a_uav_not_flown_or_lost_is_not_waited_for():
     points = [POINTS[0], (math.nan,) * 3, POINTS[2]]
-    state, actions = step(_planned(points=points), _seen(1.0, {0: 0.0, 2: 0.0}), _now(1.0))
+    state, actions = step(_planned(points=points), _seen(1.0, _waiting({0: 0.0, 2: 0.0})),
+                          _now(1.0))
     assert state.phase is Phase.STARTED and "(uav0, uav2)" in actions[1].text
-    state, actions = step(_planned(), _seen(1.0, {0: 0.0, 2: 0.0}, lost=frozenset({1})),
+    state, actions = step(_planned(), _seen(1.0, _waiting({0: 0.0, 2: 0.0}), lost=frozenset({1})),
                           _now(1.0))
     assert state.phase is Phase.STARTED
 
 
 def test_a_waiting_capture_is_said_every_period_naming_who_and_why():
     state = _planned(t=0.0)
-    along = {0: 0.0, 1: 2.5}  # uav1 too far, uav2 never heard
+    along = _waiting({0: 0.0, 1: 2.5})  # uav1 too far, uav2 never heard
     early = WAIT_LOG_PERIOD_S - 0.1
     assert step(state, _seen(early, along), _now(early))[1] == ()
     # a swarm with no bridge (self-flown agents): nothing said
     assert step(state, _seen(WAIT_LOG_PERIOD_S, along, bridged=False),
                 _now(WAIT_LOG_PERIOD_S))[1] == ()
     state, actions = step(state, _seen(WAIT_LOG_PERIOD_S, along), _now(WAIT_LOG_PERIOD_S))
-    assert _logs(actions) == [("info", "the pass start waits for uav1 (2.50 m from its start "
-                                       "point), uav2 (no uav2/mavlink/pose yet): "
+    assert _logs(actions) == [("info", "the pass start waits for uav1 (2.50 m from its entry), "
+                                       "uav2 (no uav2/mavlink/pose yet): "
                                        f"capture_radius_m 1 ({PLAN.label})")]
     t = 1.5 * WAIT_LOG_PERIOD_S  # not again before the next period
     assert step(state, _seen(t, along), _now(t))[1] == ()
@@ -143,7 +154,7 @@ def test_a_plan_on_another_start_line_waits_for_a_new_capture():
     # the hold plan (nothing flown) too, and it never starts
     held, actions = step(state, NewPlan(REPLAN, [(math.nan,) * 3] * 3, SPEED, 0.0), _now(5.0))
     assert held.phase is Phase.AWAITING_CAPTURE and actions == ()
-    assert step(held, _seen(6.0, {0: 0.0}), _now(6.0))[1] == ()
+    assert step(held, _seen(6.0, _waiting({0: 0.0})), _now(6.0))[1] == ()
 
 
 def test_every_flown_uav_behind_resumes_from_the_rearmost_after_the_delay():

@@ -73,9 +73,11 @@ class ObservedMission(SlotSchedule):
 
     @property
     def pass_start_s(self) -> float | None:
-        """When the pass's target was, or would have been, at the start line (wall clock;
-        None without a start): no slot starts before."""
-        return None if self.clock is None else self.clock.origin_s()
+        """From when slots start (wall clock; None without a start): the pass's instant, when
+        its target leaves the run-in's entry, or for a pass resumed mid-track the instant its
+        target was, or would have been, at the start line (its slots before the resume point
+        were flown then)."""
+        return None if self.clock is None else min(self.clock.start_s, self.clock.origin_s())
 
     def set_plan(self, target_xz: tuple[float, float], powers: Sequence[float],
                  y_start: float = 0.0) -> None:

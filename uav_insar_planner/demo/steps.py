@@ -24,7 +24,8 @@ from uav_insar_planner.demo.recorder import recorder_ready, start_recorder, stop
 from uav_insar_planner.param_specs.nodes import FIRST_SYSID, PORT_STEP
 from uav_insar_planner.report.flown import MavlinkPass, mavlink_table, rate_table, summary
 from uav_insar_planner.swarm import MASTER, MAX_UAVS, agent_name, uav_name, uavs
-from uav_insar_planner.track.speed_profile import ramp_delay_s
+from uav_insar_planner.track.pass_clock import PassClock
+from uav_insar_planner.track.passes import run_in_m
 
 if TYPE_CHECKING:
     from uav_insar_planner.params import Params
@@ -278,7 +279,8 @@ class Mission:
         self.targets = {k: (p.position.x, p.position.y, p.position.z)
                         for k, p in enumerate(formation.poses) if math.isfinite(p.position.x)}
         if not self.args.no_mavlink:
-            self.mavlink_pass = MavlinkPass(self.targets, CAPTURE_RADIUS_M)
+            self.mavlink_pass = MavlinkPass(self.targets, CAPTURE_RADIUS_M,
+                                            run_in_m(self.params.speed))
         return True
 
     def fly(self) -> tuple[bool, bool, list[str]]:
@@ -308,10 +310,15 @@ class Mission:
                                 else self.targets[k])
                             for k, p in enumerate(last.poses) if k in self.targets}
         flew_pass = self.mavlink_pass is None or MASTER in killed or w.spin_until(
-            lambda: self.mavlink_pass.done(
-                time.monotonic(), self.pass_s + ramp_delay_s(self.params.speed) + SETTLE_S),
+            lambda: self.mavlink_pass.done(time.monotonic(), self.pass_stop_s() + SETTLE_S),
             MAVLINK_TIMEOUT_S, self.running)
         return complete, flew_pass, kill_lines
+
+    def pass_stop_s(self) -> float:
+        """From the pass start until the bridges' targets stop: the run-in from the hover, the
+        pass and its braking, on the pass's clock."""
+        v = self.params.speed
+        return PassClock(0.0, v, -run_in_m(v), self.pass_s).time_at(v * self.pass_s)
 
     def print_tables(self, kill_lines: list[str]) -> None:
         """The achieved rates, the MAVLink vehicles and the summary, as one block."""

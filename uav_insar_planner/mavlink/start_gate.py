@@ -3,7 +3,8 @@ planner's instant.
 
 pass_start "capture": a bridge that sees every vehicle starts the pass itself once each
 linked UAV with a target (whose arming did not fail) reports a fresh position within
-`capture_radius_m` of its start point (track.capture); radius 0 starts at once.
+`capture_radius_m` of its entry, the start of its run-in (track.capture,
+track.trajectory); radius 0 starts at once.
 pass_start "planner" (a stack per UAV: no bridge sees the others): the planner sees every UAV
 captured and publishes one wall-clock start a little in the future (ros/formation_start.py);
 `planner_start` flies it on the bridge's monotonic clock (track.trajectory.PassTrajectory
@@ -33,7 +34,7 @@ def captured(gate: Sequence[WatchedVehicle], pass_: PassTrajectory, frame: Track
     for v in gate:
         if not v.position_fresh(now, max_age_s):
             return False
-        if outside(v.position_ned, frame.to_ned(*pass_.start_pose(v.uav)),
+        if outside(v.position_ned, frame.to_ned(*pass_.entry(v.uav)),
                    capture_radius_m) is not None:
             return False
     return True

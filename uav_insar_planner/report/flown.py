@@ -24,11 +24,12 @@ class PassRecord:
 class MavlinkPass:
     """Follows the vehicles' positions against their start points `starts[k]` = (x_k,
     y_start, z_k). The pass begins (`began`, monotonic time) when every vehicle is within
-    `capture_radius` of its start point, the bridge's own rule; from then on every position
-    updates that vehicle's PassRecord."""
+    `capture_radius` of its entry, `run_in_m` before its start point (the bridge's own rule,
+    track/trajectory.py); from then on every position updates that vehicle's PassRecord."""
 
-    def __init__(self, starts: dict[int, Vec3], capture_radius: float) -> None:
+    def __init__(self, starts: dict[int, Vec3], capture_radius: float, run_in_m: float) -> None:
         self.starts = starts
+        self.entries = {k: (x, y - run_in_m, z) for k, (x, y, z) in starts.items()}
         self.capture_radius = capture_radius
         self.latest: dict[int, Vec3] = {}
         self.poses = dict.fromkeys(starts, 0)
@@ -42,8 +43,8 @@ class MavlinkPass:
         self.poses[k] += 1
         if self.began is None:
             if len(self.latest) == len(self.starts) and all(
-                    math.dist(self.latest[j], start) <= self.capture_radius
-                    for j, start in self.starts.items()):
+                    math.dist(self.latest[j], entry) <= self.capture_radius
+                    for j, entry in self.entries.items()):
                 self.began = now
             return
         x, y, z = position

@@ -1,9 +1,11 @@
 """Where the UAVs are for the planner's pass start (ros/formation_start.py), from the poses
-their bridges publish: each captured at its start point, or (a planner started again) all on
-their tracks past the start line, and the rearmost of them.
+their bridges publish: each captured at its entry (the start of its run-in,
+track/trajectory.py), or (a planner started again) all on their tracks past the start line,
+and the rearmost of them.
 
 Poses are (monotonic time heard, (x, y, z) in the track frame) per UAV; a start point is
-(x_k, y_start, z_k). The capture test is the bridge's (track/capture.py).
+(x_k, y_start, z_k), an entry (x_k, y_start - run_in, z_k). The capture test is the bridge's
+(track/capture.py).
 """
 from __future__ import annotations
 
@@ -20,8 +22,9 @@ ON_TRACK_M = 2.0  # a held copter drifts in wind: wider than the default capture
 
 def not_captured(starts: dict[int, Vec3], poses: dict[int, tuple[float, Vec3]],
                  now: float, radius_m: float) -> dict[int, str]:
-    """Why each UAV of `starts` is not captured (no pose fresher than POSE_FRESH_S at `now`,
-    monotonic, or farther than `radius_m` from its start), by UAV; empty when all are."""
+    """Why each UAV of `starts` (its capture point: the entry) is not captured (no pose
+    fresher than POSE_FRESH_S at `now`, monotonic, or farther than `radius_m` from it), by
+    UAV; empty when all are."""
     why: dict[int, str] = {}
     for k, start in starts.items():
         seen = poses.get(k)
@@ -30,7 +33,7 @@ def not_captured(starts: dict[int, Vec3], poses: dict[int, tuple[float, Vec3]],
         elif now - seen[0] > POSE_FRESH_S:
             why[k] = f"no {topics.mavlink_pose(k)} for {now - seen[0]:.1f} s"
         elif (far := outside(seen[1], start, radius_m)) is not None:
-            why[k] = f"{far:.2f} m from its start point"
+            why[k] = f"{far:.2f} m from its entry"
     return why
 
 

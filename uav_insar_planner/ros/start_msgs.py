@@ -4,9 +4,10 @@ side of it.
   header.stamp     the instant the pass starts, WALL clock (time.time(), seconds and
                    nanoseconds since the epoch; not ROS time, which may be simulated)
   header.frame_id  the identity label of the plan it starts ("plan /planner <sec>.<ns>",
-                   plan_msgs.PlanId), and for a pass that resumes mid-track the along-track
-                   distance from the start line it resumes at: "<label> at <metres> m"
-                   (the UAVs hold there until the instant, then fly on at v_y)
+                   plan_msgs.PlanId), and where the targets wait until the instant, as the
+                   along-track distance from the start line (slot 0's): "<label> at
+                   <metres> m", less than 0 for a pass from the hover (its run-in before the
+                   line, track/passes.py), more for one that resumes mid-track
 
 The planner publishes it (ros/formation_start.py); a re-plan during the pass (same y_start)
 publishes the same instant again under the new plan's label. Validated where it enters
@@ -38,14 +39,14 @@ from uav_insar_planner.track.pass_clock import PassClock
 PLAUSIBLE_S = 86400.0
 KEPT = 8
 MAX_OFFSET_M = 1e6  # far beyond any pass (the bridge's origin limit is 1e5 m)
-_RESUME = re.compile(r"^(.*) at (\d{1,7}\.\d{3}) m$")
+_OFFSET = re.compile(r"^(.*) at (-?\d{1,7}\.\d{3}) m$")
 
 
 def encode_start(clock: PassClock, plan_id: PlanId) -> Header:
     """The start message of `plan_id` for `clock` (wall clock): stamp its `start_s`, the pass
-    then `offset_m` past its start line (0: a pass from the start line)."""
+    then `offset_m` past its start line (less than 0: its run-in before the line)."""
     offset_m = clock.offset_m
-    label = plan_id.label if offset_m <= 0.0 else f"{plan_id.label} at {offset_m:.3f} m"
+    label = plan_id.label if offset_m == 0.0 else f"{plan_id.label} at {offset_m:.3f} m"
     msg = Header(frame_id=label)
     msg.stamp.sec, msg.stamp.nanosec = divmod(round(clock.start_s * 1e9), 1_000_000_000)
     return msg
@@ -54,16 +55,16 @@ def encode_start(clock: PassClock, plan_id: PlanId) -> Header:
 def decode_start(msg: Header, wall_now: float) -> tuple[PlanId, float, float]:
     """(plan identity, start in wall-clock seconds, along-track offset at it in metres), or
     PlanMessageError (one line)."""
-    resume = _RESUME.match(msg.frame_id)
-    label, offset = (resume[1], float(resume[2])) if resume else (msg.frame_id, 0.0)
+    at = _OFFSET.match(msg.frame_id)
+    label, offset = (at[1], float(at[2])) if at else (msg.frame_id, 0.0)
     plan_id = PlanId.from_label(label)
     if plan_id is None:
         raise PlanMessageError(topics.FORMATION_START, "frame_id", msg.frame_id,
                                "a plan identity 'plan <planner> <sec>.<nanosec>', optionally "
                                "followed by ' at <metres> m'")
-    if not (math.isfinite(offset) and 0.0 <= offset <= MAX_OFFSET_M):
+    if not (math.isfinite(offset) and -MAX_OFFSET_M <= offset <= MAX_OFFSET_M):
         raise PlanMessageError(topics.FORMATION_START, "frame_id offset", offset,
-                               f"0..{MAX_OFFSET_M:g} m")
+                               f"-{MAX_OFFSET_M:g}..{MAX_OFFSET_M:g} m")
     sec, nanosec = int(msg.stamp.sec), int(msg.stamp.nanosec)
     if not 0 <= nanosec < 1_000_000_000:
         raise PlanMessageError(topics.FORMATION_START, "stamp.nanosec", nanosec,

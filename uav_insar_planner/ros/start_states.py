@@ -5,7 +5,7 @@ it what it heard and executes what it returns, so every decision is testable wit
   phase               the data it holds           left for
   NO_PLAN             nothing                     AWAITING_CAPTURE: a plan (NewPlan)
   AWAITING_CAPTURE    the plan, its start points  STARTED: every flown UAV fresh and within
-                                                    capture_radius_m of its start point;
+                                                    capture_radius_m of its entry;
                                                   STARTED / RESUME_UNCONFIRMED: all on their
                                                     tracks past the start line (a planner
                                                     started again): resumed from the rearmost
@@ -52,6 +52,7 @@ from uav_insar_planner.ros.start_confirmations import (
 )
 from uav_insar_planner.swarm import uav_name
 from uav_insar_planner.track.pass_clock import PassClock, same_line
+from uav_insar_planner.track.passes import run_in_m
 
 # Bridges say `behind` once a second on /diagnostics; a swarm held by one silence says it
 # within a few seconds of each other, DDS repairs included. Longer alone: it is left behind.
@@ -251,9 +252,10 @@ def _await_capture(state: StartState, seen: Observed, starts: dict[int, Vec3], n
         return _resume(state, rear, max(seen.start_delay_s, RESTARTED_DELAY_S),
                        seen.start_confirm_wait_s, "the UAVs are on their tracks past the "
                        "start line (this planner started again?)", now)
-    radius = seen.capture_radius_m
-    if not all_captured(starts, seen.poses, now.mono, radius):
-        why = (not_captured(starts, seen.poses, now.mono, radius)
+    radius, run_in = seen.capture_radius_m, run_in_m(state.speed_mps)
+    entries = {k: (x, y - run_in, z) for k, (x, y, z) in starts.items()}
+    if not all_captured(entries, seen.poses, now.mono, radius):
+        why = (not_captured(entries, seen.poses, now.mono, radius)
                if now.mono - state.wait_told >= WAIT_LOG_PERIOD_S and seen.bridged else {})
         if not why:
             return state, ()
@@ -262,12 +264,12 @@ def _await_capture(state: StartState, seen: Observed, starts: dict[int, Vec3], n
             Log("info", f"the pass start waits for {waiting}: capture_radius_m {radius:g} "
                         f"({state.plan})"),)
     delay = seen.start_delay_s
-    clock = PassClock(now.wall + delay, state.speed_mps)
+    clock = PassClock(now.wall + delay, state.speed_mps, -run_in)  # from the hover
     started = replace(state, phase=Phase.STARTED, clock=clock,
                       started=state.started | {state.plan.label})
     return started, (Publish(clock, state.plan), Log("info", (
         f"every flown UAV ({', '.join(uav_name(k) for k in sorted(starts))}) within "
-        f"{radius:g} m of its start: the pass starts in {delay:g} s, wall clock "
+        f"{radius:g} m of its entry: the pass starts in {delay:g} s, wall clock "
         f"{clock.start_s:.3f} ({state.plan})")))
 
 

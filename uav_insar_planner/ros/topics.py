@@ -134,9 +134,10 @@ INTERFACE: tuple[TopicSpec, ...] = (
               "label is the plan's identity, `plan /planner <sec>.<nanosec>`"),
     TopicSpec(FORMATION_START, "std_msgs/msg/Header", "LATCHED", _PLANNER, _AGENT + _BRIDGE,
               "the pass start, once every flown UAV's uav{k}/mavlink/pose is within "
-              "capture_radius_m of its start point: stamp = the wall-clock start (time.time(), "
+              "capture_radius_m of its entry: stamp = the wall-clock start (time.time(), "
               "not ROS time), frame_id = the identity label of the plan it starts, with "
-              "` at <metres> m` when the pass resumes that far past the start line (a "
+              "` at <metres> m` where the targets wait for it: the run-in's entry before the "
+              "start line (negative), or past it for a pass that resumes mid-track (a "
               "planner started again, a swarm held behind its clock: ros/start_msgs.py); "
               "the one mission clock: a bridge flies its pass from it "
               "(pass_start planner, the default), an agent on a bridge-flown vehicle starts "

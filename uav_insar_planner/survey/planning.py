@@ -7,9 +7,8 @@ schedule, the sorties and the coverage (`plan_survey` -> `SurveyPlan`).
    formation every strip flies.
 2. Its master fixes the geometry: the swath S_0 = Theta_3dB r_0 / cos(theta_0) (C5's, the
    plan's metrics) centred z_0 tan(theta_0) = x_t - x_0 (C2) to the right of the master's track.
-   Each strip's run-in is v_y^2 / (2 RAMP_MPS2) (track.passes.min_run_in_m) plus
-   RUN_IN_MARGIN_M: slot 0's line is crossed at v_y even by a UAV captured that far ahead of
-   its entry.
+   Each strip's run-in is every pass's (track.passes.run_in_m): v_y^2 / (2 RAMP_MPS2) and a
+   margin, so that slot 0's line is crossed at v_y.
 3. The strips (survey/strips.py) on the given bearing or on the one with the least flight time
    (`best_bearing` over the sorties' time), each imaged part lengthened to whole slots.
 4. Each strip's offloading: the strip's own slot count, and the ground station where it stands
@@ -36,10 +35,8 @@ from uav_insar_planner.survey.coverage import covered_fraction
 from uav_insar_planner.survey.sorties import FlightSpeeds, Sortie, plan_sorties
 from uav_insar_planner.survey.speed import fastest_speed, slowest_fitting_speed, speed_front
 from uav_insar_planner.survey.strips import Strip, best_bearing, layout_strips
-from uav_insar_planner.track.passes import min_run_in_m
+from uav_insar_planner.track.passes import run_in_m
 
-# Beyond the ramp's v^2 / (2 a): the capture radius (1 m by default) and a metre to spare.
-RUN_IN_MARGIN_M = 2.0
 AIRFRAME_MAX_MPS = 15.0  # a survey multicopter's top ground speed with a radar payload
 COVERAGE_CELL_M = 2.0  # the brute-force check's grid; coarser on big areas (COVERAGE_CELLS_MAX)
 COVERAGE_CELLS_MAX = 250_000
@@ -138,7 +135,7 @@ def _layout(area: Area, params: Params, plan: Plan, options: SurveyOptions
             ) -> tuple[float, list[Strip], list[Sortie]]:
     """(bearing, strips with whole slots, sorties) at the plan's speed."""
     swath, offset, height = geometry(params, plan)
-    run_in = min_run_in_m(params.speed) + RUN_IN_MARGIN_M
+    run_in = run_in_m(params.speed)
     slot_m = params.speed * params.slot_duration_s
 
     def strips_at(bearing: float) -> list[Strip]:
@@ -233,7 +230,7 @@ def plan_survey(area: Area, params: Params, options: SurveyOptions) -> SurveyPla
             "station nearer the strips (or shorter strips: the area, the bearing)")
     cell = max(COVERAGE_CELL_M, math.sqrt(area.area_m2 / COVERAGE_CELLS_MAX))
     return SurveyPlan(area, options, speed, why, plan, bearing,
-                      min_run_in_m(speed) + RUN_IN_MARGIN_M, tuple(planned), tuple(sorties),
+                      run_in_m(speed), tuple(planned), tuple(sorties),
                       covered_fraction(area, strips, geometry(local, plan)[0], cell))
 
 

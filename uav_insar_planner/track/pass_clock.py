@@ -2,8 +2,9 @@
 it is at any instant. The planner, the bridges and the agents all keep the pass in this one
 value, and decide "the same start" by its one rule.
 
-A pass starts at `start_s` with its target `offset_m` past the start line (0: at the line;
-more: a pass resumed mid-track, whose targets hold there until `start_s`). From then on the
+A pass starts at `start_s` with its target `offset_m` past the start line (slot 0's): less
+than 0 for a pass from the hover, whose run-in lies before the line (track/passes.py), more
+for a pass resumed mid-track; the targets hold there until `start_s`. From then on the
 target runs along track at `speed_mps`:
 
     s(t) = offset                                              t < start
@@ -134,6 +135,7 @@ class PassClock:
         wall clock 1796000012.000, resuming 20.00 m past the start line"."""
         ahead = self.start_s - now_s
         when = f"in {ahead:.2f} s" if ahead >= 0 else f"{-ahead:.2f} s ago (joining the pass)"
-        where = (f", resuming {self.offset_m:.2f} m past the start line"
-                 if self.offset_m > 0.0 else "")
+        where = (f", resuming {self.offset_m:.2f} m past the start line" if self.offset_m > 0.0
+                 else f", from its run-in {-self.offset_m:.2f} m before the start line"
+                 if self.offset_m < 0.0 else "")
         return f"{when}, wall clock {self.start_s:.3f}{where}"

@@ -30,9 +30,20 @@ from uav_insar_planner.track.speed_profile import BRAKE_MPS2, RAMP_MPS2
 XY = tuple[float, float]
 
 
+# Beyond the ramp's v^2 / (2 a): the capture radius (1 m by default: a UAV captured that far
+# ahead of its entry) and a metre to spare.
+RUN_IN_MARGIN_M = 2.0
+
+
 def min_run_in_m(speed_mps: float) -> float:
     """The shortest run-in from a hover that reaches `speed_mps` by slot 0's line [m]."""
     return speed_mps * speed_mps / (2.0 * RAMP_MPS2)
+
+
+def run_in_m(speed_mps: float) -> float:
+    """The run-in every pass from a hover flies before slot 0's line [m]: `min_run_in_m` and
+    RUN_IN_MARGIN_M."""
+    return min_run_in_m(speed_mps) + RUN_IN_MARGIN_M if speed_mps > 0.0 else 0.0
 
 
 def run_out_m(speed_mps: float) -> float:

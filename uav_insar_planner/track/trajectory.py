@@ -1,11 +1,14 @@
 """The pass every UAV flies in the track frame: the formation on one pass clock.
 
-UAV k's target is its start point (x_k, y_start, z_k) until the pass has a clock, then
-(x_k, y_start + s(t), z_k) with s the clock's (`pass_clock.PassClock.along`). A new formation
+UAV k's target is its entry (x_k, y_start - run_in, z_k) until the pass has a clock, then
+(x_k, y_start + s(t), z_k) with s the clock's (`pass_clock.PassClock.along`). The run-in
+(`passes.run_in_m`) lies before the start line (slot 0's), so that a pass from the hover at
+the entry crosses the line at v_y: every slot is flown at the planned speed. A new formation
 with the same start line keeps the clock running (a re-plan during the pass); one with another
 start line is another pass, whose clock is yet to come.
 
-The clock comes from the bridge's own capture (`start_now`) or from the planner's start
+The clock comes from the bridge's own capture at the entries (`start_now`, the clock's
+resume point run_in before the line) or from the planner's start
 (`start_from`): that one is kept as it was sent (`sent`, wall clock), to be compared with the
 next one, and on the reader's monotonic clock (`clock`), to fly.
 """
@@ -13,6 +16,7 @@ from __future__ import annotations
 
 from uav_insar_planner.plan import Vec3
 from uav_insar_planner.track.pass_clock import PassClock, same_line
+from uav_insar_planner.track.passes import run_in_m
 
 
 class PassTrajectory:
@@ -20,6 +24,7 @@ class PassTrajectory:
 
     def __init__(self, speed_mps: float, duration_s: float):
         self.speed_mps, self.duration_s = speed_mps, duration_s
+        self.run_in_m = run_in_m(speed_mps)
         self.formation: list[Vec3 | None] | None = None
         self.clock: PassClock | None = None  # on this reader's clock; None: not started
         self.sent: PassClock | None = None  # the planner's start it came from, as sent
@@ -36,8 +41,9 @@ class PassTrajectory:
         return False
 
     def start_now(self, now: float) -> None:
-        """The pass starts from the hover at `now` (the bridge's own capture)."""
-        self.clock, self.sent = PassClock(now, self.speed_mps, 0.0, self.duration_s), None
+        """The pass starts from the hover at the entries at `now` (the bridge's own capture)."""
+        self.clock = PassClock(now, self.speed_mps, -self.run_in_m, self.duration_s)
+        self.sent = None
 
     def start_from(self, start_s: float, offset_m: float, now: float, wall_now: float
                    ) -> PassClock | None:
@@ -58,11 +64,16 @@ class PassTrajectory:
         """UAV `uav`'s start point (x_k, y_start, z_k), None if it is not flown."""
         return None if self.formation is None else self.formation[uav]
 
+    def entry(self, uav: int) -> Vec3 | None:
+        """Where UAV `uav` waits for the pass from the hover: its run-in's start, or None."""
+        start = self.start_pose(uav)
+        return None if start is None else (start[0], start[1] - self.run_in_m, start[2])
+
     def target(self, uav: int, now: float) -> tuple[Vec3, Vec3] | None:
         """(position, velocity) of UAV `uav` in the track frame at `now`, or None."""
         start = self.start_pose(uav)
         if start is None:
             return None
         if self.clock is None:
-            return start, (0.0, 0.0, 0.0)
+            return self.entry(uav), (0.0, 0.0, 0.0)
         return self.clock.target(start, now)
