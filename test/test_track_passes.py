@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from uav_insar_planner.track.passes import (
@@ -75,3 +76,14 @@ def test_a_bad_pass_is_refused_in_one_line_naming_the_field(make, field):
     with pytest.raises(ValueError) as err:
         make()
     assert str(err.value).startswith(f"{field}: value ") and "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize("speed", [1.3, 4.3, 7.7])
+def test_every_pass_stops_in_finite_time_whatever_its_length(speed):
+    """Its stop is the braked end itself, which rounding must not put out of reach (a strip
+    of 86.0 m once took 'inf min')."""
+    for length in [0.0, 1e-3, 86.0, *np.linspace(0.1, 900.0, 211)]:
+        track = TrackPass(0.0, 0.0, float(length), run_in_m=min_run_in_m(speed) + 2.0)
+        clock = track.clock(0.0, speed)
+        stop = track.stop_s(clock)
+        assert math.isfinite(stop) and clock.along(stop)[1] == pytest.approx(0.0, abs=1e-6)

@@ -39,7 +39,7 @@ from uav_insar_planner.track.passes import run_in_m
 
 AIRFRAME_MAX_MPS = 15.0  # a survey multicopter's top ground speed with a radar payload
 COVERAGE_CELL_M = 2.0  # the brute-force check's grid; coarser on big areas (COVERAGE_CELLS_MAX)
-COVERAGE_CELLS_MAX = 250_000
+COVERAGE_CELLS_MAX = 40_000
 
 
 class SurveyInfeasible(ValueError):

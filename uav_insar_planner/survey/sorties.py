@@ -70,18 +70,27 @@ class Sortie:
         return self.climb_s + self.transit_s + self.strips_s + self.return_s + self.descent_s
 
 
+HOME = (0.0, 0.0)
+
+
+def pass_s(strip: TrackPass, speed_mps: float) -> float:
+    """A strip's pass from the hover at its entry to its stop [s] (its clock's)."""
+    return strip.stop_s(strip.clock(0.0, speed_mps))
+
+
 def sortie_of(strips: Sequence[TrackPass], indices: Sequence[int], height_m: float,
               speed_mps: float, fly: FlightSpeeds) -> Sortie:
     """The sortie flying strips[i] for i in `indices`, in that order, at `height_m` (the
-    highest UAV's) and v_y `speed_mps`."""
-    chosen = tuple(strips[i] for i in indices)
-    passes = MissionPasses(chosen, speed_mps, fly.transit_mps)
-    last_stop = chosen[-1].stop(speed_mps)
+    highest UAV's) and v_y `speed_mps`: the passes' clocks laid end to end with the turns
+    between them (track.passes.MissionPasses.duration_s), and a settle at each entry."""
+    chosen = [strips[i] for i in indices]
+    turns = sum(math.dist(a.stop(speed_mps), b.entry)
+                for a, b in zip(chosen, chosen[1:], strict=False)) / fly.transit_mps
     return Sortie(
         strips=tuple(indices), climb_s=height_m / fly.climb_mps,
-        transit_s=math.dist((0.0, 0.0), chosen[0].entry) / fly.transit_mps,
-        strips_s=passes.duration_s() + fly.settle_s * len(chosen),
-        return_s=math.dist(last_stop, (0.0, 0.0)) / fly.transit_mps,
+        transit_s=math.dist(HOME, chosen[0].entry) / fly.transit_mps,
+        strips_s=sum(pass_s(s, speed_mps) + fly.settle_s for s in chosen) + turns,
+        return_s=math.dist(chosen[-1].stop(speed_mps), HOME) / fly.transit_mps,
         descent_s=height_m / fly.descent_mps)
 
 
@@ -89,18 +98,26 @@ def plan_sorties(strips: Sequence[TrackPass], height_m: float, speed_mps: float,
                  budget_s: float, fly: FlightSpeeds = FlightSpeeds()) -> list[Sortie]:
     """`strips` (survey frame, home at the origin, in flight order) in sorties of at most
     `budget_s` each (module docstring); ValueError (one line) when one strip alone does not
-    fit."""
+    fit. Each strip is tried once: the sortie's time grows by its turn, settle and pass, and
+    its return is from the new last strip."""
+    climb, descent = height_m / fly.climb_mps, height_m / fly.descent_mps
     sorties: list[Sortie] = []
     current: list[int] = []
-    for i in range(len(strips)):
-        trial = sortie_of(strips, current + [i], height_m, speed_mps, fly)
-        if trial.flight_time_s <= budget_s:
-            current.append(i)
-            continue
+    spent = 0.0  # the current sortie's climb, transit out, passes, settles and turns
+    for i, strip in enumerate(strips):
+        stop = strip.stop(speed_mps)
+        flying = pass_s(strip, speed_mps) + fly.settle_s
+        back = math.dist(stop, HOME) / fly.transit_mps
         if current:
+            turn = math.dist(strips[current[-1]].stop(speed_mps), strip.entry) / fly.transit_mps
+            if spent + turn + flying + back + descent <= budget_s:
+                current.append(i)
+                spent += turn + flying
+                continue
             sorties.append(sortie_of(strips, current, height_m, speed_mps, fly))
-        alone = sortie_of(strips, [i], height_m, speed_mps, fly)
-        if alone.flight_time_s > budget_s:
+        spent = climb + math.dist(HOME, strip.entry) / fly.transit_mps + flying
+        if spent + back + descent > budget_s:
+            alone = sortie_of(strips, [i], height_m, speed_mps, fly)
             raise ValueError(
                 f"endurance_min: value {budget_s / 60.0:.3g} min of flight (after the "
                 f"reserve) is not allowed; expected at least {alone.flight_time_s / 60.0:.3g} "

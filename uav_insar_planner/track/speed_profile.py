@@ -63,8 +63,10 @@ def braked_time_s(distance_m: float, speed: float, duration: float) -> float:
     beyond the end of a finite pass, where it stops; `speed` > 0)."""
     if duration <= 0.0:
         return distance_m / speed
-    if distance_m > speed * duration:
+    end = speed * duration
+    if distance_m > end + 1e-9 * max(1.0, end):  # (the end itself, to rounding, is reached)
         return math.inf
+    distance_m = min(distance_m, end)
     t_brake, decel = _braking(speed, duration)
     if distance_m <= speed * t_brake:
         return distance_m / speed
