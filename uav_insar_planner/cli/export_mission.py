@@ -170,6 +170,19 @@ def check_out(text: str, names: list[str], stale: list[str]) -> Path:
     return out
 
 
+def write_out(text: str, out: Path, files: dict[str, str | bytes], stale: list[str]
+              ) -> list[str]:
+    """`files` written into the --out folder `out` (given as `text`) and the `stale` names
+    removed, all or nothing (mission_file/folder.py): the names removed, or one ParamError
+    line saying nothing was changed."""
+    try:
+        return replace_files(out, files, stale)
+    except OSError as exc:
+        raise ParamError([f"--out: value {shown(text)} is not allowed; writing "
+                          f"{shown(exc.filename)} failed ({exc.strerror}); nothing was "
+                          "changed"]) from None
+
+
 def plan_names(count: int) -> list[str]:
     """The file names of UAVs 0..count - 1."""
     return [f"{uav_name(k)}.plan" for k in uavs(count)]
@@ -214,12 +227,7 @@ def main(args: argparse.Namespace) -> int:
         home, flight, x, z, start, args.end, args.autopilot, args.altitude_frame), indent=2)
         + "\n" for k, (x, z) in flown.items()}
     stale = [name for name in plan_names(MAX_UAVS) if name not in texts]
-    try:
-        removed = replace_files(out, texts, stale)
-    except OSError as exc:
-        raise ParamError([f"--out: value {shown(args.out)} is not allowed; writing "
-                          f"{shown(exc.filename)} failed ({exc.strerror}); nothing was "
-                          "changed"]) from None
+    removed = write_out(args.out, out, texts, stale)
     for k, (x, z) in flown.items():
         print(f"wrote {out / (uav_name(k) + '.plan')}: x {x:.3f} m, z {z:.3f} m")
     if removed:

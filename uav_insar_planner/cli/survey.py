@@ -32,10 +32,15 @@ import numpy as np
 
 from uav_insar_planner.autopilots.profiles import AUTOPILOTS, profile
 from uav_insar_planner.cli.checks import check_output_folder, utc_instant
-from uav_insar_planner.cli.export_mission import check_start, parse_bounded, parse_home
+from uav_insar_planner.cli.export_mission import (
+    check_start,
+    parse_bounded,
+    parse_home,
+    write_out,
+)
 from uav_insar_planner.cli.scenario import add_scenario_arguments, scenario_params
 from uav_insar_planner.exit_codes import EXIT_INFEASIBLE, EXIT_OK
-from uav_insar_planner.mission_file.folder import folder_problems, replace_files
+from uav_insar_planner.mission_file.folder import folder_problems
 from uav_insar_planner.mission_file.geodesy import latlon_to_ned
 from uav_insar_planner.mission_file.qgc_plan import PREFLIGHT_S
 from uav_insar_planner.mission_file.survey_plan import StripLeg, sortie_document, sortie_items
@@ -247,12 +252,7 @@ def main(args: argparse.Namespace) -> int:
              if out.is_dir() else [])
     if problems := folder_problems("--out", out, files, stale):
         raise ParamError(problems)
-    try:
-        removed = replace_files(out, files, stale)
-    except OSError as exc:
-        raise ParamError([f"--out: value {shown(args.out)} is not allowed; writing "
-                          f"{shown(exc.filename)} failed ({exc.strerror}); nothing was "
-                          "changed"]) from None
+    removed = write_out(args.out, out, files, stale)
     if args.front is not None:
         # about the chosen speed, where the trade is made (the scenario's plans end near it)
         top = min(options.max_speed_mps, FRONT_SPAN * survey.speed_mps)
