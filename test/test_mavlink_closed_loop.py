@@ -6,6 +6,8 @@ import pytest
 from mavlink_fakes import MAV, wait_until
 
 from uav_insar_planner.mavlink.bridge import Bridge, BridgeConfig
+from uav_insar_planner.track.pass_clock import PassClock
+from uav_insar_planner.track.passes import run_in_m
 from uav_insar_planner.track.speed_profile import ramp_up
 from uav_insar_sim.vehicle.simulator import SimVehicle
 
@@ -44,7 +46,7 @@ def test_vehicles_reach_the_formation_and_fly_the_track(feedforward):
         with bridge:
             bridge.set_formation(FORMATION)
             assert wait_until(bridge.track_started, 10.0)
-            # established: every vehicle within the 1 m capture radius of its start point
+            # established: every vehicle within the 1 m capture radius of its entry
             time.sleep(3.0)
             errs = errors(bridge, vehicles, time.monotonic())
             statuses = bridge.status()
@@ -54,9 +56,11 @@ def test_vehicles_reach_the_formation_and_fly_the_track(feedforward):
             assert max(errs) < 2.0, errs
         for k, s in enumerate(statuses):
             assert s.link == "linked"
-            # flew along the track: the target ramped up from the hover (4.7 m in 3 s at
-            # 2 m/s), the vehicle at most 2 m behind it (position-only)
-            assert s.position_track[1] > ramp_up(3.0, 2.0)[0] - 2.0
+            # flew along the track: the target ramped up from the hover at its entry, a
+            # run-in before the line (4.7 m in 3 s at 2 m/s), the vehicle at most 2 m behind
+            # it (position-only)
+            assert s.position_track[1] > ramp_up(3.0, 2.0)[0] - run_in_m(2.0) - 2.0
+            assert s.position_track[1] < ramp_up(3.0, 2.0)[0] - run_in_m(2.0) + 0.5
             assert s.position_track[0] == pytest.approx(FORMATION[k][0], abs=0.5)
             assert s.position_track[2] == pytest.approx(FORMATION[k][2], abs=0.5)
     finally:
@@ -70,7 +74,8 @@ def test_formation_held_when_the_track_has_ended():
         with bridge:
             bridge.set_formation(FORMATION)
             assert wait_until(bridge.track_started, 10.0)
-            time.sleep(3.0)
+            # until the target stopped (the run-in, 1 s of pass, the braking), and a second
+            time.sleep(PassClock(0.0, 3.0, -run_in_m(3.0), 1.0).time_at(3.0) + 1.0)
             errs = errors(bridge, vehicles, time.monotonic())
         assert max(errs) < 0.5, errs
         for k, v in enumerate(vehicles):

@@ -75,7 +75,7 @@ def test_planner_bridge_vehicles_end_to_end(watcher):
     ports = ", ".join(f"'udpout:127.0.0.1:{v.port}'" for v in vehicles)
     bridge = start("uav_insar_planner.ros.mavlink_bridge", env, f"connections:=[{ports}]",
                    "target_sysids:=[2, 3, 4]", "speed_mps:=2.0", "velocity_feedforward:=true")
-    planner = start("uav_insar_planner.ros.planner", env)
+    planner = start("uav_insar_planner.ros.planner", env, "speed_mps:=2.0")  # the bridge's
     spin_until, poses, diags = watcher.spin_until, watcher.mavlink_poses, watcher.diagnostics
     formation = [[(p.position.x, p.position.y, p.position.z) for p in m.poses]
                  for m in watcher.formations]

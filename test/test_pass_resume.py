@@ -24,14 +24,23 @@ from uav_insar_planner.ros import topics
 from uav_insar_planner.ros.plan_msgs import decode_formation
 from uav_insar_planner.ros.start_msgs import decode_start
 from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, uavs
+from uav_insar_planner.track.passes import run_in_m
 
 pytestmark = pytest.mark.timeout(90)
 SPEED = 4.3  # the scenario's v_y (Table I)
+RUN_IN = run_in_m(SPEED)  # the UAVs wait at their entries, this far before the start line
+
+
+def offset_of(start: Header) -> float:
+    """Where a start's targets wait (m past the start line): less than 0 for a pass from the
+    hover at the entries, more for one resumed mid-track."""
+    return decode_start(start, time.time())[2]
 
 
 class FakeBridges:
-    """FAULT INJECTION: the per-UAV bridges as the planner hears them. Each UAV holds its start
-    point until the planner's pass start, then flies the pass at SPEED, except the `held`
+    """FAULT INJECTION: the per-UAV bridges as the planner hears them. Each UAV holds its entry
+    (RUN_IN before its start point) until the planner's pass start, then flies the pass at
+    SPEED from where the start puts it, except the `held`
     ones, which stop where they are and report `behind` on the flown plan until a resumed
     start comes (as a real bridge rejoins on it), then fly on from its offset. Each reports on
     /diagnostics, once a second, the start it flies (`pass_start`, `pass_plan`), as the real
@@ -61,14 +70,14 @@ class FakeBridges:
 
     def resumed(self, k: int) -> bool:
         """Whether UAV k's bridge took a resumed start (one with an offset)."""
-        return k in self.flying and " at " in self.flying[k].frame_id
+        return k in self.flying and offset_of(self.flying[k]) > 0.0
 
     def along(self, k: int) -> float:
         """How far UAV k is past its start line now."""
         if k in self.held and not self.resumed(k):
             return self.held[k]
         if k not in self.flying:
-            return 0.0
+            return -RUN_IN
         _, t0, offset = decode_start(self.flying[k], time.time())
         return offset + max(0.0, SPEED * (time.time() - t0))
 
@@ -125,7 +134,7 @@ def test_one_uav_behind_alone_is_replanned_out_as_a_lost_uav(watcher, procs):
     log, = stop_cleanly([planner])
     assert survivors[2] is None and survivors[0] is not None and survivors[1] is not None
     assert "uav2 lost at slot" in log and "cannot keep the pass" in log, log[-3000:]
-    assert len(bridges.starts) >= 1 and " at " not in bridges.starts[-1].frame_id
+    assert len(bridges.starts) >= 1 and offset_of(bridges.starts[-1]) < 0.0  # none resumed
     print(f"uav2 behind alone: re-planned without it {replanned_after:.1f} s later")
     assert replanned_after >= 4.0  # BEHIND_GRACE_S: a swarm held together says so within it
 
@@ -134,9 +143,9 @@ def test_every_uav_behind_resumes_the_pass_from_the_rearmost(watcher, procs):
     planner, bridges = fly(watcher, procs)
     bridges.hold([0, 1, 2])
     rear = min(bridges.held.values())
-    assert watcher.spin_until(lambda: any(" at " in s.frame_id for s in bridges.starts), 10.0,
+    assert watcher.spin_until(lambda: any(offset_of(s) > 0.0 for s in bridges.starts), 10.0,
                               [planner]), [s.frame_id for s in bridges.starts]
-    resumed = next(s for s in bridges.starts if " at " in s.frame_id)
+    resumed = next(s for s in bridges.starts if offset_of(s) > 0.0)
     plan_id, t_start, offset = decode_start(resumed, time.time())
     watcher.spin_until(lambda: False, 1.0)  # its log line follows the start it sent
     log, = stop_cleanly([planner])
@@ -166,7 +175,7 @@ def test_a_resumed_start_a_bridge_has_not_confirmed_is_moved_later_until_it_has(
 
     assert watcher.spin_until(settled, 25.0, [planner]), [s.frame_id for s in bridges.starts]
     log, = stop_cleanly([planner])
-    resumed = [s for s in bridges.starts if " at " in s.frame_id]
+    resumed = [s for s in bridges.starts if offset_of(s) > 0.0]
     first, last = _instant(resumed[0]), _instant(resumed[-1])
     print(f"the resumed start moved {last - first:.1f} s later, "
           f"{log.count('the resumed pass waits')} times")

@@ -26,12 +26,15 @@ from uav_insar_planner.ros.mavlink_bridge import POSE_PERIOD_S
 from uav_insar_planner.ros.start_msgs import decode_start
 from uav_insar_planner.solver import solve
 from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, MAX_UAVS, uavs
+from uav_insar_planner.track.passes import run_in_m
 
 # Table I's swarm: this test is of three UAVs (test_num_uavs.py flies others)
 UAVS = uavs(DEFAULT_NUM_UAVS)
 
 pytestmark = pytest.mark.timeout(120)
 SPEED = 4.3  # the bridges' default speed_mps (Table I v_y)
+RUN_IN = run_in_m(SPEED)  # each UAV waits at its entry, this far before its start point
+RUN_IN_S = RUN_IN / SPEED  # what the run-in adds to the time to any line past the start
 SETPOINT_RATE_HZ = 10.0  # the bridges' default
 VEHICLE_PORTS = (29010, 29020, 29030)
 SYSIDS = (2, 3, 4)
@@ -94,14 +97,14 @@ def test_three_stacks_fly_the_formation_and_start_the_pass_together(watcher):
         assert watcher.spin_until(lambda: starts, 40.0, everyone), "no formation/start"
         plan_id, t0, _ = decode_start(starts[0], time.time())
         assert 0.5 < t0 - time.time() < 2.5  # a little in the future: start_delay_s 2
-        assert watcher.spin_until(lambda: time.time() > t0 + 4.0, 10.0, everyone)
+        assert watcher.spin_until(lambda: time.time() > t0 + 4.0 + RUN_IN_S, 10.0, everyone)
         tracked()
         # a re-plan during the pass (same y_start): the same instant under the new identity
         assert watcher.call(Trigger, "/planner/replan", Trigger.Request()).success
         # (the planner sends each start again every half second: look for another label)
         replanned = watcher.spin_until(
             lambda: any(m.frame_id != starts[0].frame_id for m in starts), 20.0, everyone)
-        watcher.spin_until(lambda: time.time() > t0 + 6.0, 10.0, everyone)
+        watcher.spin_until(lambda: time.time() > t0 + 6.0 + RUN_IN_S, 10.0, everyone)
         replanned_y = [watcher.mavlink_poses[k][-1].pose.position.y for k in UAVS]
         names = set(watcher.node.get_node_names_and_namespaces())
         flown = list(watcher.flown_plans[1])
@@ -130,7 +133,9 @@ def test_three_stacks_fly_the_formation_and_start_the_pass_together(watcher):
     lags = []
     for k in UAVS:
         before = [y for t, y in track[k] if t < t0 - 0.2]
-        assert before and max(abs(y - points[k][1]) for y in before[-5:]) < 1.0, before[-5:]
+        # waiting at its entry, the start of its run-in, until the pass started
+        assert before and max(abs(y - points[k][1] + RUN_IN) for y in before[-5:]) < 1.0, \
+            before[-5:]
         assert track[k][-1][1] > 8.0, track[k][-1]  # flew the track: ~4 s at 4.3 m/s
         lags.append(progress(track[k], t0, 1.5, 4.0))
     spread = max(lags) - min(lags)

@@ -139,7 +139,7 @@ def test_the_bridge_flies_ten_vehicles_into_the_planned_formation(procs, ros_con
         everyone = [procs("mavlink_bridge", "-p", f"connections:={ports}",
                           "-p", f"target_sysids:={[v.sysid for v in vehicles]}",
                           "-p", "speed_mps:=2.0", "-p", "velocity_feedforward:=true"),
-                    procs("planner", *ROS_ARGS)]
+                    procs("planner", *ROS_ARGS, "-p", "speed_mps:=2.0")]  # the bridge's
         assert w.spin_until(lambda: w.formations, 60.0, everyone), "no plan"
         plan = decode_formation(w.formations[-1]).points
         assert len(plan) == MAX_UAVS and all(p is not None for p in plan)
