@@ -42,13 +42,14 @@ def imaged(points_ne: np.ndarray, strips: Sequence[Strip], swath_m: float) -> np
     docstring)."""
     hit = np.zeros(len(points_ne), dtype=bool)
     for strip in strips:
+        left = np.flatnonzero(~hit)  # (a point one strip images needs no other)
         heading = strip.heading_rad
         u = np.array([math.cos(heading), math.sin(heading)])
         r = np.array([-u[1], u[0]])  # right of the flight: heading north -> east
-        rel = points_ne - np.asarray(strip.master_line_ne()[0])
+        rel = points_ne[left] - np.asarray(strip.master_line_ne()[0])
         along, across = rel @ u, rel @ r
-        hit |= ((along >= -TOLERANCE_M) & (along <= strip.track.length_m + TOLERANCE_M)
-                & (np.abs(across - strip.look_offset_m) <= 0.5 * swath_m + TOLERANCE_M))
+        hit[left] = ((along >= -TOLERANCE_M) & (along <= strip.track.length_m + TOLERANCE_M)
+                     & (np.abs(across - strip.look_offset_m) <= 0.5 * swath_m + TOLERANCE_M))
     return hit
 
 

@@ -12,10 +12,12 @@ schedule, the sorties and the coverage (`plan_survey` -> `SurveyPlan`).
 3. The strips (survey/strips.py) on the given bearing or on the one with the least flight time
    (`best_bearing` over the sorties' time), each imaged part lengthened to whole slots.
 4. Each strip's offloading: the strip's own slot count, and the ground station where it stands
-   in that strip's formation frame. For the shared formation the cheapest schedule meeting C10
-   is exact (solver/power.py), so a strip's plan is that schedule, checked by the independent
-   evaluator (C1-C11); a strip the station cannot serve (C9-C11) is refused by name: move the
-   station (`station_ne_m`) or shorten the strips (the area, the bearing).
+   in that strip's formation frame. Only C9-C11 read them (C1-C8 are the formation's, certified
+   once). For the shared formation the cheapest schedule meeting C10 is the strip's plan, and
+   C9 and C11 hold for it iff each UAV's x-z distance to the station lies within the station
+   disk (solver/power.py: exact, not a relaxation, each family's own disk naming the one that
+   fails); a strip the station cannot serve is refused by name: move the station
+   (`station_ne_m`) or shorten the strips (the area, the bearing).
 5. The sorties (survey/sorties.py) and the brute-force coverage (survey/coverage.py).
 """
 from __future__ import annotations
@@ -25,11 +27,10 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from uav_insar_planner.evaluate import evaluate
 from uav_insar_planner.params import Params
 from uav_insar_planner.plan import Plan
 from uav_insar_planner.solver import solve
-from uav_insar_planner.solver.power import schedules
+from uav_insar_planner.solver.power import schedules, station_radius_sq
 from uav_insar_planner.survey.area import Area
 from uav_insar_planner.survey.coverage import covered_fraction
 from uav_insar_planner.survey.sorties import FlightSpeeds, Sortie, plan_sorties
@@ -39,7 +40,7 @@ from uav_insar_planner.track.passes import run_in_m
 
 AIRFRAME_MAX_MPS = 15.0  # a survey multicopter's top ground speed with a radar payload
 COVERAGE_CELL_M = 2.0  # the brute-force check's grid; coarser on big areas (COVERAGE_CELLS_MAX)
-COVERAGE_CELLS_MAX = 40_000
+COVERAGE_CELLS_MAX = 10_000
 
 
 class SurveyInfeasible(ValueError):
@@ -173,9 +174,14 @@ def strip_plan(params: Params, plan: Plan, strip: Strip, station_ne: tuple[float
     gx, gy, _ = frame.from_ned(station_ne[0], station_ne[1], 0.0)
     station = (gx, gy, params.ground_station[2])
     local = params.replace(num_slots=n, ground_station_m=list(station))
+    violated = set()
+    for k, (x, z) in enumerate(plan.formation):
+        rho2 = (x - station[0]) ** 2 + (z - station[2]) ** 2
+        if np.isfinite(rho2) and rho2 > station_radius_sq(local, k, plan.scheme):
+            violated |= {c for c, other in (("C9", "C11"), ("C11", "C9"))
+                         if rho2 > station_radius_sq(local, k, plan.scheme, frozenset({other}))}
     power = schedules(local, plan.formation, plan.scheme)
-    ev = evaluate(local, plan.formation, power, plan.scheme, plan.objective)
-    return StripPlan(strip, n, station, power), list(ev.violated)
+    return StripPlan(strip, n, station, power), sorted(violated)
 
 
 def choose_speed(params: Params, area: Area, options: SurveyOptions
