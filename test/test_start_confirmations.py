@@ -13,7 +13,7 @@ from uav_insar_planner.ros.start_confirmations import (
     REPORT_FRESH_S,
     WAIT,
     AwaitedStart,
-    reported_instant,
+    reported_number,
     verdict,
 )
 
@@ -29,11 +29,11 @@ def _awaited(since: float = 100.0) -> AwaitedStart:
 
 @pytest.mark.parametrize("value", ["", None, "nan", "inf", "-inf", "1e400", "soon", "1,5"])
 def test_a_report_that_is_no_instant_confirms_nothing(value):
-    assert reported_instant(value) is None
+    assert reported_number(value) is None
 
 
 def test_the_instant_as_the_bridge_formats_it_is_read_back():
-    assert reported_instant(f"{START_S:.3f}") == START_S
+    assert reported_number(f"{START_S:.3f}") == START_S
 
 
 def test_nothing_is_decided_before_the_margin_before_the_instant():

@@ -279,3 +279,21 @@ def test_a_state_whose_data_disagree_with_its_phase_is_refused():
         StartState(Phase.STARTED, PLAN)  # started, with no start
     with pytest.raises(ValueError):
         StartState(Phase.NO_PLAN, PLAN)
+
+
+def test_a_bridge_flying_another_speed_is_named_while_the_capture_waits():
+    """Its entry, a run-in before the start line, is its speed's: a bridge at 2 m/s under a
+    plan at 4.3 m/s holds its UAV where the planner never sees it captured, and says why."""
+    state = _planned(t=0.0)
+    slow = BridgeReport(1, 1.0, None, "", "", speed_mps=2.0)
+    same = BridgeReport(0, 1.0, None, "", "", speed_mps=SPEED)
+    along = _waiting({0: 0.0, 2: 0.0}) | {1: run_in_m(SPEED) - run_in_m(2.0) - RUN_IN}
+    state, actions = step(state, _seen(1.0, along, reports=(slow, same)), _now(1.0))
+    assert state.phase is Phase.AWAITING_CAPTURE and actions == ()
+    t = WAIT_LOG_PERIOD_S
+    state, actions = step(state, _seen(t, along), _now(t))
+    gap = run_in_m(SPEED) - run_in_m(2.0)
+    assert _logs(actions) == [("info", (
+        f"the pass start waits for uav1 ({gap:.2f} m from its entry; its bridge flies "
+        f"speed_mps 2, the plan 4.3 m/s, so its entry is {gap:.2f} m from the one awaited): "
+        f"capture_radius_m 1 ({PLAN.label})"))]

@@ -191,8 +191,9 @@ class FormationStart:
                 continue
             values = {kv.key: kv.value for kv in s.values}
             report = BridgeReport(k, now,
-                                  start_confirmations.reported_instant(values.get("pass_start")),
-                                  values.get("behind", ""), values.get("pass_plan", ""))
+                                  start_confirmations.reported_number(values.get("pass_start")),
+                                  values.get("behind", ""), values.get("pass_plan", ""),
+                                  start_confirmations.reported_number(values.get("speed_mps")))
             with self._lock:
                 self._reports.append(report)
 

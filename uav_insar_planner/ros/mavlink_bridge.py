@@ -37,7 +37,9 @@ Publishes   uav{K}/mavlink/claim (std_msgs/String, latched) per UAV flown (ros/c
             armed / airborne / in formation / lost ...), link state, mode, arming sequence,
             PreArm reason, position error, separation warning, link counters, and the
             planner's start it flies (`pass_plan`, `pass_start`: its wall-clock instant; a
-            resumed pass waits for them, ros/start_confirmations.py). Level ERROR:
+            resumed pass waits for them, ros/start_confirmations.py) and the v_y it flies
+            (`speed_mps`: the planner names a bridge whose speed, and so whose entry, is not
+            the plan's). Level ERROR:
             I/O thread dead or sequence failed; WARN: not linked, or planned closer than
             min_separation_m to another UAV, or holding because the ground station fell
             silent (phase `holding (LOITER): ...`; value `gcs`: the ground link); else
@@ -240,7 +242,7 @@ class MavlinkBridgeNode(Node):
                   ("bad_signature", link.bad_signature), ("spoofed", link.spoofed),
                   ("bad_value", link.bad_value), ("unsendable", link.unsendable),
                   ("pass_plan", s.pass_plan), ("pass_start", s.pass_start_s),
-                  ("behind", s.behind)]
+                  ("behind", s.behind), ("speed_mps", self.bridge.config.speed_mps)]
         return DiagnosticStatus(level=level, name=published.bridge_status_name(s.uav),
                                 message=text, hardware_id=f"mavlink sysid {s.sysid}",
                                 values=[KeyValue(key=k, value=fmt(v)) for k, v in values])

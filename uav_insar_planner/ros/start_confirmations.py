@@ -53,9 +53,10 @@ class AwaitedStart:
         return replace(self, start_s=wall_now + self.delay_s)
 
 
-def reported_instant(value: str | None) -> float | None:
-    """A bridge's `pass_start` diagnostic value as an instant (s), None when it reports none
-    or something that is no finite number (nothing is confirmed by it)."""
+def reported_number(value: str | None) -> float | None:
+    """A bridge's diagnostic value (its `pass_start` instant [s], its `speed_mps`) as a
+    number, None when it reports none or something that is no finite number (nothing is
+    confirmed or told by it)."""
     try:
         got = float(value) if value else math.nan
     except ValueError:

@@ -109,6 +109,7 @@ class StartState:
     awaited: AwaitedStart | None = None  # a resumed start not yet confirmed by all
     behind: Mapping[int, Behind] = field(default_factory=dict)
     confirms: Mapping[int, tuple[float, float]] = field(default_factory=dict)  # (heard, start)
+    bridge_speeds: Mapping[int, float] = field(default_factory=dict)  # the v_y each flies
     started: frozenset[str] = frozenset()  # labels of the plans this planner started
     wait_told: float = 0.0  # when the wait for a capture was last said (monotonic)
 
@@ -148,6 +149,7 @@ class BridgeReport:
     instant: float | None
     behind: str
     plan_label: str
+    speed_mps: float | None = None  # the v_y it flies (None: not said)
 
 
 @dataclass(frozen=True)
@@ -230,6 +232,8 @@ def _heard(state: StartState, reports: Sequence[BridgeReport]) -> StartState:
     if not reports:
         return state
     confirms, behind = dict(state.confirms), dict(state.behind)
+    speeds = {**state.bridge_speeds, **{r.k: r.speed_mps for r in reports
+                                        if r.speed_mps is not None}}
     for r in reports:
         if r.instant is None:
             confirms.pop(r.k, None)
@@ -240,7 +244,7 @@ def _heard(state: StartState, reports: Sequence[BridgeReport]) -> StartState:
             behind[r.k] = Behind(first, r.heard, r.behind)
         else:
             behind.pop(r.k, None)
-    return replace(state, confirms=confirms, behind=behind)
+    return replace(state, confirms=confirms, behind=behind, bridge_speeds=speeds)
 
 
 def _await_capture(state: StartState, seen: Observed, starts: dict[int, Vec3], now: Now
@@ -259,7 +263,8 @@ def _await_capture(state: StartState, seen: Observed, starts: dict[int, Vec3], n
                if now.mono - state.wait_told >= WAIT_LOG_PERIOD_S and seen.bridged else {})
         if not why:
             return state, ()
-        waiting = ", ".join(f"{uav_name(k)} ({w})" for k, w in sorted(why.items()))
+        waiting = ", ".join(f"{uav_name(k)} ({w}{_other_speed(state, k)})"
+                            for k, w in sorted(why.items()))
         return replace(state, wait_told=now.mono), (
             Log("info", f"the pass start waits for {waiting}: capture_radius_m {radius:g} "
                         f"({state.plan})"),)
@@ -271,6 +276,16 @@ def _await_capture(state: StartState, seen: Observed, starts: dict[int, Vec3], n
         f"every flown UAV ({', '.join(uav_name(k) for k in sorted(starts))}) within "
         f"{radius:g} m of its entry: the pass starts in {delay:g} s, wall clock "
         f"{clock.start_s:.3f} ({state.plan})")))
+
+
+def _other_speed(state: StartState, k: int) -> str:
+    """Why UAV k may never reach the entry the planner waits for: its bridge flies another
+    v_y, so its entry (the run-in is the speed's) lies elsewhere ("" when it does not)."""
+    theirs, ours = state.bridge_speeds.get(k), state.speed_mps
+    if theirs is None or abs(theirs - ours) < 1e-6:
+        return ""
+    return (f"; its bridge flies speed_mps {theirs:g}, the plan {ours:g} m/s, so its entry is "
+            f"{abs(run_in_m(theirs) - run_in_m(ours)):.2f} m from the one awaited")
 
 
 def _confirm(state: StartState, starts: dict[int, Vec3], now: Now
