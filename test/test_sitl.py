@@ -117,7 +117,8 @@ def _fly(tmp_path: Path, env: dict, watcher, sitls: list, nodes: list) -> dict:
         env)
     nodes.append(bridge)
     read_lines(bridge, bridge_out)
-    planner = start_node("planner", [], env)
+    # the bridge's speed: the entries, a run-in before the start line, are the speed's
+    planner = start_node("planner", ["-p", f"speed_mps:={SPEED_MPS}"], env)
     nodes.append(planner)
     read_lines(planner, [])
     figures: dict[str, object] = {}
