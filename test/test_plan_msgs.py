@@ -189,3 +189,57 @@ def test_a_killed_planner_still_in_the_graph_beside_its_successor_gives_way_to_i
     _pair(pairing, single, PlanId(30, 0, "/planner"))  # the successor's plan
     assert pairing.choose(twice, twice)[1].plan_id == PlanId(30, 0, "/planner")
     assert pairing.choose(twice, ["/planner", "/planner2"]) is None  # two names: holds
+
+
+def _leg(strip: int = 3, sortie: int = 1, last: bool = True, heading_deg: float = 271.5,
+         origin=(12.345, -67.89, 0.0), length_m: float = 120.0):
+    from uav_insar_planner.track.frame import TrackFrame
+    from uav_insar_planner.track.leg import SurveyLeg
+    return SurveyLeg(strip, sortie, last, TrackFrame.from_degrees(heading_deg, origin), length_m)
+
+
+@pytest.mark.parametrize("last", [True, False])
+def test_a_survey_strip_rides_in_the_formation_frame_id_and_comes_back(last):
+    import math
+
+    from uav_insar_planner.ros.plan_msgs import decode_leg, encode_leg
+    leg = _leg(last=last)
+    text = encode_leg(leg)
+    assert text.startswith("insar_track: strip 3, sortie 1, attempt 1")
+    assert ("last" in text) == last
+    back = decode_leg(text)
+    assert (back.strip, back.sortie, back.last, back.length_m) == (3, 1, last, 120.0)
+    assert math.isclose(back.frame.bearing_rad, leg.frame.bearing_rad, abs_tol=1e-6)
+    assert back.frame.origin_ned == pytest.approx(leg.frame.origin_ned, abs=1e-3)
+    assert decode_leg("insar_track") is None and decode_leg("") is None
+
+
+@pytest.mark.parametrize("frame_id, field", [
+    ("map", "header.frame_id"),
+    ("insar_track: strip 3, sortie 1, attempt 0; heading 4.0000 deg; origin N 0.000 E 0.000 "
+     "D 0.000 m; length 10.000 m", "header.frame_id"),
+    ("insar_track: strip 3, sortie 1, attempt 1; heading 400.0000 deg; origin N 0.000 "
+     "E 0.000 D 0.000 m; length 10.000 m", "header.frame_id"),
+    ("insar_track: strip 3, sortie 1, attempt 1; heading 10.0000 deg; origin N 0.000 E 0.000 "
+     "D 0.000 m; length 0.000 m", "header.frame_id"),
+    ("insar_track: strip -3, sortie 1, attempt 1; heading 10.0000 deg; origin N 0.000 "
+     "E 0.000 D 0.000 m; length 5.000 m", "header.frame_id")])
+def test_a_bad_strip_frame_id_is_refused_naming_the_field(frame_id, field):
+    from uav_insar_planner.ros.plan_msgs import PlanMessageError, decode_leg
+    with pytest.raises(PlanMessageError) as err:
+        decode_leg(frame_id)
+    assert err.value.field == field and "\n" not in str(err.value)
+
+
+def test_a_strip_frame_is_placed_by_the_home_of_each_vehicle():
+    from uav_insar_planner.track.frame import TrackFrame
+    leg = _leg(heading_deg=90.0, origin=(10.0, 20.0, 0.0))
+    a = leg.placed(TrackFrame.from_degrees(0.0, (0.0, 0.0, 0.0)))
+    b = leg.placed(TrackFrame.from_degrees(30.0, (-5.0, 7.0, 0.0)))  # the bearing is not used
+    # slot 0's line start of the master, seen by two vehicles booted 8.6 m apart
+    pa, pb = a.to_ned(0.0, 0.0, 10.0), b.to_ned(0.0, 0.0, 10.0)
+    assert pa == pytest.approx((10.0, 20.0, -10.0))
+    assert pb == pytest.approx((5.0, 27.0, -10.0))
+    # flying along the strip is flying east, for both
+    assert a.to_ned(0.0, 5.0, 0.0)[1] - pa[1] == pytest.approx(5.0)
+    assert b.to_ned(0.0, 5.0, 0.0)[1] - pb[1] == pytest.approx(5.0)

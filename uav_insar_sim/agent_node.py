@@ -15,7 +15,10 @@ in slot n and computing the rate it achieves from where it actually is. Publishe
 the power applied in the slot and the energy used and left of E_com^max. The power is the
 plan's P_com[k][n] (`offloading: open`, the default) or the closed-loop choice
 (`offloading: closed`, offload.ClosedLoopOffload). A new plan re-targets the UAV
-without restarting the slot clock, so a planner restart (same latched plan) changes nothing.
+without restarting the slot clock, so a planner restart (same latched plan) changes nothing;
+a plan on another survey strip (the formation's frame_id, ros/plan_msgs.py) is a new pass:
+its own slots from 0, its own pass start, in the strip's frame, each slot's `offload` naming
+the strip, and one "strip i of sortie j complete" line when its slots are flown.
 
 How the UAV flies is chosen once at start-up (`flight.choose_flight`): by itself on the
 mission clock, or, in MAVLink mode (`mavlink_listen` set, e.g. `udpin:127.0.0.1:14552`), as an
@@ -144,6 +147,7 @@ class AgentNode(Node):
         self._starts = (StartFollower(self, ns, lambda: self.gate.current, self._on_pass_start,
                                       f"{self.uav_name}: ") if self.flight.observed else None)
         self._told_no_start = False
+        self._leg = None  # the survey strip flown (track/leg.py), None: a single pass
         self._late: list = []  # slots a late pass start found already flown, to report
         self._rate_tol = rate_tolerance_bps(params.rate_min_bps)
         self._lag_logged_at = -LAG_LOG_PERIOD_S
@@ -174,7 +178,9 @@ class AgentNode(Node):
         x, y, z = formation.points[self.k] or (float("nan"), 0.0, float("nan"))
         n = power.p_com_w.shape[1]
         powers = [float(v) for v in power.p_com_w[self.k]]
-        if n != self.mission.params.num_slots:
+        if formation.leg != self._leg:
+            self._new_pass(formation.leg, n)
+        elif n != self.mission.params.num_slots and formation.leg is None:
             self.get_logger().warning(f"{self.uav_name}: plan has {n} slots, num_slots is "
                                       f"{self.mission.params.num_slots}; flying the plan's {n}")
         self.flight.set_plan(x, y, z, powers)
@@ -190,6 +196,21 @@ class AgentNode(Node):
                 self._told_no_start = True
                 self.get_logger().info(f"{self.uav_name}: no pass start yet: no slot starts "
                                        f"before the planner's {topics.FORMATION_START}")
+
+    def _new_pass(self, leg, n: int) -> None:
+        """Another survey strip: a fresh slot schedule (and frame), the strip's own start."""
+        if self._leg is not None and not self.mission.phase.over:
+            self.get_logger().warning(
+                f"{self.uav_name}: {self._leg.describe()} left after "
+                f"{len(self.mission.samples)} of {self.mission.num_slots} slots")
+        self._leg = leg
+        self.flight.new_pass(leg)
+        self.mission, self._announced = self.flight.mission, False
+        self._phase = self.mission.phase
+        self._told_no_start = False
+        if leg is not None:
+            self.get_logger().info(f"{self.uav_name}: {leg.describe()}: a new pass of {n} "
+                                   "slots, from its own start")
 
     def _on_pass_start(self, wall_time_s: float, label: str, offset_m: float = 0.0) -> None:
         now = time.time()  # (the clock as the bridge flies it: the same rule, the same ramp)
@@ -289,7 +310,7 @@ class AgentNode(Node):
         msg.layout.dim = [MultiArrayDimension(label=",".join(topics.OFFLOAD_FIELDS), size=size,
                                               stride=size)]
         msg.data = [float(sample.slot), sample.power_w, sample.energy_used_j,
-                    sample.energy_left_j]
+                    sample.energy_left_j, float(-1 if self._leg is None else self._leg.strip)]
         self._offload_pub.publish(msg)
 
     def _log_phase(self) -> None:
@@ -318,7 +339,8 @@ class AgentNode(Node):
                             + (", ..." if len(off) > 5 else "") + ")" if off else "")
                          + f", slot durations {min(durations):.2f}-{max(durations):.2f} s "
                          f"of {self.mission.params.slot_duration_s:g} s")
-            log.info(f"{self.uav_name}: mission complete: {len(samples)} slots flown{speed}, "
+            what = "mission" if self._leg is None else self._leg.describe()
+            log.info(f"{self.uav_name}: {what} complete: {len(samples)} slots flown{speed}, "
                      f"rate met in {met}, worst margin {worst:+.4g} Mbit/s")
 
 

@@ -16,7 +16,9 @@ In all three, the simulated link fading (`fading.LinkFading`) and the offloading
 the plan's powers; closed: `offload.ClosedLoopOffload`) are the agent parameters' (`link_of`).
 
 All offer the same calls: `start()` (returns a line to log, or ""), `stop()`,
-`set_plan(x, y, z, powers)`, `tick() -> started slots`, and `mission` (the slot schedule);
+`set_plan(x, y, z, powers)`, `tick() -> started slots`, `new_pass(leg)` (a survey strip,
+track/leg.py: a fresh slot schedule, and for a watched vehicle the strip's frame) and
+`mission` (the slot schedule);
 `observed` says whether the slots wait for the planner's pass start (`mission.set_pass_start`:
 both watched flights) or run on the agent's own mission clock (SelfFlight);
 `own_poses` says whether the node publishes the mission's position on uavK/pose each tick and
@@ -32,6 +34,7 @@ from uav_insar_planner.param_specs.nodes import FIRST_SYSID
 from uav_insar_planner.params import Params
 from uav_insar_planner.plan import Vec3
 from uav_insar_planner.track.frame import TrackFrame
+from uav_insar_planner.track.leg import SurveyLeg
 from uav_insar_sim.fading import LinkFading
 from uav_insar_sim.mission import Mission, home_position
 from uav_insar_sim.observed_mission import ObservedMission
@@ -52,10 +55,15 @@ class SelfFlight:
     own_poses = True
     observed = False
 
-    def __init__(self, mission: Mission, time_scale: float):
+    def __init__(self, mission: Mission, time_scale: float, fresh=None):
         self.mission = mission
         self.time_scale = time_scale
         self._wall_t0: float | None = None
+        self._fresh = fresh  # () -> a new Mission, for each survey strip
+
+    def new_pass(self, leg: SurveyLeg | None) -> None:
+        """A strip flown from the home of its own frame (the agent simulates no turn)."""
+        self.mission, self._wall_t0 = self._fresh(), None
 
     def start(self) -> str:
         return ""
@@ -86,11 +94,16 @@ class MavlinkFlight:
     observed = True
 
     def __init__(self, mission: ObservedMission, vehicle: SimVehicle, frame: TrackFrame,
-                 listen: str):
+                 listen: str, fresh=None):
         self.mission = mission
         self.vehicle = vehicle
-        self.frame = frame
+        self.frame = self.home = frame
         self.listen = listen
+        self._fresh = fresh  # () -> a new ObservedMission, for each survey strip
+
+    def new_pass(self, leg: SurveyLeg | None) -> None:
+        self.mission = self._fresh()
+        self.frame = self.home if leg is None else leg.placed(self.home)
 
     def start(self) -> str:
         self.vehicle.start()
@@ -118,9 +131,15 @@ class AutopilotFlight:
     own_poses = False
     observed = True
 
-    def __init__(self, mission: ObservedMission):
+    def __init__(self, mission: ObservedMission, fresh=None):
         self.mission = mission
         self._fed: list[tuple[Vec3, float]] = []  # (position, read at) since the last tick
+        self._fresh = fresh  # () -> a new ObservedMission, for each survey strip
+
+    def new_pass(self, leg: SurveyLeg | None) -> None:
+        """(The bridge publishes the positions in the strip's frame already.) Positions fed
+        before the new plan are the last strip's: dropped."""
+        self.mission, self._fed = self._fresh(), []
 
     def start(self) -> str:
         return "position_source autopilot: slots run on the autopilot's uavK/mavlink/pose"
@@ -155,21 +174,30 @@ def choose_flight(own: dict, params: Params) -> Flight:
     ValueError (one line) for a bad value, e.g. max_speed_mps below speed_mps (checked in
     every mode), a bad connection string, or autopilot together with mavlink_listen."""
     k = own["uav_id"]
-    wind = Wind(own["wind_mps"], own["gust_std_mps"], own["gust_tau_s"], own["fading_seed"], k)
-    mission = Mission(k, params, own["max_speed_mps"], own["max_accel_mps2"],
-                      own["position_noise_std_m"], own["noise_seed"], wind, *link_of(own, params))
+
+    def flown() -> Mission:
+        wind = Wind(own["wind_mps"], own["gust_std_mps"], own["gust_tau_s"], own["fading_seed"],
+                    k)
+        return Mission(k, params, own["max_speed_mps"], own["max_accel_mps2"],
+                       own["position_noise_std_m"], own["noise_seed"], wind,
+                       *link_of(own, params))
+
+    def observed() -> ObservedMission:
+        return ObservedMission(k, params, *link_of(own, params))
+
+    mission = flown()
     if own["position_source"] == "autopilot":
         if own["mavlink_listen"]:
             raise ValueError(f"position_source: value 'autopilot' is not allowed with "
                              f"mavlink_listen {own['mavlink_listen'][:80]!r} (an embedded "
                              "vehicle); expected agent, or an empty mavlink_listen")
-        return AutopilotFlight(ObservedMission(k, params, *link_of(own, params)))
+        return AutopilotFlight(observed(), observed)
     if not own["mavlink_listen"]:
-        return SelfFlight(mission, own["time_scale"])
+        return SelfFlight(mission, own["time_scale"], flown)
     # The embedded vehicle's local NED relates to the track as the bridge's does.
     frame = TrackFrame.from_degrees(own["track_bearing_deg"], own["origin_ned_m"])
-    return MavlinkFlight(ObservedMission(k, params, *link_of(own, params)),
-                         embedded_vehicle(own, frame), frame, own["mavlink_listen"])
+    return MavlinkFlight(observed(), embedded_vehicle(own, frame), frame,
+                         own["mavlink_listen"], observed)
 
 
 def link_of(own: dict, params: Params) -> tuple[LinkFading | None, ClosedLoopOffload | None]:

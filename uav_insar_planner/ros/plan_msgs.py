@@ -12,13 +12,25 @@ names no planner: a formation belongs to the plan whose power message carries th
 and the planner that plan names must be the sole publisher of both topics in the ROS graph for
 a consumer to adopt it (ros/plan_gate.py).
 
+A survey strip (track/leg.py) rides in the formation's header.frame_id, readable in `ros2
+topic echo /formation` and recorded with the plan, so a bag says which strip each plan (and
+so each slot) flew; degrees only here, at the edge:
+  insar_track       a single pass, in the frame each node was configured with (an empty
+                    frame_id, as a hand-published message has, too)
+  insar_track: strip 3, sortie 1, attempt 1, last; heading 90.0000 deg; origin N 12.345
+  E -67.890 D 0.000 m; length 120.000 m     (one line) strip and sortie from 0 as in
+                    survey.json, the strip's attempt (from 1: an interrupted strip is flown
+                    again), `last` for the sortie's last strip, the strip frame about the home
+                    (heading from north, origin in the home's NED), the imaged length
+
 Validation (every decode; a bad message raises `PlanMessageError` naming topic, field, value
 cut short and what is allowed, and the caller drops it without any change of state):
   formation  each pose's x, y, z finite with |v| <= POSITION_BOUND_M (1e6 m, well inside
              float32, which MAVLink carries), or a UAV not flown: x and z both NaN (y, the
              track start, may be finite or NaN); MIN_UAVS to MAX_UAVS poses (swarm.py: a
              swarm of 2 to 10, one pose per UAV, NaN for a UAV not flown); the quaternion is
-             ignored;
+             ignored; the frame_id one of the two above, its heading in [0, 360) deg,
+             origin within POSITION_BOUND_M and length in (0, POSITION_BOUND_M] m;
   power      exactly the three dimensions above (MIN_UAVS to MAX_UAVS rows, slots >= 1,
              strides row-major, data_offset 0, a parseable identity label), len(data) = K*N,
              every value finite, >= 0 and at most FLOAT32_MAX W.
@@ -40,11 +52,18 @@ from uav_insar_planner.mavlink.guard import FLOAT32_MAX
 from uav_insar_planner.plan import Plan
 from uav_insar_planner.ros import topics
 from uav_insar_planner.swarm import MAX_UAVS, MIN_UAVS, uav_name
+from uav_insar_planner.track.frame import TrackFrame
+from uav_insar_planner.track.leg import SurveyLeg
 
 POSITION_BOUND_M = 1e6
 SHOWN_CHARS = 40
 DROP_LOG_PERIOD_S = 1.0  # bad messages of these topics: at most a line a second (DropLog)
 _ID_LABEL = re.compile(r"^plan (/\S*) (\d{1,12})\.(\d{9})$")
+_NUMBER = r"(-?\d{1,7}\.\d{1,9})"
+_LEG = re.compile(
+    rf"^{re.escape(topics.FRAME_ID)}: strip (\d{{1,6}}), sortie (\d{{1,6}}), attempt (\d{{1,6}})"
+    rf"(, last)?; heading "
+    rf"{_NUMBER} deg; origin N {_NUMBER} E {_NUMBER} D {_NUMBER} m; length {_NUMBER} m$")
 
 
 class PlanMessageError(ValueError):
@@ -87,10 +106,12 @@ class PlanId:
 
 @dataclass(frozen=True)
 class Formation:
-    """A decoded `formation`: its stamp and poses[k] = (x, y, z), or None for a UAV not flown."""
+    """A decoded `formation`: its stamp, poses[k] = (x, y, z) or None for a UAV not flown, and
+    the survey strip it flies (None: a single pass)."""
 
     stamp: tuple[int, int]
     points: tuple[tuple[float, float, float] | None, ...]
+    leg: SurveyLeg | None = None
 
 
 @dataclass(frozen=True)
@@ -110,13 +131,46 @@ def next_stamp(now: tuple[int, int], last: tuple[int, int] | None) -> tuple[int,
     return (sec + 1, 0) if nanosec >= 1_000_000_000 else (sec, nanosec)
 
 
-def encode(points: Sequence[tuple[float, float, float]], plan: Plan,
-           plan_id: PlanId) -> tuple[PoseArray, Float64MultiArray]:
-    """The two messages of `plan` under `plan_id` (see the module docstring); `points` are
-    its `published.formation_points`, which the planner also hands the pass start."""
+def encode_leg(leg: SurveyLeg | None) -> str:
+    """The frame_id of a formation flown on `leg` (None: a single pass; module docstring)."""
+    if leg is None:
+        return topics.FRAME_ID
+    n, e, d = leg.frame.origin_ned
+    heading = math.degrees(leg.frame.bearing_rad) % 360.0
+    return (f"{topics.FRAME_ID}: strip {leg.strip}, sortie {leg.sortie}, attempt {leg.attempt}"
+            f"{', last' if leg.last else ''}; heading {heading:.4f} deg; "
+            f"origin N {n:.3f} E {e:.3f} D {d:.3f} m; length {leg.length_m:.3f} m")
+
+
+def decode_leg(frame_id: str) -> SurveyLeg | None:
+    """The strip a formation's frame_id names, None for a single pass, or PlanMessageError."""
+    if frame_id in (topics.FRAME_ID, ""):
+        return None
+    found = _LEG.match(frame_id)
+    if found is None:
+        raise PlanMessageError(topics.FORMATION, "header.frame_id", frame_id, (
+            f"'{topics.FRAME_ID}', or '{topics.FRAME_ID}: strip <i>, sortie <j>, attempt <a>"
+            "[, last]; "
+            "heading <deg> deg; origin N <m> E <m> D <m> m; length <m> m'"))
+    heading, n, e, d, length = (float(v) for v in found.groups()[4:])
+    if int(found[3]) < 1 or not (0.0 <= heading < 360.0 and 0.0 < length <= POSITION_BOUND_M
+                                 and max(abs(n), abs(e), abs(d)) <= POSITION_BOUND_M):
+        raise PlanMessageError(topics.FORMATION, "header.frame_id", frame_id,
+                               f"an attempt >= 1, a heading in [0, 360) deg, an origin within "
+                               f"+-{POSITION_BOUND_M:g} m and a length in (0, "
+                               f"{POSITION_BOUND_M:g}] m")
+    return SurveyLeg(int(found[1]), int(found[2]), found[4] is not None,
+                     TrackFrame(math.radians(heading), (n, e, d)), length, int(found[3]))
+
+
+def encode(points: Sequence[tuple[float, float, float]], plan: Plan, plan_id: PlanId,
+           leg: SurveyLeg | None = None) -> tuple[PoseArray, Float64MultiArray]:
+    """The two messages of `plan` under `plan_id` (see the module docstring), flown on `leg`
+    (None: a single pass); `points` are its `published.formation_points`, which the planner
+    also hands the pass start."""
     formation = PoseArray()
     formation.header.stamp = Time(sec=plan_id.sec, nanosec=plan_id.nanosec)
-    formation.header.frame_id = topics.FRAME_ID
+    formation.header.frame_id = encode_leg(leg)
     formation.poses = [Pose(position=Point(x=x, y=y, z=z), orientation=Quaternion(w=1.0))
                        for x, y, z in points]
     rows, cols, data = published.power_rows(plan)
@@ -145,7 +199,8 @@ def decode_formation(msg: PoseArray) -> Formation:
             _check_position(k, axis, v, nan_ok=False)
         points.append(xyz)
     stamp = msg.header.stamp
-    return Formation((int(stamp.sec), int(stamp.nanosec)), tuple(points))
+    return Formation((int(stamp.sec), int(stamp.nanosec)), tuple(points),
+                     decode_leg(msg.header.frame_id))
 
 
 def _check_position(k: int, axis: str, v: float, nan_ok: bool) -> None:

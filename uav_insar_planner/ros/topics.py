@@ -62,8 +62,10 @@ def achieved_rate(k: int) -> str:
     return f"{uav_name(k)}/achieved_rate"
 
 
-#: The fields of one `offload(k)` message, in order (its layout's single dimension label).
-OFFLOAD_FIELDS = ("slot", "power_w", "energy_used_j", "energy_left_j")
+#: The fields of one `offload(k)` message, in order (its layout's single dimension label);
+#: `strip` is the survey strip the slot belongs to (plan_msgs: the formation's), -1 for a
+#: single pass.
+OFFLOAD_FIELDS = ("slot", "power_w", "energy_used_j", "energy_left_j", "strip")
 
 
 def offload(k: int) -> str:

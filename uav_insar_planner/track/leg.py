@@ -1,0 +1,69 @@
+"""One strip of a survey as the swarm flies it: which strip, of which sortie, its track frame
+and its length.
+
+A survey (survey/) is flown strip after strip, each a pass in a track frame of its own: y
+along the strip's direction of flight, x to its right (where the radar looks), slot 0's line
+at y = 0. The frame is given about the survey's home, in the home's local NED (north, east,
+down; D = 0 at the home's height), its bearing from north:
+
+    strip frame -> home NED:      TrackFrame(heading, origin_about_home)
+    home NED -> a vehicle's NED:  + the home's place in that vehicle's local NED
+
+A vehicle's local NED is north-aligned (the EKF origin frame), so the strip's heading holds
+for every vehicle; only the origins differ, by where each vehicle's EKF origin lies (where it
+booted, for most autopilots). `placed(home)` is that frame on one vehicle, with `home` the
+track frame its bridge or agent was configured with (`origin_ned_m`: the home in the vehicle's
+local NED; its bearing serves a single pass and is not used by a strip).
+
+`last` marks the sortie's last strip: after it the vehicles return and land. `attempt`
+counts the strip's flights (1 the first): a strip interrupted (a UAV lost, a hold) is flown
+again as attempt 2, a new pass with slots of its own, never the same one resumed.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from uav_insar_planner.track.frame import TrackFrame
+
+
+@dataclass(frozen=True)
+class SurveyLeg:
+    """See the module docstring. `strip` and `sortie` count from 0; SI: metres, radians."""
+
+    strip: int
+    sortie: int
+    last: bool
+    frame: TrackFrame
+    length_m: float
+    attempt: int = 1
+
+    def __post_init__(self) -> None:
+        if self.strip < 0 or self.sortie < 0 or self.attempt < 1:
+            raise ValueError(f"strip, sortie, attempt: values {self.strip!r}, {self.sortie!r}, "
+                             f"{self.attempt!r} are not allowed; expected indices >= 0 and an "
+                             "attempt >= 1")
+        if not (math.isfinite(self.length_m) and self.length_m > 0.0):
+            raise ValueError(f"length_m: value {self.length_m!r} is not allowed; expected a "
+                             "finite strip length > 0 m")
+        values = (self.frame.bearing_rad, *self.frame.origin_ned)
+        if not all(math.isfinite(v) for v in values):
+            raise ValueError(f"frame: value {values!r} is not allowed; expected a finite "
+                             "bearing and origin")
+
+    def placed(self, home: TrackFrame) -> TrackFrame:
+        """The strip's frame in the local NED of a vehicle whose configured frame is `home`
+        (module docstring)."""
+        n, e, d = self.frame.origin_ned
+        n0, e0, d0 = home.origin_ned
+        return TrackFrame(self.frame.bearing_rad, (n + n0, e + e0, d + d0))
+
+    def duration_s(self, speed_mps: float) -> float:
+        """The pass's imaged part at `speed_mps` [s]: its length flown at v_y."""
+        return self.length_m / speed_mps
+
+    def describe(self) -> str:
+        """'strip 3 of sortie 1 (its last)' for a log line (counted from 1, as people do)."""
+        return (f"strip {self.strip + 1} of sortie {self.sortie + 1}"
+                + (f", attempt {self.attempt}" if self.attempt > 1 else "")
+                + (" (its last)" if self.last else ""))
