@@ -87,6 +87,8 @@ class AutopilotProfile:
     flight: Mode
     #: the position hold the bridge's holds order
     hold: Mode
+    #: return to launch and land: after a survey sortie's last strip
+    home: Mode
     #: the arming sequence (names from ARMING_STEPS); "takeoff" sends NAV_TAKEOFF, without it
     #: the first setpoint is the takeoff
     arming_steps: tuple[str, ...]
@@ -117,12 +119,13 @@ class AutopilotProfile:
 PROFILES = {
     "ardupilot": AutopilotProfile(
         "ardupilot", flight=copter_mode("GUIDED"), hold=copter_mode("LOITER"),
+        home=copter_mode("RTL"),
         arming_steps=("wait for position", "mode", "arm", "takeoff", "climb"),
         stream_before_flight_s=0.0, setpoints_in_flight_only=True,
         mav_autopilot=3, mission_waits_for_utc=True),  # MAV_AUTOPILOT_ARDUPILOTMEGA
     "px4": AutopilotProfile(
         "px4", flight=px4_mode("OFFBOARD", "OFFBOARD", PX4_MAIN_MODE_MASK),
-        hold=px4_mode("HOLD", "AUTO.LOITER"),
+        hold=px4_mode("HOLD", "AUTO.LOITER"), home=px4_mode("RTL", "AUTO.RTL"),
         arming_steps=("wait for position", "stream setpoints", "mode", "arm"),
         # PX4 wants > 1 s of setpoints before OFFBOARD; the margin is for jitter
         stream_before_flight_s=1.2, setpoints_in_flight_only=False,

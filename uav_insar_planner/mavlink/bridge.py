@@ -53,6 +53,7 @@ from uav_insar_planner.mavlink.supervision import WatchedVehicle, is_vehicle_hea
 from uav_insar_planner.plan import Vec3
 from uav_insar_planner.swarm import MAX_UAVS
 from uav_insar_planner.track.frame import TrackFrame
+from uav_insar_planner.track.leg import SurveyLeg
 
 __all__ = ["Bridge", "BridgeConfig", "BridgeEvent", "VehicleStatus"]
 
@@ -72,7 +73,6 @@ class Bridge(IoThread):
         config.validate()
         super().__init__("mavlink-bridge")
         self.config = config
-        self.frame = TrackFrame.from_degrees(config.track_bearing_deg, config.origin_ned_m)
         self._clock = clock
         self._t0 = clock()
         self._lock = threading.Lock()
@@ -93,8 +93,9 @@ class Bridge(IoThread):
                           in zip(self.uavs, config.target_sysids, addresses, strict=True)]
         # poses read: one per vehicle, or every pose a plan may have (separation from the others)
         count = max(self.uavs) + 1 if config.uav_id < 0 else MAX_UAVS
-        self._flight = FlightState(config, self.frame, self._vehicles, count, self._event,
-                                   self._send_command)
+        self._flight = FlightState(
+            config, TrackFrame.from_degrees(config.track_bearing_deg, config.origin_ned_m),
+            self._vehicles, count, self._event, self._send_command)
         self._by_link: dict[int, dict[int, WatchedVehicle]] = {}
         for v in self._vehicles:
             self._by_link.setdefault(id(v.link), {})[v.sysid] = v
@@ -104,11 +105,18 @@ class Bridge(IoThread):
         for link in self._links.values():
             link.close()
 
-    def set_formation(self, poses: Sequence[Vec3 | None]) -> None:
+    def set_formation(self, poses: Sequence[Vec3 | None], leg: SurveyLeg | None = None) -> None:
         """New formation: poses[k] = (x_k, y_start, z_k) in the track frame, None or NaN: not
-        flown. Another y_start restarts the approach; the same keeps the track clock."""
+        flown, on the survey strip `leg` (None: a single pass). Another y_start or strip
+        restarts the approach; the same keeps the track clock."""
         with self._lock:
-            self._flight.set_formation(poses, self._clock())
+            self._flight.set_formation(poses, self._clock(), leg)
+
+    @property
+    def frame(self) -> TrackFrame:
+        """The track frame flown: the configured one, or the survey strip's on it."""
+        with self._lock:
+            return self._flight.frame
 
     def gcs_heard(self, what: str, heartbeat: bool = False, newer_plan: bool = False) -> None:
         """Something came from the ground station (`what`: a heartbeat, plan or start;
@@ -278,7 +286,7 @@ class Bridge(IoThread):
             if target is None:
                 v.stream_since = None
                 continue
-            msg = setpoint_message(v.link.mav, self.frame, target, boot_ms(now - self._t0),
+            msg = setpoint_message(v.link.mav, self._flight.frame, target, boot_ms(now - self._t0),
                                    v.sysid, v.compid, self.config.velocity_feedforward)
             if msg is None:
                 self._drop(v, "unsendable", f"setpoint for target {target}: not float32")

@@ -15,9 +15,15 @@ commands it asks for, under its lock. Each point's detail is in the module named
 - Optional arm_and_takeoff (`sequencer`), one sequence per UAV a plan flies.
 - Two planned UAVs closer than `min_separation_m` are warned about
   (`track.formation.separation`).
+- A survey (`track.leg`): each strip a pass of its own, in the strip's frame placed on this
+  bridge's home (`origin_ned_m`), its length the strip's; after the sortie's last strip has
+  been flown and braked (RETURN_AFTER_S), every flown vehicle is ordered to return to launch
+  and land (the profile's `home` mode, phase `returning`), whether the planner is heard or
+  not; the next sortie's first plan arms and takes off again (arm_and_takeoff).
 """
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import replace
@@ -36,12 +42,17 @@ from uav_insar_planner.mavlink.start_gate import (
 )
 from uav_insar_planner.mavlink.supervision import WatchedVehicle
 from uav_insar_planner.plan import Vec3
+from uav_insar_planner.swarm import uav_name
 from uav_insar_planner.track.catch_up import CATCH_UP_FROM_M, CatchUp, governed
 from uav_insar_planner.track.formation import clean_formation, separation
 from uav_insar_planner.track.frame import TrackFrame
+from uav_insar_planner.track.leg import SurveyLeg
 from uav_insar_planner.track.trajectory import PassTrajectory
 
 SendCommand = Callable[[WatchedVehicle, int, Sequence[float], int], None]
+# After the last strip's imaged part: its braking (v / BRAKE_MPS2, 1.3 s at 4 m/s) and the
+# vehicles' lag behind their targets.
+RETURN_AFTER_S = 3.0
 
 
 class FlightState:
@@ -52,7 +63,10 @@ class FlightState:
                  vehicles: Sequence[WatchedVehicle], count: int, emit: Emit,
                  send_command: SendCommand):
         self.config, self.frame, self.vehicles = config, frame, tuple(vehicles)
+        self.home = frame  # the configured frame: a single pass's, a survey's home
+        self.leg: SurveyLeg | None = None  # the survey strip flown
         self.autopilot = profile(config.autopilot)
+        self.returning = ModeOrder(self.autopilot.home)
         self._count, self._emit, self._send_command = count, emit, send_command
         self.pass_ = PassTrajectory(config.speed_mps, config.track_duration_s)
         self._start_label = ""  # the plan whose pass start the track clock is (planner)
@@ -62,8 +76,11 @@ class FlightState:
         self.holding = Holding(self.autopilot, config.gcs_timeout_s,
                                [v.uav for v in self.vehicles], emit)
 
-    def set_formation(self, poses: Sequence[Vec3 | None], now: float) -> None:
+    def set_formation(self, poses: Sequence[Vec3 | None], now: float,
+                      leg: SurveyLeg | None = None) -> None:
         """New formation (see `Bridge.set_formation`)."""
+        if leg != self.leg:
+            self._new_leg(leg)
         clean = clean_formation(poses, self._count)
         flown = self.pass_.formation is not None and any(self.pass_.formation)
         self.holding.on_plan(clean, flown)
@@ -77,6 +94,36 @@ class FlightState:
             for v in self.vehicles:
                 if clean[v.uav] is not None and v.uav not in self.sequences:
                     self.sequences[v.uav] = self._new_sequence(v)
+
+    def _new_leg(self, leg: SurveyLeg | None) -> None:
+        """Another strip (or attempt): a pass of its own, in its frame; a new sortie arms and
+        takes off again."""
+        if leg is None or self.leg is None or leg.sortie != self.leg.sortie:
+            self.sequences.clear()
+            self.returning.release()
+        self.leg = leg
+        self.frame = self.home if leg is None else leg.placed(self.home)
+        duration = (self.config.track_duration_s if leg is None
+                    else leg.duration_s(self.config.speed_mps))
+        self.pass_ = PassTrajectory(self.config.speed_mps, duration)
+        self._catch_up.clear()
+        self._start_label = ""
+        if leg is not None:
+            self._emit(-1, "info", f"{leg.describe()}: heading "
+                                   f"{math.degrees(leg.frame.bearing_rad):.1f} deg, "
+                                   f"{leg.length_m:.1f} m; flying to its entries")
+
+    def _sortie_over(self, now: float) -> None:
+        """After the sortie's last strip: every flown vehicle returns to launch (once)."""
+        clock, leg = self.pass_.clock, self.leg
+        if (leg is None or not leg.last or clock is None or self.returning.active
+                or now < clock.time_at(leg.length_m) + RETURN_AFTER_S):
+            return
+        flown = [v.uav for v in self.vehicles if self.pass_.start_pose(v.uav) is not None]
+        self.returning.engage(flown)
+        self._emit(-1, "info", f"{leg.describe()} flown: the sortie is over; "
+                               f"{', '.join(uav_name(k) for k in flown)} return to launch "
+                               f"({self.autopilot.home.name}) and land")
 
     def gcs_heard(self, what: str, now: float, heartbeat: bool, newer_plan: bool) -> None:
         """See `Bridge.gcs_heard`. Heard again while the ground flies a plan not adopted here
@@ -104,8 +151,9 @@ class FlightState:
         return seq if seq is not None and seq.active else None
 
     def check(self, now: float) -> None:
-        """The clock moved on: the ground's silence, the arming sequences."""
+        """The clock moved on: the ground's silence, the arming sequences, a sortie's end."""
         self.holding.check(now)
+        self._sortie_over(now)
         for v in self.vehicles:
             if (seq := self.running(v)) and v.linked:
                 seq.step(now)
@@ -118,6 +166,8 @@ class FlightState:
                                    f"{self.config.speed_mps:g} m/s")
 
     def order_due(self, v: WatchedVehicle, now: float) -> ModeOrder | None:
+        if self.returning.engaged(v.uav):
+            return self.returning if self.returning.due(v, now) else None
         return self.holding.order_due(v, now)
 
     def target_to_send(self, v: WatchedVehicle, now: float) -> tuple[Vec3, Vec3] | None:
@@ -125,14 +175,14 @@ class FlightState:
         target = governed(self._catch_up, v.uav, self.pass_.target(v.uav, now), now)
         waits = self.autopilot.setpoints_in_flight_only and (
             self.running(v) is not None or not self.autopilot.flight.shown_by(v.custom_mode))
-        if target is None or waits or self.holding.stopped(v):
+        if target is None or waits or self.holding.stopped(v) or self.returning.engaged(v.uav):
             return None
         return target
 
     def status(self, v: WatchedVehicle, now: float) -> VehicleStatus:
         status = vehicle_status(v, now, self.pass_, self.frame, self.config.capture_radius_m,
                                 self.sequences.get(v.uav), self._separation[v.uav])
-        held = self.holding.phase(v)
+        held = "returning" if self.returning.engaged(v.uav) else self.holding.phase(v)
         return replace(status, phase=held or status.phase, pass_plan=self._start_label,
                        pass_start_s=None if self.pass_.sent is None else self.pass_.sent.start_s,
                        behind=self.holding.behind.get(v.uav, ""))

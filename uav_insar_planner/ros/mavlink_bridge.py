@@ -17,6 +17,10 @@ on the graph claimed first is refused with one line, exit 2.
 
 Subscribes  formation (geometry_msgs/PoseArray, reliable + transient_local, depth 1):
             poses[k] = (x_k, y_start, z_k) in the track frame; NaN for a UAV not flown;
+            its frame_id may name a survey strip (plan_msgs.decode_leg): then the track frame
+            is the strip's, placed on origin_ned_m (the survey's home in the vehicle's local
+            NED), the pass is the strip's length, and after the sortie's last strip every
+            vehicle returns to launch and lands (phase `returning`);
             and formation/power, only to know each formation's plan: like the agents, the
             bridge flies a formation only with the power message of the same plan identity
             and only while its planner is the sole publisher (ros/plan_gate.py), so with two
@@ -31,7 +35,8 @@ Subscribes  formation (geometry_msgs/PoseArray, reliable + transient_local, dept
             start of the flown plan's pass (ros/start_msgs.py, validated, `bad_start_messages`).
 Publishes   uav{K}/mavlink/claim (std_msgs/String, latched) per UAV flown (ros/claims.py);
             uav{K}/mavlink/pose (geometry_msgs/PoseStamped, frame insar_track), the
-            vehicle's LOCAL_POSITION_NED in the track frame, each time a new one arrives;
+            vehicle's LOCAL_POSITION_NED in the track frame (the strip's during a survey),
+            each time a new one arrives;
             /diagnostics (diagnostic_msgs/DiagnosticArray) once a second, one status per UAV:
             its `phase` (waiting for heartbeat / waiting for position / prearm: <reason> /
             armed / airborne / in formation / lost ...), link state, mode, arming sequence,
@@ -136,12 +141,13 @@ class MavlinkBridgeNode(Node):
 
     def _on_plan(self, formation: Formation, power: PowerSchedule) -> None:
         poses = list(formation.points)
-        self.bridge.set_formation(poses)
+        self.bridge.set_formation(poses, formation.leg)
         if self._starts is not None:
             self._starts.plan_adopted()
         flown = sum(p is not None for p in poses)
         self.get_logger().info(f"formation received: {flown} UAV(s) with a target "
-                               f"({power.plan_id})")
+                               f"({power.plan_id}" + (f", {formation.leg.describe()}"
+                                                      if formation.leg else "") + ")")
         beyond = [k for k in self.bridge.uavs if k >= len(poses)]
         if beyond:  # (clean_formation gives them no target: they hold)
             self.get_logger().warning(
