@@ -17,7 +17,7 @@ commands it asks for, under its lock. Each point's detail is in the module named
   (`track.formation.separation`).
 - A survey (`track.leg`): each strip a pass of its own, in the strip's frame placed on this
   bridge's home (`origin_ned_m`), its length the strip's; after the sortie's last strip has
-  been flown and braked (RETURN_AFTER_S), every flown vehicle is ordered to return to launch
+  been flown and braked (`SurveyLeg.over_at`), every flown vehicle is ordered to return to launch
   and land (the profile's `home` mode, phase `returning`), whether the planner is heard or
   not; the next sortie's first plan arms and takes off again (arm_and_takeoff).
 """
@@ -50,9 +50,6 @@ from uav_insar_planner.track.leg import SurveyLeg
 from uav_insar_planner.track.trajectory import PassTrajectory
 
 SendCommand = Callable[[WatchedVehicle, int, Sequence[float], int], None]
-# After the last strip's imaged part: its braking (v / BRAKE_MPS2, 1.3 s at 4 m/s) and the
-# vehicles' lag behind their targets.
-RETURN_AFTER_S = 3.0
 
 
 class FlightState:
@@ -117,7 +114,7 @@ class FlightState:
         """After the sortie's last strip: every flown vehicle returns to launch (once)."""
         clock, leg = self.pass_.clock, self.leg
         if (leg is None or not leg.last or clock is None or self.returning.active
-                or now < clock.time_at(leg.length_m) + RETURN_AFTER_S):
+                or now < leg.over_at(clock)):
             return
         flown = [v.uav for v in self.vehicles if self.pass_.start_pose(v.uav) is not None]
         self.returning.engage(flown)

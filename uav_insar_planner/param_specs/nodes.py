@@ -88,6 +88,9 @@ PLANNER_SPECS = (
               "once every flown UAV's bridge confirmed its start on /diagnostics, moved later "
               "meanwhile, and after this long without them (then left behind); 0: not waited "
               "for [s]", 0.0, 600.0),
+    ParamSpec("survey_file", str, "", "fly this survey (the survey.json of `uav-insar survey "
+              "--out`) strip after strip, sortie after sortie (~/next_sortie); its speed must be "
+              "speed_mps; empty: one pass"),
 )
 #: The scenario parameters an agent needs (P_max and E_max for the closed loop).
 AGENT_SCENARIO_SPECS = tuple(SPEC_BY_NAME[n] for n in (

@@ -70,6 +70,8 @@ from uav_insar_planner.ros.start_states import (
     StartState,
     step,
 )
+from uav_insar_planner.track.leg import SurveyLeg
+from uav_insar_planner.track.pass_clock import PassClock
 
 CHECK_PERIOD_S = 0.1
 REPEAT_PERIOD_S = 0.5
@@ -102,10 +104,16 @@ class FormationStart:
                                        lambda msg, k=k: self._on_pose(k, msg), topics.DEPTH)
 
     def on_plan(self, plan_id: PlanId, points: Sequence[Vec3], speed_mps: float,
-                length_m: float) -> None:
+                length_m: float, leg: SurveyLeg | None = None) -> None:
         """The planner published plan `plan_id` with start points `points` (NaN: not flown),
-        flown at `speed_mps` along a pass `length_m` long."""
-        self._step(NewPlan(plan_id, tuple(points), speed_mps, length_m))
+        flown at `speed_mps` along a pass `length_m` long, on survey strip `leg`."""
+        self._step(NewPlan(plan_id, tuple(points), speed_mps, length_m, leg))
+
+    def clock(self, leg: SurveyLeg | None = None) -> PassClock | None:
+        """The start published for the pass flown on `leg` (wall clock), None while there is
+        none (or the pass flown is another strip's)."""
+        with self._lock:
+            return self._state.clock if self._state.leg == leg else None
 
     def started(self, label: str) -> bool:
         """Whether this planner published a pass start for the plan labelled `label`."""

@@ -29,6 +29,11 @@ publishes formation/start (std_msgs/Header, latched: the wall-clock start of the
 plan it starts) once every flown UAV is captured. Planner-only parameters: uav_timeout_s,
 capture_radius_m, start_delay_s (param_specs.nodes.PLANNER_SPECS).
 Service ~/replan (std_srvs/Trigger): solve again with the current parameters.
+With `survey_file` (planner-only, read once at start: a file that cannot be read, or a survey
+at another speed than speed_mps, is one line and exit code 2) the plan is flown strip after
+strip (ros/survey_run.py): each publication names its strip in the formation's frame_id,
+`planner: survey` is on /diagnostics, and service ~/next_sortie (std_srvs/Trigger) lets the
+next sortie go.
 Solves run on a worker thread (solve_worker), so the node keeps serving while one runs; a
 worker that dies turns the plan status ERROR ("solve worker died: ...") and the node exits
 with code 1 after publishing it (exit_codes.EXIT_CRASH).
@@ -74,6 +79,7 @@ from uav_insar_planner.ros.plan_msgs import PlanId
 from uav_insar_planner.ros.plan_watch import PlanWatch
 from uav_insar_planner.ros.run import run_node
 from uav_insar_planner.ros.solve_worker import SolveWorker
+from uav_insar_planner.ros.survey_run import SurveyRun, survey_for
 from uav_insar_planner.ros.swarm_watch import SwarmWatch
 from uav_insar_planner.solver import solve
 
@@ -88,11 +94,16 @@ class PlannerNode(Node):
         super().__init__(node_name, **kwargs)
         self.problems = declare_specs(self, PARAM_SPECS) + declare_specs(self, PLANNER_SPECS)
         self.problems += unknown_overrides(self)
-        params = None
+        params = survey = None
         try:
             params = params_from_mapping(spec_values(self, PARAM_SPECS))
         except ParamError as exc:
             self.problems += exc.problems
+        if not self.problems and (path := self.get_parameter("survey_file").value):
+            try:
+                survey = survey_for(path, params)
+            except ValueError as exc:
+                self.problems.append(str(exc))
         if self.problems:
             return
         self._state_lock = threading.Lock()
@@ -121,6 +132,8 @@ class PlannerNode(Node):
         self._swarm = SwarmWatch(self, params, self._publish_replan, self._set_plan_status)
         self._formation_start = FormationStart(self, self._swarm.lost_uavs,
                                                self._swarm.declare_lost)
+        self._survey = (None if survey is None else SurveyRun(
+            self, survey, self._republish, self._formation_start.clock, self._swarm.lost_uavs))
         self._watch_uavs(params.num_uavs)
         self._worker.request(params, "start")
 
@@ -240,20 +253,31 @@ class PlannerNode(Node):
             return self._plan_id
 
     def _publish_plan(self, plan: Plan) -> None:
-        """Both messages under a new identity (plan_msgs: stamps unique per planner)."""
+        """Both messages under a new identity (plan_msgs: stamps unique per planner); in a
+        survey, on its strip (ros/survey_run.py)."""
         with self._state_lock:
             last = self._plan_id.stamp if self._plan_id else None
             self._plan_id = PlanId(*plan_msgs.next_stamp(
                 self.get_clock().now().seconds_nanoseconds(), last),
                 self.get_fully_qualified_name())
             plan_id, scenario = self._plan_id, self._scenario
+        leg, length_m = None, scenario.speed * scenario.slot_duration_s * scenario.num_slots
+        if self._survey is not None:
+            leg, plan = self._survey.on_publish(plan, scenario)
+            length_m = leg.length_m
         points = published.formation_points(plan)
-        msg, power = plan_msgs.encode(points, plan, plan_id)
+        msg, power = plan_msgs.encode(points, plan, plan_id, leg)
         self._formation_pub.publish(msg)
         self._power_pub.publish(power)
         self._markers.publish_plan(scenario, plan)
-        self._formation_start.on_plan(plan_id, points, scenario.speed,
-                                 scenario.speed * scenario.slot_duration_s * scenario.num_slots)
+        self._formation_start.on_plan(plan_id, points, scenario.speed, length_m, leg)
+
+    def _republish(self) -> None:
+        """The survey flies another strip: the current plan on it."""
+        with self._state_lock:
+            plan = self._plan
+        if plan is not None:
+            self._publish_plan(plan)
 
     def _on_diagnostics_timer(self) -> None:
         self._publish_diagnostics()
@@ -270,6 +294,8 @@ class PlannerNode(Node):
                     self._scenario.scheme, "solve worker died: " + failure)
             statuses = [self._plan_status] if self._plan_status else []
             statuses.append(self._swarm.status())
+            if self._survey is not None:
+                statuses.append(self._survey.status())
             # Per-UAV status even without a plan of this planner's (restarted infeasible).
             statuses += self._plans.statuses(self._plan, self._plan_id,
                                              self._scenario.rate_min_bps, self._reports)

@@ -24,7 +24,8 @@ safe until every bridge has it (`awaited`; ros/start_confirmations.py): the stat
 combinations that can occur, and each step reads one of them, never a set of loose fields.
 
 A plan with the same start line as the running pass (`same_line`, a re-plan during the pass)
-keeps the state and its start, published again under the new identity; any other goes back to
+and the same survey strip (track/leg.py; every strip starts at y = 0 of its own frame) keeps
+the state and its start, published again under the new identity; any other goes back to
 AWAITING_CAPTURE and the old start is void. While a start runs, the bridges' `behind` reports
 are watched (BehindReport): every flown UAV behind resumes the pass from the rearmost; one
 behind alone longer than BEHIND_GRACE_S is declared lost. A resume from the hover starts after
@@ -51,6 +52,7 @@ from uav_insar_planner.ros.start_confirmations import (
     AwaitedStart,
 )
 from uav_insar_planner.swarm import uav_name
+from uav_insar_planner.track.leg import SurveyLeg
 from uav_insar_planner.track.pass_clock import PassClock, same_line
 from uav_insar_planner.track.passes import run_in_m
 
@@ -105,6 +107,7 @@ class StartState:
     y_start: float | None = None
     speed_mps: float = 0.0
     length_m: float = 0.0
+    leg: SurveyLeg | None = None  # the survey strip the plan flies (None: a single pass)
     clock: PassClock | None = None  # the published start, while this pass lasts
     awaited: AwaitedStart | None = None  # a resumed start not yet confirmed by all
     behind: Mapping[int, Behind] = field(default_factory=dict)
@@ -137,6 +140,7 @@ class NewPlan:
     points: Sequence[Vec3]
     speed_mps: float
     length_m: float
+    leg: SurveyLeg | None = None  # another strip (or attempt) is another pass
 
 
 @dataclass(frozen=True)
@@ -217,9 +221,9 @@ def _on_plan(state: StartState, new: NewPlan, now: Now
     starts = {k: tuple(p) for k, p in enumerate(new.points) if all(map(math.isfinite, p))}
     y_start = next(iter(starts.values()))[1] if starts else None
     plan = dict(plan=new.plan, starts=starts, y_start=y_start, speed_mps=new.speed_mps,
-                length_m=new.length_m, wait_told=now.mono)
+                length_m=new.length_m, leg=new.leg, wait_told=now.mono)
     if (state.clock is None or y_start is None or state.y_start is None
-            or not same_line(y_start, state.y_start)):
+            or not same_line(y_start, state.y_start) or new.leg != state.leg):
         return replace(state, phase=Phase.AWAITING_CAPTURE, clock=None, awaited=None,
                        **plan), ()
     kept = replace(state, started=state.started | {new.plan.label}, **plan)

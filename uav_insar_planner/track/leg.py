@@ -25,6 +25,20 @@ import math
 from dataclasses import dataclass
 
 from uav_insar_planner.track.frame import TrackFrame
+from uav_insar_planner.track.pass_clock import PassClock
+
+# A strip is over this long after its target passed the imaged part's end: its braking
+# (v / BRAKE_MPS2, 1.3 s at 4 m/s) and the vehicles' lag behind their targets.
+SETTLE_S = 3.0
+# The cruise goes on this far past the imaged part: a vehicle lags its target by up to a
+# metre, and it must cross the last slot's end line at v_y too, not braking.
+RUN_PAST_M = 2.0
+
+
+def over_at(clock: PassClock, length_m: float) -> float:
+    """When a strip `length_m` long flown on `clock` is over (its clock's time base): SETTLE_S
+    after its target ended its cruise, RUN_PAST_M past the imaged part."""
+    return clock.time_at(length_m + RUN_PAST_M) + SETTLE_S
 
 
 @dataclass(frozen=True)
@@ -59,8 +73,12 @@ class SurveyLeg:
         return TrackFrame(self.frame.bearing_rad, (n + n0, e + e0, d + d0))
 
     def duration_s(self, speed_mps: float) -> float:
-        """The pass's imaged part at `speed_mps` [s]: its length flown at v_y."""
-        return self.length_m / speed_mps
+        """The pass's cruise at `speed_mps` [s]: its imaged part and RUN_PAST_M at v_y."""
+        return (self.length_m + RUN_PAST_M) / speed_mps
+
+    def over_at(self, clock: PassClock) -> float:
+        """When this strip flown on `clock` is over (`over_at`)."""
+        return over_at(clock, self.length_m)
 
     def describe(self) -> str:
         """'strip 3 of sortie 1 (its last)' for a log line (counted from 1, as people do)."""
