@@ -1,7 +1,7 @@
 """`uav-insar survey` as a user runs it: a concave area surveyed end to end (strips on the look
 side, coverage, run-ins, sorties in the battery, a .plan per UAV per sortie with AMSL heights,
-GeoJSON for QGIS), the speed chosen for an accuracy, and bad input refused in one line with
-nothing written."""
+GeoJSON for QGIS, survey.json for the planner and the report), the speed chosen for an
+accuracy, and bad input refused in one line with nothing written."""
 from __future__ import annotations
 
 import json
@@ -13,6 +13,7 @@ from test_bad_input_cli import assert_one_line, run
 
 from uav_insar_planner.mission_file.geodesy import latlon_to_ned, ned_to_latlon
 from uav_insar_planner.mission_file.qgc_plan import CMD_DELAY, CMD_LOITER_UNLIM, CMD_WAYPOINT
+from uav_insar_planner.survey.survey_file import read_survey
 from uav_insar_planner.track.speed_profile import RAMP_MPS2
 
 HOME = (48.1, 11.5, 520.0)
@@ -88,6 +89,17 @@ def test_a_concave_area_is_surveyed_on_the_look_side_in_sorties_that_fit(capsys,
         assert len(holds) == len(summary["sorties"][sortie]["strips"])
         assert summary["mission_start_items"][name] == [
             n for n, i in enumerate(items) if i["command"] == 178 and i["params"][1] == v]
+    # survey.json, read back: the strips the GeoJSON draws, the sorties and speed printed
+    survey = read_survey((out / "survey.json").read_text())
+    assert len(survey.strips) == summary["strips"] and survey.speed_mps == v
+    assert [list(s) for s in survey.sorties] == [s["strips"] for s in summary["sorties"]]
+    assert survey.sigma_h_m == summary["sigma_h_m"] and survey.swath_m == summary["swath_m"]
+    assert survey.station_ne_m == pytest.approx(STATION_NE, abs=1e-6)
+    for strip in survey.strips:
+        drawn = [_ne(p) for p in strips[strip.index]["geometry"]["coordinates"]]
+        for a, b in zip(strip.master_line_ne(), drawn, strict=True):
+            assert a == pytest.approx(b, abs=0.01)  # the GeoJSON's 1e-8 deg: about 1 mm
+        assert survey.num_slots[strip.index] == strips[strip.index]["properties"]["num_slots"]
 
 
 def test_the_speed_for_an_accuracy_is_certified_and_a_smaller_survey_clears_stale_plans(

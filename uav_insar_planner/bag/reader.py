@@ -33,11 +33,12 @@ class BagError(ValueError):
 class MissionRecord:
     """What a bag holds about one mission (see the module docstring). Per UAV k:
     `rates[k]` (t_s, rate_bps) rows, `offloads[k]` (t_s, slot, power_w, energy_used_j,
-    energy_left_j) rows, `poses[k]` (t_s, x, y, z) rows; `formation` (num_uavs, 3) planned
-    (x, y, z) with NaN rows for UAVs not flown and `power` (num_uavs, N) planned P_com [W], None
-    when absent (num_uavs as the plan has it, checked by its reader); `plan_values` the plan
-    status's key/values, `uav_values[k]` the latest `planner: uavK` status's; `counts`
-    messages per topic."""
+    energy_left_j, strip) rows (strip -1 for a single pass and in bags of agents whose offload
+    had no strip field yet: ros/topics.py OFFLOAD_FIELDS), `poses[k]` (t_s, x, y, z) rows;
+    `formation` (num_uavs, 3) planned (x, y, z) with NaN rows for UAVs not flown and `power`
+    (num_uavs, N) planned P_com [W], None when absent (num_uavs as the plan has it, checked by
+    its reader); `plan_values` the plan status's key/values, `uav_values[k]` the latest
+    `planner: uavK` status's; `counts` messages per topic."""
 
     formation: np.ndarray | None = None
     power: np.ndarray | None = None
@@ -109,7 +110,7 @@ def read_mission(path: str | Path, progress: Callable[[int], None] | None = None
                     progress(1)
     except (AnyReaderError, *_UNREADABLE) as exc:
         raise BagError(f"BAG: {str(path)[:200]!r} cannot be read: {str(exc)[:200]}") from None
-    widths = {"achieved_rate": 2, "offload": 5, "pose": 4}
+    widths = {"achieved_rate": 2, "offload": 6, "pose": 4}
     for (name, k), found in rows.items():
         target = {"achieved_rate": record.rates, "offload": record.offloads,
                   "pose": record.poses}[name]
@@ -135,7 +136,9 @@ def _take(record: MissionRecord, rows: dict, name: str, k: int, t: float, msg) -
     elif name == "achieved_rate":
         rows.setdefault((name, k), []).append((t, msg.data))
     elif name == "offload":
-        rows.setdefault((name, k), []).append((t, *list(msg.data)[:4]))
+        data = list(msg.data)
+        strip = data[4] if len(data) > 4 else -1.0  # an older agent's four fields: one pass
+        rows.setdefault((name, k), []).append((t, *data[:4], strip))
     elif name == "pose":
         p = msg.pose.position
         rows.setdefault((name, k), []).append((t, p.x, p.y, p.z))

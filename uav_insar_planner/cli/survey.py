@@ -3,15 +3,17 @@ certified formation, strips on the radar's look side with run-ins, sorties that 
 and write them for ground stations (survey/planning.py is the science; this is its adapter).
 
 Into `--out` (made when missing): `survey.geojson` (the area, each strip's master track and
-swath: QGIS, geojson.io), `survey.png` (the map), and `sortie<S>_uav<K>.plan` per sortie and
-flown UAV (QGroundControl; heights AMSL; mission_file/survey_plan.py). ArduPilot files wait at
-each strip's entry for its UTC start: sortie 1 takes off at `--start-utc` (default: now +
-qgc_plan.PREFLIGHT_S), each later one `--turnaround-min` after the one before has landed; a
-sortie flown later is exported again with a later `--start-utc`. PX4 files hold at each
-strip's entry until `uav-insar start-missions --item SEQ` (the sequence numbers are printed,
-and in `--json`). Files are written to temporaries and renamed, and `sortie*_uav*.plan` plans
-of an earlier, larger survey are removed (mission_file/folder.py): a failed run leaves the
-folder as it was. `--front PNG` also plots the certified accuracy-time front.
+swath: QGIS, geojson.io), `survey.png` (the map), `survey.json` (the survey for the planner
+node and `uav-insar report --survey`: survey/survey_file.py), and `sortie<S>_uav<K>.plan` per
+sortie and flown UAV (QGroundControl; heights AMSL; mission_file/survey_plan.py). ArduPilot
+files wait at each strip's entry for its UTC start: sortie 1 takes off at `--start-utc`
+(default: now + qgc_plan.PREFLIGHT_S), each later one `--turnaround-min` after the one before
+has landed; a sortie flown later is exported again with a later `--start-utc`. PX4 files hold
+at each strip's entry until `uav-insar start-missions --item SEQ` (the sequence numbers are
+printed, and in `--json`). Files are written to temporaries and renamed, and
+`sortie*_uav*.plan` plans of an earlier, larger survey are removed (mission_file/folder.py): a
+failed run leaves the folder as it was. `--front PNG` also plots the certified accuracy-time
+front.
 
 Exit codes (exit_codes.py): EXIT_OK; EXIT_BAD_INPUT (one line naming the field: not GeoJSON,
 no polygon, a self-intersecting ring, an area too far from home, a sortie that holds no
@@ -222,6 +224,7 @@ def main(args: argparse.Namespace) -> int:
     from uav_insar_planner.survey.geojson import survey_geojson
     from uav_insar_planner.survey.planning import SurveyInfeasible, accuracy_time_front, plan_survey
     from uav_insar_planner.survey.speed import SpeedSearchError
+    from uav_insar_planner.survey.survey_file import survey_document
 
     now = datetime.now(timezone.utc)
     params = scenario_params(args)
@@ -245,6 +248,7 @@ def main(args: argparse.Namespace) -> int:
         raise ParamError([str(exc)]) from None
     texts, items = _plans(survey, args, take_off, turnaround)
     texts["survey.geojson"] = json.dumps(survey_geojson(survey), indent=1) + "\n"
+    texts["survey.json"] = json.dumps(survey_document(survey, params), indent=1) + "\n"
     png = io.BytesIO()
     plot_survey(survey, png)
     files: dict[str, str | bytes] = {**texts, "survey.png": png.getvalue()}

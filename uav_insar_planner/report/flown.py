@@ -1,14 +1,35 @@
 """What a flown mission achieved, as the demo prints it (no ROS import): rates per slot,
-the MAVLink vehicles' pass against the plan, and a summary. Positions in the track frame [m],
-rates in bit/s (Mbit/s only in the printed tables)."""
+the MAVLink vehicles' pass against the plan, and a summary; and the sigma_h of the formation
+as flown, for a whole pass (`flown_sigma_h`) and slot by slot (`slot_positions`,
+`sigma_h_per_slot`: the survey's coverage map). Positions in the track frame [m], rates in
+bit/s (Mbit/s only in the printed tables), times in seconds.
+
+A slot as flown, for one UAV: its offload sample (ros/topics.py OFFLOAD_FIELDS, sent at the
+slot's start t_n) opens it, the UAV's next sample of the same pass closes it (the last slot of
+a pass: one slot duration later, the UAV's median). A pass is a run of samples of one strip
+with rising slot numbers: a strip flown again (its attempt 2) starts from slot 0 as a new
+pass. The slot's position is the mean (x, z) of the UAV's poses in [t_n, t_n+1) (the last
+slot's end included); it is unusable (None) without a pose there, without an achieved rate
+recorded within half a slot of t_n, or with that rate below R_min,k - tol (the checker's
+tolerance). Its sigma_h as flown is the planner's evaluation (evaluate.evaluate) of the
+formation with every flown UAV at its slot's position; NaN when a flown UAV's slot is
+unusable or missing.
+"""
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
+import numpy as np
+
+from uav_insar_planner.evaluate import evaluate
+from uav_insar_planner.params import Params
 from uav_insar_planner.plan import Vec3
 from uav_insar_planner.swarm import uav_name
+
+#: A slot as flown: (strip, attempt from 1, slot n); strip -1 for a single pass.
+SlotKey = tuple[int, int, int]
 
 
 @dataclass
@@ -118,3 +139,73 @@ def summary(plan_message: str | None, targets: Mapping[int, Vec3],
                          f"{r.max_error:.3f} m, final {r.final_error:.3f} m; flew "
                          f"{r.along_track:.1f} m along track (pass {pass_m:.1f} m)")
     return "\n".join(lines)
+
+
+def flown_sigma_h(p: Params, planned_xz: np.ndarray, flown_xz: Mapping[int, tuple[float, float]],
+                  scheme: str) -> float:
+    """The fused sigma_h [m] of the formation `planned_xz` ((num_uavs, 2), NaN rows for UAVs
+    not flown) with each UAV k of `flown_xz` at its flown (x, z) instead; NaN when one of
+    those is not finite. The planner's own evaluation (evaluate.evaluate); sigma_h is the
+    geometry's alone (the power enters only C9-C11), so none is given."""
+    if not all(math.isfinite(v) for q in flown_xz.values() for v in q):
+        return math.nan
+    xz = np.array(planned_xz, dtype=float)
+    for k, q in flown_xz.items():
+        xz[k] = q
+    return float(evaluate(p, xz, np.zeros((len(xz), p.num_slots)), scheme).sigma_h)
+
+
+def _passes(offloads: np.ndarray) -> list[tuple[int, int, np.ndarray]]:
+    """(strip, attempt, row indices) of each pass in a UAV's offload rows (module docstring)."""
+    passes: list[tuple[int, int, list[int]]] = []
+    attempts: dict[int, int] = {}
+    for i, (slot, strip) in enumerate(offloads[:, [1, 5]]):
+        last = passes[-1] if passes else None
+        if last is None or int(strip) != last[0] or slot <= offloads[last[2][-1], 1]:
+            attempts[int(strip)] = attempts.get(int(strip), 0) + 1
+            passes.append((int(strip), attempts[int(strip)], []))
+        passes[-1][2].append(i)
+    return [(strip, attempt, np.array(rows)) for strip, attempt, rows in passes]
+
+
+def slot_positions(offloads: np.ndarray, rates: np.ndarray, poses: np.ndarray,
+                   rate_min_bps: float, tol_bps: float, slot_s: float
+                   ) -> dict[SlotKey, tuple[float, float] | None]:
+    """One UAV's slots as flown (module docstring): its `offloads` (t, slot, power_w,
+    energy_used_j, energy_left_j, strip) rows, `rates` (t, bit/s) and `poses` (t, x, y, z)
+    rows, in time order; `slot_s` the slot duration when no pass shows two slots. Each slot's
+    mean (x, z), or None where unusable."""
+    passes = _passes(offloads) if len(offloads) else []
+    gaps = np.concatenate([np.diff(offloads[rows, 0]) for _, _, rows in passes] or [[]])
+    duration = float(np.median(gaps)) if len(gaps) else slot_s
+    out: dict[SlotKey, tuple[float, float] | None] = {}
+    for strip, attempt, rows in passes:
+        starts = offloads[rows, 0]
+        ends = np.append(starts[1:], starts[-1] + duration)
+        for j, (t0, t1) in enumerate(zip(starts, ends, strict=True)):
+            last = j == len(starts) - 1
+            on = (poses[:, 0] >= t0) & ((poses[:, 0] <= t1) if last else (poses[:, 0] < t1))
+            near = np.abs(rates[:, 0] - t0)
+            rate = (rates[int(np.argmin(near)), 1] if len(near) and near.min() <= 0.5 * duration
+                    else math.nan)
+            usable = on.any() and rate >= rate_min_bps - tol_bps  # False for a NaN rate
+            key = (strip, attempt, int(offloads[rows[j], 1]))
+            out[key] = ((float(poses[on, 1].mean()), float(poses[on, 3].mean())) if usable
+                        else None)
+    return out
+
+
+def sigma_h_per_slot(p: Params, planned_xz: np.ndarray, scheme: str,
+                     slots: Mapping[int, Mapping[SlotKey, tuple[float, float] | None]]
+                     ) -> dict[int, list[tuple[int, float]]]:
+    """Per strip, (n, sigma_h as flown [m]) of each slot any flown UAV flew, passes in order
+    (module docstring): `slots[k]` is flown UAV k's `slot_positions`, one entry per UAV the
+    plan flies; NaN where one of them has the slot unusable or not at all."""
+    keys = sorted({key for flown in slots.values() for key in flown})
+    out: dict[int, list[tuple[int, float]]] = {}
+    for key in keys:
+        where = {k: flown.get(key) for k, flown in slots.items()}
+        sigma = (math.nan if any(q is None for q in where.values())
+                 else flown_sigma_h(p, planned_xz, where, scheme))
+        out.setdefault(key[0], []).append((key[2], sigma))
+    return out

@@ -25,7 +25,12 @@ import numpy as np
 from uav_insar_planner.bag.reader import MissionRecord
 from uav_insar_planner.evaluate import evaluate, rate_tolerance_bps
 from uav_insar_planner.params import Params
-from uav_insar_planner.report.flown import summary
+from uav_insar_planner.report.flown import (
+    flown_sigma_h,
+    sigma_h_per_slot,
+    slot_positions,
+    summary,
+)
 from uav_insar_planner.solver.worst_case import worst_sigma
 from uav_insar_planner.swarm import count_problem, uav_name
 from uav_insar_planner.swarm import uavs as swarm_uavs
@@ -106,8 +111,9 @@ def _recorded_rate_min_mbps(record: MissionRecord, k: int, otherwise: float) -> 
     return value if math.isfinite(value) and value >= 0.0 else otherwise
 
 
-def mission_figures(record: MissionRecord, p: Params) -> MissionFigures:
-    """The report's figures (see the module docstring); ReportError without a plan."""
+def _plan(record: MissionRecord, p: Params) -> tuple[np.ndarray, np.ndarray, str, list[int]]:
+    """The recorded (formation, power, scheme, flown UAVs); ReportError without a plan of
+    p.num_uavs UAVs."""
     if record.formation is None or record.power is None:
         raise ReportError("the bag holds no formation and formation/power: was the planner "
                           "running while it recorded?")
@@ -118,9 +124,15 @@ def mission_figures(record: MissionRecord, p: Params) -> MissionFigures:
         raise ReportError(problem or f"the recorded plan has {n} poses and power rows "
                           f"{power.shape}; expected {p.num_uavs} of each (num_uavs)")
     scheme = record.plan_values.get("scheme", p.scheme)
-    uavs = [k for k in swarm_uavs(n) if np.isfinite(formation[k]).all()]
+    return formation, power, scheme, [k for k in swarm_uavs(n)
+                                      if np.isfinite(formation[k]).all()]
+
+
+def mission_figures(record: MissionRecord, p: Params) -> MissionFigures:
+    """The report's figures (see the module docstring); ReportError without a plan."""
+    formation, power, scheme, uavs = _plan(record, p)
     targets = {k: tuple(float(v) for v in formation[k]) for k in uavs}
-    offloads = {k: record.offloads.get(k, np.zeros((0, 5))) for k in uavs}
+    offloads = {k: record.offloads.get(k, np.zeros((0, 6))) for k in uavs}
     tracks = {k: _track(record.poses.get(k), offloads[k], targets[k]) for k in uavs}
     flown_xz = {k: ((targets[k][0] + float(tracks[k].dx.mean()),
                      targets[k][2] + float(tracks[k].dz.mean()))
@@ -128,12 +140,8 @@ def mission_figures(record: MissionRecord, p: Params) -> MissionFigures:
     budget = {k: (float(offloads[k][-1, 3] + offloads[k][-1, 4]) if len(offloads[k])
                   else p.e_max_j) for k in uavs}
     planned_xz = formation[:, [0, 2]]
-    flown = planned_xz.copy()
-    for k in uavs:
-        flown[k] = flown_xz[k]
     sigma_plan = evaluate(p, planned_xz, power, scheme).sigma_h
-    sigma_flown = (evaluate(p, flown, power, scheme).sigma_h if np.isfinite(flown[uavs]).all()
-                   else math.nan)
+    sigma_flown = flown_sigma_h(p, planned_xz, flown_xz, scheme)
     worst = (worst_sigma(p, planned_xz, scheme).upper if p.nav_error_m > 0
              and np.isfinite(planned_xz[uavs]).all() else math.nan)
     try:
@@ -147,6 +155,25 @@ def mission_figures(record: MissionRecord, p: Params) -> MissionFigures:
         energy_j={k: offloads[k][:, 3] for k in uavs}, budget_j=budget, tracks=tracks,
         flown_xz=flown_xz, planned_power_w=power, sigma_h_plan_m=float(sigma_plan),
         sigma_h_recorded_m=recorded, sigma_h_flown_m=float(sigma_flown), sigma_h_worst_m=worst)
+
+
+def flown_by_strip(record: MissionRecord, p: Params) -> dict[int, list[tuple[int, float]]]:
+    """Each survey strip's slots as flown, (n, sigma_h as flown [m], NaN: unusable), from
+    every flown UAV's offload samples grouped by their `strip` field (report/flown.py
+    `slot_positions`, `sigma_h_per_slot`; the plan's formation and scheme as recorded).
+    ReportError when no sample names a strip: a single pass, or agents that did not name it."""
+    formation, _, scheme, uavs = _plan(record, p)
+    tol = rate_tolerance_bps(p.rate_min_bps)
+    slots = {k: slot_positions(record.offloads.get(k, np.zeros((0, 6))),
+                               record.rates.get(k, np.zeros((0, 2))),
+                               record.poses.get(k, np.zeros((0, 4))), p.rate_min_bps[k], tol,
+                               p.slot_duration_s) for k in uavs}
+    slots = {k: {key: q for key, q in flown.items() if key[0] >= 0}
+             for k, flown in slots.items()}
+    if not any(slots.values()):
+        raise ReportError("the bag's uavK/offload samples name no survey strip (strip -1 or no "
+                          "strip field): a single pass, which has no survey to map")
+    return sigma_h_per_slot(p, formation[:, [0, 2]], scheme, slots)
 
 
 def report_table(f: MissionFigures, p: Params) -> str:

@@ -7,5 +7,7 @@ no MAVLink; `model`, `solver/`, `track/`, `mavlink/` and the simulator never imp
 - `coverage`: the brute-force check of how much of the area the strips' swaths image;
 - `sorties`: the strips in flight order, in sorties within endurance x (1 - reserve);
 - `speed`: v_y as a decision variable: the fastest speed for a sigma_h target, certified;
-- `planning`: the whole survey planned (`plan_survey` -> `SurveyPlan`).
+- `planning`: the whole survey planned (`plan_survey` -> `SurveyPlan`);
+- `survey_file`: the planned survey as `survey.json`, and its reader (`SurveyFile`);
+- `flown_coverage`: the planned and the flown sigma_h over the area's cells (coverage map).
 """

@@ -22,6 +22,13 @@ from uav_insar_planner.survey.area import Area
 from uav_insar_planner.survey.strips import Strip
 
 TOLERANCE_M = 1e-6  # a point on a swath's edge counts as imaged (adjacent swaths share edges)
+CELL_M = 2.0  # the grid's cell; coarser on big areas, so that at most CELLS_MAX cells are tested
+CELLS_MAX = 10_000
+
+
+def cell_size_m(area: Area) -> float:
+    """The grid's cell for `area`: CELL_M, or coarser so that it holds about CELLS_MAX."""
+    return max(CELL_M, math.sqrt(area.area_m2 / CELLS_MAX))
 
 
 def grid_points(area: Area, cell_m: float) -> np.ndarray:
@@ -37,19 +44,33 @@ def grid_points(area: Area, cell_m: float) -> np.ndarray:
     return points[area.contains(points)]
 
 
+def strip_coordinates(points_ne: np.ndarray, strip: Strip) -> tuple[np.ndarray, np.ndarray]:
+    """(along, across) of the (k, 2) (north, east) points about `strip`: (p - p0) . u and
+    (p - p0) . r of the module docstring [m]."""
+    heading = strip.heading_rad
+    u = np.array([math.cos(heading), math.sin(heading)])
+    r = np.array([-u[1], u[0]])  # right of the flight: heading north -> east
+    points = np.asarray(points_ne, dtype=float).reshape(-1, 2)
+    rel = points - np.asarray(strip.master_line_ne()[0])
+    return rel @ u, rel @ r
+
+
+def strip_images(along: np.ndarray, across: np.ndarray, strip: Strip, swath_m: float
+                 ) -> np.ndarray:
+    """Which points, at `strip_coordinates` (along, across), `strip` images (module
+    docstring; TOLERANCE_M on every edge)."""
+    return ((along >= -TOLERANCE_M) & (along <= strip.track.length_m + TOLERANCE_M)
+            & (np.abs(across - strip.look_offset_m) <= 0.5 * swath_m + TOLERANCE_M))
+
+
 def imaged(points_ne: np.ndarray, strips: Sequence[Strip], swath_m: float) -> np.ndarray:
     """Which of the (k, 2) (north, east) points at least one strip images (module
     docstring)."""
     hit = np.zeros(len(points_ne), dtype=bool)
     for strip in strips:
         left = np.flatnonzero(~hit)  # (a point one strip images needs no other)
-        heading = strip.heading_rad
-        u = np.array([math.cos(heading), math.sin(heading)])
-        r = np.array([-u[1], u[0]])  # right of the flight: heading north -> east
-        rel = points_ne[left] - np.asarray(strip.master_line_ne()[0])
-        along, across = rel @ u, rel @ r
-        hit[left] = ((along >= -TOLERANCE_M) & (along <= strip.track.length_m + TOLERANCE_M)
-                     & (np.abs(across - strip.look_offset_m) <= 0.5 * swath_m + TOLERANCE_M))
+        along, across = strip_coordinates(points_ne[left], strip)
+        hit[left] = strip_images(along, across, strip, swath_m)
     return hit
 
 

@@ -32,15 +32,13 @@ from uav_insar_planner.plan import Plan
 from uav_insar_planner.solver import solve
 from uav_insar_planner.solver.power import schedules, station_radius_sq
 from uav_insar_planner.survey.area import Area
-from uav_insar_planner.survey.coverage import covered_fraction
+from uav_insar_planner.survey.coverage import cell_size_m, covered_fraction
 from uav_insar_planner.survey.sorties import FlightSpeeds, Sortie, plan_sorties
 from uav_insar_planner.survey.speed import fastest_speed, slowest_fitting_speed, speed_front
 from uav_insar_planner.survey.strips import Strip, best_bearing, layout_strips
 from uav_insar_planner.track.passes import run_in_m
 
 AIRFRAME_MAX_MPS = 15.0  # a survey multicopter's top ground speed with a radar payload
-COVERAGE_CELL_M = 2.0  # the brute-force check's grid; coarser on big areas (COVERAGE_CELLS_MAX)
-COVERAGE_CELLS_MAX = 10_000
 
 
 class SurveyInfeasible(ValueError):
@@ -234,7 +232,7 @@ def plan_survey(area: Area, params: Params, options: SurveyOptions) -> SurveyPla
             f"{options.station_ne_m[1]:.0f} m east of the home cannot serve "
             f"{'; '.join(blocked[:5])}{' ...' if len(blocked) > 5 else ''}; expected a "
             "station nearer the strips (or shorter strips: the area, the bearing)")
-    cell = max(COVERAGE_CELL_M, math.sqrt(area.area_m2 / COVERAGE_CELLS_MAX))
+    cell = cell_size_m(area)
     return SurveyPlan(area, options, speed, why, plan, bearing,
                       run_in_m(speed), tuple(planned), tuple(sorties),
                       covered_fraction(area, strips, geometry(local, plan)[0], cell))
