@@ -129,6 +129,7 @@ class AgentNode(Node):
         self.vehicle = self.flight.vehicle
         self.mission = self.flight.mission
         self.k = own["uav_id"]
+        self._params = params  # the scenario's (a survey strip's slots and station differ)
         self.uav_name = uav_name(self.k)  # the prefix of every log line
         self._announced = False
         self._phase = self.mission.phase
@@ -204,7 +205,11 @@ class AgentNode(Node):
                 f"{self.uav_name}: {self._leg.describe()} left after "
                 f"{len(self.mission.samples)} of {self.mission.num_slots} slots")
         self._leg = leg
-        self.flight.new_pass(leg)
+        params = self._params if leg is None else self._params.replace(num_slots=n)
+        if leg is not None and leg.station_ne_m is not None:  # the link to it, in its frame
+            station = leg.station(float(self._params.ground_station[2]))
+            params = params.replace(ground_station_m=list(station))
+        self.flight.new_pass(leg, params)
         self.mission, self._announced = self.flight.mission, False
         self._phase = self.mission.phase
         self._told_no_start = False

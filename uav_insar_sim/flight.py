@@ -16,8 +16,9 @@ In all three, the simulated link fading (`fading.LinkFading`) and the offloading
 the plan's powers; closed: `offload.ClosedLoopOffload`) are the agent parameters' (`link_of`).
 
 All offer the same calls: `start()` (returns a line to log, or ""), `stop()`,
-`set_plan(x, y, z, powers)`, `tick() -> started slots`, `new_pass(leg)` (a survey strip,
-track/leg.py: a fresh slot schedule, and for a watched vehicle the strip's frame) and
+`set_plan(x, y, z, powers)`, `tick() -> started slots`, `new_pass(leg, params)` (a survey
+strip, track/leg.py: a fresh slot schedule under the strip's `params`, its slot count and
+station, and for a watched vehicle the strip's frame) and
 `mission` (the slot schedule);
 `observed` says whether the slots wait for the planner's pass start (`mission.set_pass_start`:
 both watched flights) or run on the agent's own mission clock (SelfFlight);
@@ -61,9 +62,9 @@ class SelfFlight:
         self._wall_t0: float | None = None
         self._fresh = fresh  # () -> a new Mission, for each survey strip
 
-    def new_pass(self, leg: SurveyLeg | None) -> None:
+    def new_pass(self, leg: SurveyLeg | None, params: Params) -> None:
         """A strip flown from the home of its own frame (the agent simulates no turn)."""
-        self.mission, self._wall_t0 = self._fresh(), None
+        self.mission, self._wall_t0 = self._fresh(params), None
 
     def start(self) -> str:
         return ""
@@ -101,8 +102,8 @@ class MavlinkFlight:
         self.listen = listen
         self._fresh = fresh  # () -> a new ObservedMission, for each survey strip
 
-    def new_pass(self, leg: SurveyLeg | None) -> None:
-        self.mission = self._fresh()
+    def new_pass(self, leg: SurveyLeg | None, params: Params) -> None:
+        self.mission = self._fresh(params)
         self.frame = self.home if leg is None else leg.placed(self.home)
 
     def start(self) -> str:
@@ -136,10 +137,10 @@ class AutopilotFlight:
         self._fed: list[tuple[Vec3, float]] = []  # (position, read at) since the last tick
         self._fresh = fresh  # () -> a new ObservedMission, for each survey strip
 
-    def new_pass(self, leg: SurveyLeg | None) -> None:
+    def new_pass(self, leg: SurveyLeg | None, params: Params) -> None:
         """(The bridge publishes the positions in the strip's frame already.) Positions fed
         before the new plan are the last strip's: dropped."""
-        self.mission, self._fed = self._fresh(), []
+        self.mission, self._fed = self._fresh(params), []
 
     def start(self) -> str:
         return "position_source autopilot: slots run on the autopilot's uavK/mavlink/pose"
@@ -175,15 +176,14 @@ def choose_flight(own: dict, params: Params) -> Flight:
     every mode), a bad connection string, or autopilot together with mavlink_listen."""
     k = own["uav_id"]
 
-    def flown() -> Mission:
+    def flown(p: Params = params) -> Mission:
         wind = Wind(own["wind_mps"], own["gust_std_mps"], own["gust_tau_s"], own["fading_seed"],
                     k)
-        return Mission(k, params, own["max_speed_mps"], own["max_accel_mps2"],
-                       own["position_noise_std_m"], own["noise_seed"], wind,
-                       *link_of(own, params))
+        return Mission(k, p, own["max_speed_mps"], own["max_accel_mps2"],
+                       own["position_noise_std_m"], own["noise_seed"], wind, *link_of(own, p))
 
-    def observed() -> ObservedMission:
-        return ObservedMission(k, params, *link_of(own, params))
+    def observed(p: Params = params) -> ObservedMission:
+        return ObservedMission(k, p, *link_of(own, p))
 
     mission = flown()
     if own["position_source"] == "autopilot":

@@ -18,10 +18,12 @@ so each slot) flew; degrees only here, at the edge:
   insar_track       a single pass, in the frame each node was configured with (an empty
                     frame_id, as a hand-published message has, too)
   insar_track: strip 3, sortie 1, attempt 1, last; heading 90.0000 deg; origin N 12.345
-  E -67.890 D 0.000 m; length 120.000 m     (one line) strip and sortie from 0 as in
+  E -67.890 D 0.000 m; length 120.000 m; station N 0.000 E 0.000 m     (one line; the
+                    station optional) strip and sortie from 0 as in
                     survey.json, the strip's attempt (from 1: an interrupted strip is flown
                     again), `last` for the sortie's last strip, the strip frame about the home
-                    (heading from north, origin in the home's NED), the imaged length
+                    (heading from north, origin in the home's NED), the imaged length, the
+                    ground station (north, east about the home)
 
 Validation (every decode; a bad message raises `PlanMessageError` naming topic, field, value
 cut short and what is allowed, and the caller drops it without any change of state):
@@ -63,7 +65,8 @@ _NUMBER = r"(-?\d{1,7}\.\d{1,9})"
 _LEG = re.compile(
     rf"^{re.escape(topics.FRAME_ID)}: strip (\d{{1,6}}), sortie (\d{{1,6}}), attempt (\d{{1,6}})"
     rf"(, last)?; heading "
-    rf"{_NUMBER} deg; origin N {_NUMBER} E {_NUMBER} D {_NUMBER} m; length {_NUMBER} m$")
+    rf"{_NUMBER} deg; origin N {_NUMBER} E {_NUMBER} D {_NUMBER} m; length {_NUMBER} m"
+    rf"(?:; station N {_NUMBER} E {_NUMBER} m)?$")
 
 
 class PlanMessageError(ValueError):
@@ -139,7 +142,9 @@ def encode_leg(leg: SurveyLeg | None) -> str:
     heading = math.degrees(leg.frame.bearing_rad) % 360.0
     return (f"{topics.FRAME_ID}: strip {leg.strip}, sortie {leg.sortie}, attempt {leg.attempt}"
             f"{', last' if leg.last else ''}; heading {heading:.4f} deg; "
-            f"origin N {n:.3f} E {e:.3f} D {d:.3f} m; length {leg.length_m:.3f} m")
+            f"origin N {n:.3f} E {e:.3f} D {d:.3f} m; length {leg.length_m:.3f} m"
+            + ("" if leg.station_ne_m is None else
+               "; station N {:.3f} E {:.3f} m".format(*leg.station_ne_m)))
 
 
 def decode_leg(frame_id: str) -> SurveyLeg | None:
@@ -151,16 +156,20 @@ def decode_leg(frame_id: str) -> SurveyLeg | None:
         raise PlanMessageError(topics.FORMATION, "header.frame_id", frame_id, (
             f"'{topics.FRAME_ID}', or '{topics.FRAME_ID}: strip <i>, sortie <j>, attempt <a>"
             "[, last]; "
-            "heading <deg> deg; origin N <m> E <m> D <m> m; length <m> m'"))
-    heading, n, e, d, length = (float(v) for v in found.groups()[4:])
+            "heading <deg> deg; origin N <m> E <m> D <m> m; length <m> m[; station N <m> E "
+            "<m> m]'"))
+    heading, n, e, d, length = (float(v) for v in found.groups()[4:9])
+    station = None if found[10] is None else (float(found[10]), float(found[11]))
     if int(found[3]) < 1 or not (0.0 <= heading < 360.0 and 0.0 < length <= POSITION_BOUND_M
-                                 and max(abs(n), abs(e), abs(d)) <= POSITION_BOUND_M):
+                                 and max(abs(n), abs(e), abs(d), *map(abs, station or ()))
+                                 <= POSITION_BOUND_M):
         raise PlanMessageError(topics.FORMATION, "header.frame_id", frame_id,
                                f"an attempt >= 1, a heading in [0, 360) deg, an origin within "
                                f"+-{POSITION_BOUND_M:g} m and a length in (0, "
                                f"{POSITION_BOUND_M:g}] m")
     return SurveyLeg(int(found[1]), int(found[2]), found[4] is not None,
-                     TrackFrame(math.radians(heading), (n, e, d)), length, int(found[3]))
+                     TrackFrame(math.radians(heading), (n, e, d)), length, int(found[3]),
+                     station)
 
 
 def encode(points: Sequence[tuple[float, float, float]], plan: Plan, plan_id: PlanId,

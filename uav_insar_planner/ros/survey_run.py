@@ -118,7 +118,7 @@ class SurveyRun:
         strip = self._strips[fly.strip]
         x0 = float(plan.formation[0, 0])
         self._leg = SurveyLeg(fly.strip, fly.sortie, fly.last, strip.frame(x0),
-                              strip.track.length_m, fly.attempt)
+                              strip.track.length_m, fly.attempt, self._survey.station_ne_m)
         return self._leg
 
     # --- the run -------------------------------------------------------------------------

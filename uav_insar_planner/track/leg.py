@@ -15,6 +15,9 @@ booted, for most autopilots). `placed(home)` is that frame on one vehicle, with 
 track frame its bridge or agent was configured with (`origin_ned_m`: the home in the vehicle's
 local NED; its bearing serves a single pass and is not used by a strip).
 
+`station_ne_m` is the ground station (north, east about the home; its height is the
+scenario's): the agents model each strip's link from it, in the strip's frame (`station`).
+
 `last` marks the sortie's last strip: after it the vehicles return and land. `attempt`
 counts the strip's flights (1 the first): a strip interrupted (a UAV lost, a hold) is flown
 again as attempt 2, a new pass with slots of its own, never the same one resumed.
@@ -26,6 +29,7 @@ from dataclasses import dataclass
 
 from uav_insar_planner.track.frame import TrackFrame
 from uav_insar_planner.track.pass_clock import PassClock
+from uav_insar_planner.track.passes import run_out_m
 
 # A strip is over this long after its target passed the imaged part's end: its braking
 # (v / BRAKE_MPS2, 1.3 s at 4 m/s) and the vehicles' lag behind their targets.
@@ -51,6 +55,7 @@ class SurveyLeg:
     frame: TrackFrame
     length_m: float
     attempt: int = 1
+    station_ne_m: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
         if self.strip < 0 or self.sortie < 0 or self.attempt < 1:
@@ -73,8 +78,17 @@ class SurveyLeg:
         return TrackFrame(self.frame.bearing_rad, (n + n0, e + e0, d + d0))
 
     def duration_s(self, speed_mps: float) -> float:
-        """The pass's cruise at `speed_mps` [s]: its imaged part and RUN_PAST_M at v_y."""
-        return (self.length_m + RUN_PAST_M) / speed_mps
+        """The pass's `duration_s` at `speed_mps` (speed_profile.braked_pass: the target stops
+        at v_y times it) [s]: the imaged part and RUN_PAST_M at v_y, then the run-out."""
+        return (self.length_m + RUN_PAST_M + run_out_m(speed_mps)) / speed_mps
+
+    def station(self, height_m: float) -> tuple[float, float, float]:
+        """The ground station in this strip's frame (x, y, z) at `height_m` above the home;
+        ValueError when the leg names none."""
+        if self.station_ne_m is None:
+            raise ValueError("station_ne_m: value None is not allowed; expected the station")
+        x, y, _ = self.frame.from_ned(*self.station_ne_m, 0.0)
+        return x, y, height_m
 
     def over_at(self, clock: PassClock) -> float:
         """When this strip flown on `clock` is over (`over_at`)."""
