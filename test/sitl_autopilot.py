@@ -38,15 +38,17 @@ N_SLOTS = 12  # 12 slots of 1 s at Table I's 4.3 m/s: a 51.6 m pass
 WIND_DIR_DEG = 90.0  # from the east: across the track (y = north), pushing towards -x
 
 
-def sitl_command(sysid: int, parm: Path, base_port: int | None = None) -> list[str]:
-    """arducopter with ArduPilot's copter.parm and then `parm` as defaults, at HOME: instance 0
-    (SERIAL0 on TCP 5760), or with every port moved to `base_port` and after (BASE_PORTS)."""
+def sitl_command(sysid: int, parm: Path, base_port: int | None = None, home: str = HOME
+                 ) -> list[str]:
+    """arducopter with ArduPilot's copter.parm and then `parm` as defaults, at `home` (lat,lon,
+    alt,heading): instance 0 (SERIAL0 on TCP 5760), or with every port moved to `base_port`
+    and after (BASE_PORTS)."""
     ports = [] if base_port is None else [
         "--base-port", str(base_port), "--rc-in-port", str(base_port + 1),
         "--irlock-port", str(base_port + 4)]
     return [str(ARDUCOPTER), "--model", "+", "--speedup", str(SPEEDUP), *ports, "-I0",
             "--sysid", str(sysid), "--defaults", f"{SITL_DIR / 'copter.parm'},{parm}",
-            "--home", HOME]
+            "--home", home]
 
 
 def start_sitl(k: int, workdir: Path, parm: Path) -> subprocess.Popen:

@@ -12,7 +12,6 @@ Ports 33100-33199 (this file's own), a private ROS domain (conftest `ros_domain`
 """
 from __future__ import annotations
 
-import json
 import os
 import re
 import subprocess
@@ -21,14 +20,11 @@ import process_group
 import pytest
 from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
+from survey_field import write_survey
 
 from uav_insar_planner.demo.processes import executable, start_process
 from uav_insar_planner.mission_file.qgc_plan import Home
-from uav_insar_planner.params import params_from_mapping
 from uav_insar_planner.ros import topics
-from uav_insar_planner.survey.area import read_area
-from uav_insar_planner.survey.planning import SurveyOptions, plan_survey
-from uav_insar_planner.survey.survey_file import read_survey, survey_document
 from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, uavs
 from uav_insar_sim.vehicle.telemetry import SITL_HOME
 
@@ -49,30 +45,8 @@ def stop(proc: subprocess.Popen) -> str:
     return proc.stdout.read()
 
 
-def survey_file(tmp_path) -> tuple[str, object]:
-    """Three strips north-south, 30 m long, of a 120 m x 30 m field east of the home; a battery
-    that holds two of them."""
-    lat, lon = (float(v) for v in SITL_HOME[:2])
-    home = Home(lat, lon, float(SITL_HOME[2]))
-    north = [0.0, 30.0]
-    east = [20.0, 140.0]
-    dlat, dlon = 1.0 / 111_320.0, 1.0 / (111_320.0 * 0.7)  # (the area is read back exactly)
-    ring = [[lon + e * dlon, lat + n * dlat] for n, e in
-            ((north[0], east[0]), (north[0], east[1]), (north[1], east[1]),
-             (north[1], east[0]), (north[0], east[0]))]
-    area = read_area(json.dumps({"type": "Polygon", "coordinates": [ring]}), home)
-    params = params_from_mapping({})
-    options = SurveyOptions(bearing_rad=0.0, endurance_s=220.0, reserve=0.2, speed_mps=4.3,
-                            station_ne_m=(0.0, 0.0))
-    survey = plan_survey(area, params, options)
-    path = tmp_path / "survey.json"
-    path.write_text(json.dumps(survey_document(survey, params)))
-    return str(path), read_survey(path.read_text())
-
-
 def test_the_nodes_fly_a_survey_strip_after_strip_and_sortie_after_sortie(watcher, tmp_path):
-    path, survey = survey_file(tmp_path)
-    assert [len(s) for s in survey.sorties] == [2, 1], survey.sorties  # the field's design
+    path, survey = write_survey(tmp_path, Home(*SITL_HOME))
     vehicles = [start("uav-insar-vehicle", "--sysid", str(s), "--listen",
                       f"udpin:127.0.0.1:{port}", "--speed", "12", "--accel", "5",
                       "--start-ned", str(n), str(e), "0")
@@ -140,3 +114,23 @@ def test_the_nodes_fly_a_survey_strip_after_strip_and_sortie_after_sortie(watche
     for out in bridge_outs:
         assert out.count("return to launch") == 2, out[-3000:]
         assert "ERROR" not in out, out[-3000:]
+
+
+@pytest.mark.parametrize("case", ["missing", "not a survey", "another speed"])
+def test_a_survey_file_the_planner_cannot_fly_is_one_line_and_exit_2(ros_domain, tmp_path,
+                                                                     case):
+    path, _ = write_survey(tmp_path, Home(*SITL_HOME))
+    args = ["-p", f"survey_file:={path}"]
+    if case == "missing":
+        args = ["-p", f"survey_file:={tmp_path / 'nothing.json'}"]
+    elif case == "not a survey":
+        (tmp_path / "area.json").write_text('{"type": "Polygon", "coordinates": []}')
+        args = ["-p", f"survey_file:={tmp_path / 'area.json'}"]
+    else:
+        args += ["-p", "speed_mps:=3.0"]
+    planner = start("planner", "--ros-args", *args)
+    code = planner.wait(timeout=60)
+    out = planner.stdout.read()
+    errors = [line for line in out.splitlines() if "survey_file" in line]
+    assert code == 2 and len(errors) == 1, out
+    assert ("4.3 m/s" in errors[0]) == (case == "another speed"), errors[0]

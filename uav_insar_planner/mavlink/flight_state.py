@@ -17,9 +17,10 @@ commands it asks for, under its lock. Each point's detail is in the module named
   (`track.formation.separation`).
 - A survey (`track.leg`): each strip a pass of its own, in the strip's frame placed on this
   bridge's home (`origin_ned_m`), its length the strip's; after the sortie's last strip has
-  been flown and braked (`SurveyLeg.over_at`), every flown vehicle is ordered to return to launch
-  and land (the profile's `home` mode, phase `returning`), whether the planner is heard or
-  not; the next sortie's first plan arms and takes off again (arm_and_takeoff).
+  been flown and braked (`SurveyLeg.over_at`), every flown vehicle is ordered to return to
+  launch and land (the profile's `home` mode; phase `returning`, then `landed` once
+  disarmed), whether the planner is heard or not; the next sortie's first plan arms and
+  takes off again (arm_and_takeoff).
 """
 from __future__ import annotations
 
@@ -64,6 +65,7 @@ class FlightState:
         self.leg: SurveyLeg | None = None  # the survey strip flown
         self.autopilot = profile(config.autopilot)
         self.returning = ModeOrder(self.autopilot.home)
+        self._landed: set[int] = set()  # returned vehicles seen disarmed
         self._count, self._emit, self._send_command = count, emit, send_command
         self.pass_ = PassTrajectory(config.speed_mps, config.track_duration_s)
         self._start_label = ""  # the plan whose pass start the track clock is (planner)
@@ -98,6 +100,7 @@ class FlightState:
         if leg is None or self.leg is None or leg.sortie != self.leg.sortie:
             self.sequences.clear()
             self.returning.release()
+            self._landed.clear()
         self.leg = leg
         self.frame = self.home if leg is None else leg.placed(self.home)
         duration = (self.config.track_duration_s if leg is None
@@ -152,6 +155,11 @@ class FlightState:
         self.holding.check(now)
         self._sortie_over(now)
         for v in self.vehicles:
+            if self.returning.engaged(v.uav) and not v.armed and v.uav not in self._landed:
+                self._landed.add(v.uav)
+                self._emit(v.uav, "info", f"sysid {v.sysid} landed and disarmed: ready for the "
+                                          "next sortie")
+        for v in self.vehicles:
             if (seq := self.running(v)) and v.linked:
                 seq.step(now)
 
@@ -179,7 +187,8 @@ class FlightState:
     def status(self, v: WatchedVehicle, now: float) -> VehicleStatus:
         status = vehicle_status(v, now, self.pass_, self.frame, self.config.capture_radius_m,
                                 self.sequences.get(v.uav), self._separation[v.uav])
-        held = "returning" if self.returning.engaged(v.uav) else self.holding.phase(v)
+        held = ("landed" if v.uav in self._landed else "returning"
+                if self.returning.engaged(v.uav) else self.holding.phase(v))
         return replace(status, phase=held or status.phase, pass_plan=self._start_label,
                        pass_start_s=None if self.pass_.sent is None else self.pass_.sent.start_s,
                        behind=self.holding.behind.get(v.uav, ""))

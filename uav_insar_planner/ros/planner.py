@@ -33,7 +33,7 @@ With `survey_file` (planner-only, read once at start: a file that cannot be read
 at another speed than speed_mps, is one line and exit code 2) the plan is flown strip after
 strip (ros/survey_run.py): each publication names its strip in the formation's frame_id,
 `planner: survey` is on /diagnostics, and service ~/next_sortie (std_srvs/Trigger) lets the
-next sortie go.
+next sortie go (without survey_file it refuses, saying so).
 Solves run on a worker thread (solve_worker), so the node keeps serving while one runs; a
 worker that dies turns the plan status ERROR ("solve worker died: ...") and the node exits
 with code 1 after publishing it (exit_codes.EXIT_CRASH).
@@ -123,6 +123,7 @@ class PlannerNode(Node):
         self._markers = PlannerMarkers(self)
         self._heartbeat = GcsHeartbeat(self, self._published_plan)
         self.create_service(Trigger, topics.REPLAN, self._on_replan)
+        self.create_service(Trigger, topics.NEXT_SORTIE, self._on_next_sortie)
         self._pending: tuple[Params, str] | None = None
         guard_sets(self)
         self.add_on_set_parameters_callback(self._on_set_parameters)
@@ -202,6 +203,14 @@ class PlannerNode(Node):
         response.message = (f"solving {params.scheme} now" if started else
                             "a solve is running; another follows with the current parameters")
         response.message += "; the result follows on formation and /diagnostics"
+        return response
+
+    def _on_next_sortie(self, request, response):
+        if self._survey is None:
+            response.success, response.message = False, (
+                "refused: no survey_file: this planner flies one pass")
+        else:
+            response.success, response.message = self._survey.next_sortie()
         return response
 
     def _on_solved(self, params: Params, plan: Plan | None, error: str | None,

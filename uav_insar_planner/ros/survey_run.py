@@ -9,7 +9,8 @@ station (survey/planning.py `strip_plan`). The pass start is the planner's usual
 is a transit to the next strip's entries and a capture. A strip is over `track.leg.SETTLE_S`
 after its imaged part; the sortie's last strip is marked `last`, after which every bridge
 orders its vehicle home (RTL) on its own. `~/next_sortie` (std_srvs/Trigger) lets the next
-sortie go once the batteries are changed; refused, with why, at any other time.
+sortie go once the batteries are changed (the planner's service calls `next_sortie`);
+refused, with why, at any other time.
 
 A strip flown while a UAV is declared lost, or while the plan changes its formation (a re-plan,
 the hold plan), is interrupted and flown again (survey_states). Diagnostics: `planner: survey`
@@ -24,7 +25,6 @@ from collections.abc import Callable
 from dataclasses import replace
 
 from rclpy.node import Node
-from std_srvs.srv import Trigger
 
 from uav_insar_planner import published
 from uav_insar_planner.params import Params
@@ -50,7 +50,6 @@ from uav_insar_planner.track.leg import SurveyLeg
 from uav_insar_planner.track.pass_clock import PassClock
 
 TICK_PERIOD_S = 0.2
-NEXT_SORTIE = "~/next_sortie"
 SURVEY_MAX_BYTES = 50 << 20
 
 
@@ -92,7 +91,6 @@ class SurveyRun:
         self._leg: SurveyLeg | None = None
         self._formation: tuple | None = None  # the points last published on the strip
         self._lost_seen: frozenset[int] = frozenset()
-        node.create_service(Trigger, NEXT_SORTIE, self._on_next_sortie)
         node.create_timer(TICK_PERIOD_S, self._tick)
 
     # --- what the planner publishes --------------------------------------------------------
@@ -154,16 +152,15 @@ class SurveyRun:
         if flies:
             self._republish()
 
-    def _on_next_sortie(self, request, response):
+    def next_sortie(self) -> tuple[bool, str]:
+        """The operator's ~/next_sortie: (accepted, what happens or why not)."""
         with self._lock:
             before = self._fly
             replies = self._apply(step(self._state, NextSortie(), self._flight))
             flies = self._fly is not before
-        response.success = bool(replies) and replies[0].ok
-        response.message = replies[0].text if replies else "no answer"
         if flies:
             self._republish()
-        return response
+        return (replies[0].ok, replies[0].text) if replies else (False, "no answer")
 
     def status(self) -> published.Status:
         """The `planner: survey` diagnostic status."""

@@ -30,6 +30,7 @@ MARKERS = "formation/markers"
 FLOWN_MARKERS = "formation/markers/flown"
 DIAGNOSTICS = "/diagnostics"
 REPLAN = "~/replan"
+NEXT_SORTIE = "~/next_sortie"
 GCS_HEARTBEAT = "gcs/heartbeat"
 
 # /formation, /formation/power and uavK/plan: a late joiner (an agent started after the
@@ -129,8 +130,10 @@ INTERFACE: tuple[TopicSpec, ...] = (
     TopicSpec(FORMATION, "geometry_msgs/msg/PoseArray", "LATCHED", _PLANNER,
               _AGENT + _BRIDGE,
               "the plan: poses[k] = target (x_k, 0, z_k) of UAV k, NaN x and z for a UAV not "
-              "flown; header.stamp = the plan's stamp, its identity (ros/plan_msgs.py). Only "
-              "feasible plans are published"),
+              "flown; header.stamp = the plan's stamp, its identity (ros/plan_msgs.py); "
+              "header.frame_id = insar_track, or the survey strip it flies (`insar_track: "
+              "strip i, sortie j, attempt a[, last]; heading ...; origin ...; length ...; "
+              "station ...`, in that strip's frame). Only feasible plans are published"),
     TopicSpec(POWER, "std_msgs/msg/Float64MultiArray", "LATCHED", _PLANNER, _AGENT + _BRIDGE,
               "P_com[k][n] [W], row-major; layout [uav, slot, plan id]: the third dimension's "
               "label is the plan's identity, `plan /planner <sec>.<nanosec>`"),
@@ -177,6 +180,10 @@ INTERFACE: tuple[TopicSpec, ...] = (
               "wall-clock start; the oldest claim flies (ros/claims.py)"),
     TopicSpec(REPLAN, "std_srvs/srv/Trigger", "", _PLANNER, (),
               "solve again with the current parameters"),
+    TopicSpec(NEXT_SORTIE, "std_srvs/srv/Trigger", "", _PLANNER, (),
+              "a survey (survey_file): the next sortie may go (the batteries changed); "
+              "refused, saying why, while a sortie flies, before the survey began, after its "
+              "last, or without survey_file"),
 )
 
 
