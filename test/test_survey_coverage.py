@@ -261,3 +261,23 @@ def test_report_refuses_a_survey_it_cannot_map_in_one_line(capsys, survey_bag, t
             "no survey file": "--survey: "}[case]
     assert_one_line(code, err, says)
     assert not out.exists()
+
+
+def test_samples_a_lossy_radio_delivered_late_still_place_each_slot_on_its_stretch():
+    """A radio lost slots 2-4's offload and rate: they arrived together 3 s late (Fast DDS
+    resends at its next heartbeat). Poses carry when they were taken; with the slot's length
+    each slot is still its own stretch of track, and each rate is the one sent with it."""
+    from uav_insar_planner.report.flown import slot_positions
+    v, n = 4.0, 6
+    poses = np.array([(t, 1.0, v * t, 50.0 + (t // 1.0)) for t in np.arange(0.0, n, 0.05)])
+    sent = np.arange(n, dtype=float)
+    received = np.where((sent >= 2) & (sent <= 4), 5.0, sent)  # bunched, in order
+    offloads = np.column_stack([received, np.arange(n), np.zeros(n), np.zeros(n),
+                                np.zeros(n), np.full(n, 3.0)])
+    rates = np.column_stack([received, np.full(n, 2e7)])
+    placed = slot_positions(offloads, rates, poses, 1e7, 1e4, 1.0, v * 1.0)
+    assert [key[2] for key in placed] == list(range(n))
+    for (_, _, slot), xz in placed.items():
+        assert xz is not None and xz[1] == pytest.approx(50.0 + slot), (slot, xz)
+    by_time = slot_positions(offloads, rates, poses, 1e7, 1e4, 1.0)  # without the length
+    assert by_time[(3, 1, 2)] is None or by_time[(3, 1, 2)][1] != pytest.approx(52.0)

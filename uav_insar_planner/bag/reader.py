@@ -5,8 +5,9 @@ ROS import: the message types come from the definitions stored in the bag.
 the suite's names (ros/topics.py; a namespace in front is allowed): the last `formation` and
 `formation/power` (the plan flown; a later plan replaces an earlier one), the planner's plan
 status and per-UAV statuses (`planner: uavK`) on `/diagnostics`, and per UAV k
-`uav{k}/achieved_rate`, `uav{k}/offload` and `uav{k}/pose`, each with its receive time [s]
-in the bag.
+`uav{k}/achieved_rate` and `uav{k}/offload`, each with its receive time [s] in the bag, and
+`uav{k}/pose` with its header stamp, when the position was taken (its receive time when the
+stamp is unset).
 """
 from __future__ import annotations
 
@@ -139,6 +140,7 @@ def _take(record: MissionRecord, rows: dict, name: str, k: int, t: float, msg) -
         data = list(msg.data)
         strip = data[4] if len(data) > 4 else -1.0  # an older agent's four fields: one pass
         rows.setdefault((name, k), []).append((t, *data[:4], strip))
-    elif name == "pose":
-        p = msg.pose.position
-        rows.setdefault((name, k), []).append((t, p.x, p.y, p.z))
+    elif name == "pose":  # when the position was taken (a lossy radio delivers some late)
+        p, stamp = msg.pose.position, msg.header.stamp
+        taken = stamp.sec + 1e-9 * stamp.nanosec
+        rows.setdefault((name, k), []).append((taken if taken > 0.0 else t, p.x, p.y, p.z))

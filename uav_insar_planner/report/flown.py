@@ -9,10 +9,12 @@ slot's start t_n) opens it, the UAV's next sample of the same pass closes it (th
 a pass: one slot duration later, the UAV's median). A pass is a run of samples of one strip
 with rising slot numbers: a strip flown again (its attempt 2) starts from slot 0 as a new
 pass. The slot's position is the mean (x, z) of the UAV's poses in [t_n, t_n+1) (the last
-slot's end included); it is unusable (None) without a pose there, without an achieved rate
-recorded within half a slot of t_n, or with that rate below R_min,k - tol (the checker's
-tolerance). Its sigma_h as flown is the planner's evaluation (evaluate.evaluate) of the
-formation with every flown UAV at its slot's position; NaN when a flown UAV's slot is
+slot's end included), or, given the slot's length, of its pass's poses on its stretch of
+track; it is unusable (None) without a pose there, without its achieved rate (the one sent
+with it: the same count of each, else the one recorded within half a slot of t_n), or with
+that rate below R_min,k - tol (the checker's tolerance). Its sigma_h as flown is the
+planner's evaluation (evaluate.evaluate) of the formation with every flown UAV at its slot's
+position; NaN when a flown UAV's slot is
 unusable or missing.
 """
 from __future__ import annotations
@@ -30,6 +32,9 @@ from uav_insar_planner.swarm import uav_name
 
 #: A slot as flown: (strip, attempt from 1, slot n); strip -1 for a single pass.
 SlotKey = tuple[int, int, int]
+# A sample a lossy radio lost is sent again at the writer's next heartbeat (3 s in Fast DDS):
+# a pass's poses are sought this far around its samples' arrival.
+RADIO_SLACK_S = 5.0
 
 
 @dataclass
@@ -169,29 +174,40 @@ def _passes(offloads: np.ndarray) -> list[tuple[int, int, np.ndarray]]:
 
 
 def slot_positions(offloads: np.ndarray, rates: np.ndarray, poses: np.ndarray,
-                   rate_min_bps: float, tol_bps: float, slot_s: float
-                   ) -> dict[SlotKey, tuple[float, float] | None]:
+                   rate_min_bps: float, tol_bps: float, slot_s: float,
+                   slot_m: float | None = None) -> dict[SlotKey, tuple[float, float] | None]:
     """One UAV's slots as flown (module docstring): its `offloads` (t, slot, power_w,
     energy_used_j, energy_left_j, strip) rows, `rates` (t, bit/s) and `poses` (t, x, y, z)
     rows, in time order; `slot_s` the slot duration when no pass shows two slots. Each slot's
-    mean (x, z), or None where unusable."""
+    mean (x, z), or None where unusable. With `slot_m` (v_y delta_t) a slot's poses are those
+    of its pass (RADIO_SLACK_S around its samples) on its own stretch of track, y in
+    [n slot_m, (n + 1) slot_m): what a lossy radio delivers late is still placed right."""
     passes = _passes(offloads) if len(offloads) else []
     gaps = np.concatenate([np.diff(offloads[rows, 0]) for _, _, rows in passes] or [[]])
     duration = float(np.median(gaps)) if len(gaps) else slot_s
+    by_order = len(rates) == len(offloads)  # one of each per slot, both reliable, in order
     out: dict[SlotKey, tuple[float, float] | None] = {}
     for strip, attempt, rows in passes:
         starts = offloads[rows, 0]
         ends = np.append(starts[1:], starts[-1] + duration)
+        during = ((poses[:, 0] >= starts[0] - RADIO_SLACK_S)
+                  & (poses[:, 0] <= ends[-1] + RADIO_SLACK_S))
         for j, (t0, t1) in enumerate(zip(starts, ends, strict=True)):
-            last = j == len(starts) - 1
-            on = (poses[:, 0] >= t0) & ((poses[:, 0] <= t1) if last else (poses[:, 0] < t1))
-            near = np.abs(rates[:, 0] - t0)
-            rate = (rates[int(np.argmin(near)), 1] if len(near) and near.min() <= 0.5 * duration
-                    else math.nan)
+            n = int(offloads[rows[j], 1])
+            if slot_m is not None:
+                on = during & (poses[:, 2] >= n * slot_m) & (poses[:, 2] < (n + 1) * slot_m)
+            else:
+                last = j == len(starts) - 1
+                on = (poses[:, 0] >= t0) & ((poses[:, 0] <= t1) if last else (poses[:, 0] < t1))
+            if by_order:
+                rate = rates[rows[j], 1]
+            else:
+                near = np.abs(rates[:, 0] - t0)
+                rate = (rates[int(np.argmin(near)), 1]
+                        if len(near) and near.min() <= 0.5 * duration else math.nan)
             usable = on.any() and rate >= rate_min_bps - tol_bps  # False for a NaN rate
-            key = (strip, attempt, int(offloads[rows[j], 1]))
-            out[key] = ((float(poses[on, 1].mean()), float(poses[on, 3].mean())) if usable
-                        else None)
+            out[(strip, attempt, n)] = ((float(poses[on, 1].mean()), float(poses[on, 3].mean()))
+                                        if usable else None)
     return out
 
 

@@ -167,7 +167,7 @@ def flown_by_strip(record: MissionRecord, p: Params) -> dict[int, list[tuple[int
     slots = {k: slot_positions(record.offloads.get(k, np.zeros((0, 6))),
                                record.rates.get(k, np.zeros((0, 2))),
                                record.poses.get(k, np.zeros((0, 4))), p.rate_min_bps[k], tol,
-                               p.slot_duration_s) for k in uavs}
+                               p.slot_duration_s, p.speed * p.slot_duration_s) for k in uavs}
     slots = {k: {key: q for key, q in flown.items() if key[0] >= 0}
              for k, flown in slots.items()}
     if not any(slots.values()):
