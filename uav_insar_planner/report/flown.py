@@ -32,9 +32,6 @@ from uav_insar_planner.swarm import uav_name
 
 #: A slot as flown: (strip, attempt from 1, slot n); strip -1 for a single pass.
 SlotKey = tuple[int, int, int]
-# A sample a lossy radio lost is sent again at the writer's next heartbeat (3 s in Fast DDS):
-# a pass's poses are sought this far around its samples' arrival.
-RADIO_SLACK_S = 5.0
 
 
 @dataclass
@@ -180,18 +177,23 @@ def slot_positions(offloads: np.ndarray, rates: np.ndarray, poses: np.ndarray,
     energy_used_j, energy_left_j, strip) rows, `rates` (t, bit/s) and `poses` (t, x, y, z)
     rows, in time order; `slot_s` the slot duration when no pass shows two slots. Each slot's
     mean (x, z), or None where unusable. With `slot_m` (v_y delta_t) a slot's poses are those
-    of its pass (RADIO_SLACK_S around its samples) on its own stretch of track, y in
-    [n slot_m, (n + 1) slot_m): what a lossy radio delivers late is still placed right."""
+    of its pass on its own stretch of track, y in [n slot_m, (n + 1) slot_m): taken after
+    the pass before was heard to end and before the next was heard to begin, whatever the
+    arrival of its own samples (a lossy radio delivers some in a burst, seconds late). Passes
+    are separated by their turns, in which no UAV is on a strip's stretch; only the return to
+    the entry of a strip flown again crosses it, on its line."""
     passes = _passes(offloads) if len(offloads) else []
     gaps = np.concatenate([np.diff(offloads[rows, 0]) for _, _, rows in passes] or [[]])
     duration = float(np.median(gaps)) if len(gaps) else slot_s
     by_order = len(rates) == len(offloads)  # one of each per slot, both reliable, in order
     out: dict[SlotKey, tuple[float, float] | None] = {}
-    for strip, attempt, rows in passes:
+    for i, (strip, attempt, rows) in enumerate(passes):
         starts = offloads[rows, 0]
         ends = np.append(starts[1:], starts[-1] + duration)
-        during = ((poses[:, 0] >= starts[0] - RADIO_SLACK_S)
-                  & (poses[:, 0] <= ends[-1] + RADIO_SLACK_S))
+        # its poses: after the pass before was heard to end, before the next was heard to begin
+        lo = offloads[passes[i - 1][2][-1], 0] + duration if i else -math.inf
+        hi = offloads[passes[i + 1][2][0], 0] if i + 1 < len(passes) else math.inf
+        during = (poses[:, 0] >= lo) & (poses[:, 0] < hi)
         for j, (t0, t1) in enumerate(zip(starts, ends, strict=True)):
             n = int(offloads[rows[j], 1])
             if slot_m is not None:
