@@ -104,7 +104,7 @@ def test_saturated_closed_loop_warns_then_replans_its_power(watcher):
     assert last - first == SATURATED_MISSES - 1
     # The missed slots are what the agent reported: below R_min, at P_max.
     for n in range(first, last + 1):
-        slot, power_w, _, _ = w.offloads[1][n]
+        slot, power_w, *_ = w.offloads[1][n]
         assert slot == n and power_w >= params.p_max_w * (1 - 1e-3)
         assert w.rates[1][n] < params.rate_min_bps[1]
     # Then a power re-plan, formation unchanged, uav1's slots from last + 1 only, within
