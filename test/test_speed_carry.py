@@ -133,3 +133,21 @@ def test_random_speed_orders_certify_the_cold_optimum(table1, seed):
         assert w.optimality_gap <= 1e-4 and c.optimality_gap <= 1e-4
         assert w.lower_bound_m <= c.sigma_h_m and c.lower_bound_m <= w.sigma_h_m
         assert w.sigma_h_m == pytest.approx(c.sigma_h_m, rel=1e-4)
+
+
+def test_a_front_up_past_the_turn_of_c11_starts_each_point_from_carried_bounds(table1):
+    """Table I at 3-4 m/s: each step restricts (P), its first boxes are the previous ones with
+    their bounds carried, and most of those close at the new optimum without a fresh bound;
+    the answers are the cold ones."""
+    state = new_warm_start("global")
+    for v in (3.0, 3.25, 3.5, 4.0):
+        sc = _problem(table1, v)
+        cold = solve(table1.replace(speed_mps=v))
+        if v > 3.0:
+            assert warm.restricts(state, sc)
+            _, bounds, _ = warm.speed_boxes(sc, state, _solved(table1, v).point, True)
+            assert np.mean(bounds >= cold.sigma_h_m * (1.0 - 5e-5)) > 0.8
+        hot = solve(table1.replace(speed_mps=v), warm_start=state)
+        assert state.used_leaves == (v > 3.0)
+        assert hot.sigma_h_m == pytest.approx(cold.sigma_h_m, rel=1e-4)
+        assert hot.lower_bound_m <= cold.sigma_h_m

@@ -83,13 +83,16 @@ from uav_insar_planner.solver.global_opt import slave_ranges
 from uav_insar_planner.solver.problem import Problem, disk_at_psi
 
 # The core (_moves): boxes at most FINE times the finest (relative to the domain's widths)
-# with bounds within NEAR of the least.
+# with bounds within NEAR (relative) of the least: about 5 500 boxes of Table I's flat
+# optimum at 1-2.5 m/s, whose finest are 5e-5 rad wide in the angles.
 FINE = 8.0
 NEAR = 3e-4
-# More boxes than these are not carried: in place (bounds carried at about the cost of a
-# bound afresh), or moved (every bound afresh). Table I's searches end with 3 000-4 000
-# boxes past 3 m/s, 9 000-10 400 at 1-2.25 m/s, and moved partitions grow by ~1 300 a step.
-CARRIED_MAX = 6000
+# More boxes than these are not carried to the next speed, which starts from the root's
+# split instead: in place (as LEAVES_MAX of warm.py for other sweeps), or moved (every bound
+# afresh; Table I's searches end with 9 000-10 400 boxes at 1-2.25 m/s, and a moved
+# partition keeps growing, by ~1 300 boxes a 0.25 m/s step: 12 000 and 10 000 took 1.1x and
+# 1.2x the time of 16 384 over the benchmark's front).
+CARRIED_MAX = 8192
 MOVED_MAX = 16384
 
 
