@@ -43,12 +43,22 @@ their gap is wide (19-21 % at e = 0.3 m, Table I), so a target the accuracy boun
 mostly reported uncertifiable (SpeedSearchError naming the gap) rather than answered.
 
 The solves of one search share one warm start (solver.new_warm_start, as a sweep's chain):
-nothing carried is trusted at the new speed (solver/global_opt/warm.py), so the order of the
-speeds only changes the route, not the certificate. It saves little here: v_y enters the
-objective, so a step in it is no restriction (warm.restricts): the incumbent and the boxes
-carry, every bound is computed afresh, and a cold solve at Table I bounds about six boxes.
-Measured on a 23-point front: warm 0.85 x cold, 271 vs 317 ms, median of 5
-(`python benchmarks/survey_speed_front.py`).
+nothing carried is used at the new speed unproven there (solver/global_opt/warm.py), so the
+order of the speeds only changes the route, not the certificate. What a speed step carries
+(solver/global_opt/speed_carry.py): the previous optimum, followed to the new speed; a step
+up past the speed where C11's disk stops growing (Table I: 2.82 m/s) restricts (P), so the
+previous proofs of infeasibility and box bounds hold as they are (warm.speed_restricts);
+where the optimum stays (its vertex at theta_max past 3 m/s), a step up or down carries the
+previous box bounds scaled by a factor rho_B proven box by box (sigma_h rises about 0.6 % a
+0.25 m/s step, so the bounds as they are would close little); where it slides with v (the
+flat optimum below 2.75 m/s), the previous boxes move with it, each bounded afresh.
+Measured on the 23-point front (median of 3 rounds, load average 1.4-5.6 on 2 cores, six
+runs): warm 0.60-0.67 x cold, 191-222 vs 310-365 ms
+(`python benchmarks/survey_speed_front.py --repeats 3`); the 0.5 the issue asks is not
+reached: at 1-2.5 m/s the certificate of a flat optimum needs some 10 000 boxes at the new
+speed whatever the start (carrying a bound costs a third to a whole fresh one), and a
+failed follow (an active set that changes: 1, 2.75, 4.75 m/s) costs its 3 ms on top of the
+cold route.
 """
 from __future__ import annotations
 

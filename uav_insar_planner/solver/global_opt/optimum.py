@@ -113,21 +113,13 @@ def solve_global(p: Params, scheme: str, objective: str,
         return _feasible(p, scheme, sc, value, point, lower, "", (
             f"chain packing bound (solver/global_opt/chain_packing.py) over {intervals} "
             "master-range intervals, all closed"), intervals)
-    start = boxes = box_lb = angles = None
+    start = boxes = box_lb = angles = held = None
     partial = False
     if warm_start is not None:
-        restricted = warm.restricts(warm_start, sc)
-        held = warm.held_here(warm_start, sc)
-        if not restricted:
-            warm.forget_refuted(warm_start)
-        if restricted and warm_start.infeasible:
-            return _no_point(p, scheme, sc, branch_bound.SearchResult(
-                math.inf, None, math.inf, 0, True), warm_start, held, carried=True)
-        start = warm_incumbent(p, sc, warm_start, restricted)
-        boxes, box_lb = warm.start_boxes(sc, warm_start, restricted)
-        partial = restricted and boxes is not None  # start_boxes left out the empty ones
-        angles = warm_start.angles if restricted else None
-        warm_start.used_incumbent, warm_start.used_leaves = start is not None, boxes is not None
+        route = _warm_route(p, scheme, sc, warm_start)
+        if isinstance(route, SolverResult):
+            return route
+        start, boxes, box_lb, angles, partial, held = route
     landed = start is not None and start[2]
     fallback = None
     if start is None and boxes is None:  # cold: the chain's, when SLSQP or the KKT check landed it
@@ -145,8 +137,7 @@ def solve_global(p: Params, scheme: str, objective: str,
                               box_lb=box_lb, keep_leaves=warm_start is not None, landed=landed,
                               angles=angles, fallback=fallback)
     if res.point is None and (chain is None or chain[1] is None):
-        return _no_point(p, scheme, sc, res, warm_start,
-                         None if warm_start is None else held, partial=partial)
+        return _no_point(p, scheme, sc, res, warm_start, held, partial=partial)
     if start is not None and res.point is start[1]:
         res = replace(res, refined=True)  # the refined warm point stood: no second SLSQP
     value, point, lower = _search_point(sc, res, chain)
@@ -160,6 +151,33 @@ def solve_global(p: Params, scheme: str, objective: str,
         f"branch and bound over ({dims}) boxes with monotone interval bounds; "
         f"{res.nodes} boxes, " + ("all closed" if res.exhausted else f"{res.stopped} reached")),
         res.nodes)
+
+
+def _warm_route(p: Params, scheme: str, sc: Problem, state: warm.WarmStart):
+    """What the sweep's warm start gives this search (warm.py): (incumbent, boxes, their
+    carried bounds, the slaves' feasible angles, partial, the relaxations held), or the answer
+    itself where the previous point's proof of infeasibility holds here. A step that restricts
+    carries bounds; a step in the speed alone carries them scaled (warm.speed_boxes)."""
+    restricted = warm.restricts(state, sc)
+    held = warm.held_here(state, sc, restricted)
+    if not restricted:
+        warm.forget_refuted(state)
+    if restricted and state.infeasible:
+        return _no_point(p, scheme, sc, branch_bound.SearchResult(
+            math.inf, None, math.inf, 0, True), state, held, carried=True)
+    speed = warm.speed_step(state, sc)
+    start = warm_incumbent(p, sc, state, restricted, followed_only=speed)
+    if not speed:
+        boxes, box_lb = warm.start_boxes(sc, state, restricted)
+        partial = restricted and boxes is not None  # start_boxes left out the empty ones
+    elif start is not None:  # without it, the root's split: the point may be infeasible
+        boxes, box_lb, partial = warm.speed_boxes(sc, state, start[1], restricted)
+    else:
+        boxes = box_lb = None
+        partial = False
+    angles = state.angles if restricted else None
+    state.used_incumbent, state.used_leaves = start is not None, boxes is not None
+    return start, boxes, box_lb, angles, partial, held
 
 
 def _chain_first(sc: Problem, time_budget_s: float | None):
@@ -232,7 +250,8 @@ def _kept(sc: Problem, point):
     return (value, got) if value <= local_refine.value_at(sc, point) else None
 
 
-def warm_incumbent(p: Params, sc: Problem, state: warm.WarmStart, restricted: bool = False):
+def warm_incumbent(p: Params, sc: Problem, state: warm.WarmStart, restricted: bool = False,
+                   followed_only: bool = False):
     """(value, point, landed) of the previous sweep point's optimum carried to this point's
     parameters, or None; landed: a local optimum here (the search then tries fewer box
     centres, branch_bound.search). Its vertex is followed to the new parameters first
@@ -242,7 +261,9 @@ def warm_incumbent(p: Params, sc: Problem, state: warm.WarmStart, restricted: bo
     (local_refine) takes it to its local optimum here, since box centres may miss the new
     optimum by a percent where the feasible set is thin. Only a point the ray model accepts and
     whose formation passes the independent checker (evaluate.py) is returned. (SLSQP from a
-    point the ray model rejects was tried: it fails slowly where the new point is infeasible.)"""
+    point the ray model rejects was tried: it fails slowly where the new point is infeasible.)
+    followed_only: the kept or followed point or None (a speed step: Table I's front at 1 m/s
+    spent 35 ms in that SLSQP, the cold start's chain 0.7 ms)."""
     if state.point is None or len(state.point[1]) != len(sc.slaves):
         return None
     followed = _kept(sc, state.point) if restricted else None
@@ -250,6 +271,8 @@ def warm_incumbent(p: Params, sc: Problem, state: warm.WarmStart, restricted: bo
         followed = local_refine.follow(state.problem, sc, state.point)
     if followed is not None:
         (value, point), landed = followed, True
+    elif followed_only:
+        return None
     else:
         r0 = float(np.clip(state.point[0], sc.r0_lo, sc.r0_hi))
         th = np.clip(np.asarray(state.point[1], dtype=float), sc.th_lo, sc.th_hi)
@@ -322,7 +345,7 @@ def _no_point(p: Params, scheme: str, sc: Problem, res: branch_bound.SearchResul
                            message="no feasible point found and infeasibility not proven "
                            f"within {res.nodes} boxes ({res.stopped}); " + together)
     how = ("the previous sweep point's proof holds: this point only tightens its "
-           + "/".join(warm.TIGHTER_AS_THEY_GROW) + ", where ") if carried else ""
+           + "/".join((*warm.TIGHTER_AS_THEY_GROW, warm.SPEED)) + ", where ") if carried else ""
     return _nan_result(p, res.nodes, blocking=block, lower_bound=math.inf,
                        certificate="infeasible: " + how + "every box of ("
                        + ", ".join(["r0"] + [f"theta{k}" for k in sc.slaves])

@@ -98,7 +98,7 @@ def _nearest(v, a, b):
     return np.clip(v, a, b)
 
 
-def _abs_sin_range(dlo, dhi):
+def abs_sin_range(dlo, dhi):
     """(min, max) of |sin(delta)| over [dlo, dhi] with |delta| < pi."""
     s_lo, s_hi = np.abs(np.sin(dlo)), np.abs(np.sin(dhi))
     smin = np.where((dlo <= 0.0) & (dhi >= 0.0), 0.0, np.minimum(s_lo, s_hi))
@@ -137,7 +137,7 @@ def slave_box(sc: Problem, k: int | tuple[int, ...], r0a, r0b, ta, tb):
     if sc.on("C5"):
         lo = np.maximum(lo, p.swath_min * cos_hi / p.beamwidth)
     up = np.minimum(up, rays.snr_limit(sc, r0a))
-    smin, smax = _abs_sin_range(ta - sc.th0, tb - sc.th0)
+    smin, smax = abs_sin_range(ta - sc.th0, tb - sc.th0)
     with np.errstate(divide="ignore", invalid="ignore"):
         up = np.minimum(up, np.where(smin > 0, b_lim / smin, math.inf))
     if sc.on("C4"):
