@@ -55,7 +55,9 @@ def test_plan_identity_is_the_same_on_both_topics_and_changes_on_replan(watcher,
     client = w.node.create_client(Trigger, "/planner/replan")
     assert client.wait_for_service(timeout_sec=10.0)
     future = client.call_async(Trigger.Request())
-    assert w.spin_until(lambda: len(w.formations) >= 2 and len(w.powers) >= 2, 30.0)
+    # (the new plan's topics may overtake the service's answer: other writers, no order)
+    assert w.spin_until(lambda: future.done() and len(w.formations) >= 2
+                        and len(w.powers) >= 2, 30.0)
     assert future.result().success
     stamps, ids = w.plan_ids()
     assert [i.planner for i in ids] == ["/planner", "/planner"]
