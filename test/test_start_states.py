@@ -320,6 +320,7 @@ def test_capture_deadline_leaves_out_the_uav_not_captured_in_one_line():
     lost = [a for a in actions if isinstance(a, DeclareLost)]
     assert [a.k for a in lost] == [2]
     assert "5905.39 m from its entry" in lost[0].why and "capture_timeout_s 30" in lost[0].why
+    assert lost[0].by == "the pass start"  # (not its bridge's words: the planner's finding)
     (level, text), = _logs(actions)
     assert level == "warning" and text.startswith("the pass start leaves out uav2 (not captured")
     assert "uav0" not in text and "uav1" not in text and PLAN.label in text

@@ -155,7 +155,7 @@ class FormationStart:
             elif isinstance(action, Log):
                 log.info(action.text)
             elif isinstance(action, DeclareLost):
-                self._declare_lost(action.k, action.why)
+                self._declare_lost(action.k, f"{action.by}: {action.why}")
 
     def _publish(self, msg: Header, start_s: float) -> None:
         """Send a start now, and again every REPEAT_PERIOD_S (module doc)."""

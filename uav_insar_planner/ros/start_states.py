@@ -20,9 +20,8 @@ it what it heard and executes what it returns, so every decision is testable wit
                                                     later, while one has not by the instant;
                                                   AWAITING_CAPTURE: as STARTED
 
-Why these four: a start exists or not (`clock`), and a resumed start from the hover is not
-safe until every bridge has it (`awaited`; ros/start_confirmations.py): the states are the
-combinations that can occur, and each step reads one of them, never a set of loose fields.
+Why these four: a start exists or not (`clock`), and a resumed start from the hover is not safe
+until every bridge has it (`awaited`, ros/start_confirmations.py): the combinations that occur.
 
 A plan with the same start line as the running pass (`same_line`, a re-plan during the pass)
 and the same survey strip (track/leg.py; every strip starts at y = 0 of its own frame) keeps
@@ -195,6 +194,7 @@ class Log:
 class DeclareLost:
     k: int
     why: str
+    by: str = "MAVLink bridge"  # who found it: its bridge (`behind`), or the pass start
 
 
 Action = Publish | Log | DeclareLost
@@ -293,14 +293,14 @@ def _await_capture(state: StartState, seen: Observed, starts: dict[int, Vec3], n
 def _capture_overdue(state: StartState, seen: Observed, entries: dict[int, Vec3], now: Now
                      ) -> tuple[StartState, tuple[Action, ...]]:
     """capture_timeout_s passed: the UAVs not captured are lost, in one line (module doc)."""
-    late = {k: f"not captured after capture_timeout_s {seen.capture_timeout_s:g} s: {w}"
-            for k, w in why_not(entries, seen.poses, now.mono, seen.capture_radius_m,
-                                state.bridge_speeds, state.speed_mps).items()}
-    text = ", ".join(f"{uav_name(k)} ({w})" for k, w in late.items())
+    late = [DeclareLost(k, f"not captured after capture_timeout_s {seen.capture_timeout_s:g} s: "
+                           f"{w}", "the pass start") for k, w in why_not(entries, seen.poses,
+            now.mono, seen.capture_radius_m, state.bridge_speeds, state.speed_mps).items()]
+    text = ", ".join(f"{uav_name(a.k)} ({a.why})" for a in late)
     # (the deadline starts again: a re-plan that keeps one out is awaited afresh)
     return replace(state, capture_since=now.mono, wait_told=now.mono), (Log("warning", (
         f"the pass start leaves out {text}: declared lost, the others fly without it once "
-        f"re-planned ({state.plan})")), *(DeclareLost(k, w) for k, w in late.items()))
+        f"re-planned ({state.plan})")), *late)
 
 
 def _confirm(state: StartState, starts: dict[int, Vec3], now: Now

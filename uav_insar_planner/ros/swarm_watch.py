@@ -132,9 +132,10 @@ class SwarmWatch:
                     self._react(lost)
 
     def declare_lost(self, k: int, why: str) -> None:
-        """UAV k cannot go on with the swarm (its bridge says why): lost, as by silence."""
+        """UAV k cannot go on with the swarm (`why`: who says so, and why): lost, as by
+        silence."""
         with self._lock:
-            lost = self.triggers.bridge_lost(k, time.monotonic(), why)
+            lost = self.triggers.declared_lost(k, time.monotonic(), why)
         if lost is not None:
             self._react(lost)
 
