@@ -297,3 +297,57 @@ def test_a_bridge_flying_another_speed_is_named_while_the_capture_waits():
         f"the pass start waits for uav1 ({gap:.2f} m from its entry; its bridge flies "
         f"speed_mps 2, the plan 4.3 m/s, so its entry is {gap:.2f} m from the one awaited): "
         f"capture_radius_m 1 ({PLAN.label})"))]
+
+
+def _with_deadline(seen: Observed, timeout_s: float) -> Observed:
+    return Observed(seen.poses, seen.speeds, seen.reports, seen.lost, seen.capture_radius_m,
+                    seen.start_delay_s, seen.start_confirm_wait_s, seen.bridged, timeout_s)
+
+
+def test_capture_deadline_leaves_out_the_uav_not_captured_in_one_line():
+    """capture_timeout_s after a bridge was first seen, the UAV far from its entry is declared
+    lost (its distance said) in one line; the others are not, and the deadline starts again."""
+    timeout = 30.0
+    state = _planned()
+    far = _waiting({0: 0.0, 1: 0.2, 2: -5905.39})
+    state, actions = step(state, _with_deadline(_seen(5.0, far), timeout), _now(5.0))
+    assert state.capture_since == 5.0 and state.phase is Phase.AWAITING_CAPTURE
+    t = 5.0 + timeout  # not yet: the deadline is a strict "after"
+    state, actions = step(state, _with_deadline(_seen(t, far), timeout), _now(t))
+    assert not [a for a in actions if isinstance(a, DeclareLost)]
+    t += 0.1
+    state, actions = step(state, _with_deadline(_seen(t, far), timeout), _now(t))
+    lost = [a for a in actions if isinstance(a, DeclareLost)]
+    assert [a.k for a in lost] == [2]
+    assert "5905.39 m from its entry" in lost[0].why and "capture_timeout_s 30" in lost[0].why
+    assert lost[0].by == "the pass start"  # (not its bridge's words: the planner's finding)
+    (level, text), = _logs(actions)
+    assert level == "warning" and text.startswith("the pass start leaves out uav2 (not captured")
+    assert "uav0" not in text and "uav1" not in text and PLAN.label in text
+    assert state.phase is Phase.AWAITING_CAPTURE and state.capture_since == t
+    # lost now (the swarm watch's), the others captured: the pass starts without it
+    t += 0.1
+    state, actions = step(state, _with_deadline(_seen(t, far, lost=frozenset({2})), timeout),
+                          _now(t))
+    assert state.phase is Phase.STARTED and isinstance(actions[0], Publish)
+
+
+def test_capture_deadline_counts_from_the_first_bridge_and_zero_waits_for_ever():
+    """No bridge seen (self-flown agents): no deadline; capture_timeout_s 0: none either."""
+    state = _planned()
+    silent = _waiting({0: 0.0, 1: 0.0})  # uav2 never heard
+    for t in (10.0, 500.0):
+        state, actions = step(state, _with_deadline(_seen(t, silent, bridged=False), 30.0),
+                              _now(t))
+        assert actions == () and state.capture_since is None
+    state, actions = step(state, _with_deadline(_seen(501.0, silent), 30.0), _now(501.0))
+    assert state.capture_since == 501.0
+    assert not [a for a in actions if isinstance(a, DeclareLost)]
+    t = 540.0
+    state, actions = step(state, _with_deadline(_seen(t, silent), 30.0), _now(t))
+    assert [(a.k, a.why) for a in actions if isinstance(a, DeclareLost)] == [
+        (2, "not captured after capture_timeout_s 30 s: no uav2/mavlink/pose yet")]
+    forever = _planned()
+    for t in (1.0, 3000.0):
+        forever, actions = step(forever, _with_deadline(_seen(t, silent), 0.0), _now(t))
+        assert not [a for a in actions if isinstance(a, DeclareLost)]

@@ -31,6 +31,16 @@ def bridge_status_uav(name: str) -> int | None:
     """The UAV a `bridge_status_name` names; None for any other status."""
     rest = name[len(BRIDGE_STATUS_PREFIX):] if name.startswith(BRIDGE_STATUS_PREFIX) else ""
     return uav_index(rest) if rest else None
+
+
+def bridge_cannot_fly(values: dict[str, str], message: str) -> str:
+    """Why a bridge status (its values by key, its message) says its UAV cannot fly the pass
+    any more, "" when it does not: the link `lost`, or `out_of_control` (a failsafe, a pilot:
+    mavlink/control_states.py). The one rule the planner's swarm watch declares a UAV lost
+    by from its bridge (`behind`, a hold the swarm may resume from, is ros/start_states.py's)."""
+    if values.get("out_of_control"):
+        return values["out_of_control"]
+    return message if values.get("link") == "lost" else ""
 PLAN_STATUS_NAME = "planner: plan"
 POSITION_ERROR_KEY = "position_error_m"  # a uav_status value: |(x, z) - (x_k, z_k)| [m]
 

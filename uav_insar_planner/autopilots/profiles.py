@@ -102,12 +102,23 @@ class AutopilotProfile:
     mav_autopilot: int
     #: a mission file waits for a UTC time (NAV_DELAY); else it holds until MISSION_START
     mission_waits_for_utc: bool
+    #: the main mode whose sub modes a ground station names AUTO.<sub> (PX4's AUTO), if any
+    auto_main_mode: int | None = None
 
     def __post_init__(self) -> None:
         order = [ARMING_STEPS.index(step) for step in self.arming_steps]
         if order != sorted(order) or "mode" not in self.arming_steps:
             raise ValueError(f"arming_steps: {self.arming_steps!r} is not allowed; expected "
                              f"a subsequence of {ARMING_STEPS} with 'mode'")
+
+    def mode_text(self, custom_mode: int, generic: str) -> str:
+        """A heartbeat's mode as the autopilot's own messages and ground station name it
+        (`generic`: pymavlink's name, "LOITER" for PX4's AUTO.LOITER): AUTO.LOITER, AUTO.RTL,
+        AUTO.LAND (PX4's blind land) on PX4; `generic` otherwise."""
+        main = (custom_mode & PX4_MAIN_MODE_MASK) >> 16
+        if self.auto_main_mode is None or custom_mode < 0 or main != self.auto_main_mode:
+            return generic
+        return "AUTO." + generic
 
     @property
     def takes_off(self) -> bool:
@@ -129,7 +140,8 @@ PROFILES = {
         arming_steps=("wait for position", "stream setpoints", "mode", "arm"),
         # PX4 wants > 1 s of setpoints before OFFBOARD; the margin is for jitter
         stream_before_flight_s=1.2, setpoints_in_flight_only=False,
-        mav_autopilot=12, mission_waits_for_utc=False),  # MAV_AUTOPILOT_PX4
+        mav_autopilot=12, mission_waits_for_utc=False,  # MAV_AUTOPILOT_PX4
+        auto_main_mode=PX4_MAIN_MODE_AUTO),
 }
 AUTOPILOTS = tuple(PROFILES)
 

@@ -13,6 +13,10 @@ commands it asks for, under its lock. Each point's detail is in the module named
   and is reported `behind` (under pass_start "capture" a new plan resumes the pass where the
   swarm holds).
 - Optional arm_and_takeoff (`sequencer`), one sequence per UAV a plan flies.
+- A vehicle that leaves our control (`control_states`: a failsafe, a pilot's mode change, a
+  disarm, any mode no order of ours accounts for) once the bridge has it: said once
+  (`out of our control: <mode>`, its phase and `out_of_control`), and never fought: no
+  setpoints, no mode order, no arming sequence for it again.
 - Two planned UAVs closer than `min_separation_m` are warned about
   (`track.formation.separation`).
 - A survey (`track.leg`): each strip a pass of its own, in the strip's frame placed on this
@@ -31,6 +35,8 @@ from dataclasses import replace
 
 from uav_insar_planner.autopilots.profiles import profile
 from uav_insar_planner.mavlink.config import BridgeConfig
+from uav_insar_planner.mavlink.control_states import Heard, UavControl
+from uav_insar_planner.mavlink.control_states import step as control_step
 from uav_insar_planner.mavlink.holds import REJOIN_S, Holding
 from uav_insar_planner.mavlink.mode_orders import ModeOrder
 from uav_insar_planner.mavlink.report import Emit, VehicleStatus, vehicle_status
@@ -74,6 +80,7 @@ class FlightState:
         self.sequences: dict[int, ArmingSequence] = {}  # per UAV, once arm_and_takeoff ran
         self.holding = Holding(self.autopilot, config.gcs_timeout_s,
                                [v.uav for v in self.vehicles], emit)
+        self.control = {v.uav: UavControl() for v in self.vehicles}  # `control_states`
 
     def set_formation(self, poses: Sequence[Vec3 | None], now: float,
                       leg: SurveyLeg | None = None) -> None:
@@ -91,7 +98,8 @@ class FlightState:
             self._emit(-1, "warn", text)
         if self.config.arm_and_takeoff:
             for v in self.vehicles:
-                if clean[v.uav] is not None and v.uav not in self.sequences:
+                if (clean[v.uav] is not None and v.uav not in self.sequences
+                        and not self.left(v)):  # (never armed again: it is not ours)
                     self.sequences[v.uav] = self._new_sequence(v)
 
     def _new_leg(self, leg: SurveyLeg | None) -> None:
@@ -101,6 +109,9 @@ class FlightState:
             self.sequences.clear()
             self.returning.release()
             self._landed.clear()
+            # landed and disarmed: ours again once its arming sequence is done (one that
+            # left stays out: the planner lost it for the mission)
+            self.control = {k: c if c.left else UavControl() for k, c in self.control.items()}
         self.leg = leg
         self.frame = self.home if leg is None else leg.placed(self.home)
         duration = (self.config.track_duration_s if leg is None
@@ -154,6 +165,7 @@ class FlightState:
         """The clock moved on: the ground's silence, the arming sequences, a sortie's end."""
         self.holding.check(now)
         self._sortie_over(now)
+        self._watch_control()
         for v in self.vehicles:
             if self.returning.engaged(v.uav) and not v.armed and v.uav not in self._landed:
                 self._landed.add(v.uav)
@@ -170,7 +182,32 @@ class FlightState:
             self._emit(-1, "info", f"formation established; flying the track at "
                                    f"{self.config.speed_mps:g} m/s")
 
+    def left(self, v: WatchedVehicle) -> bool:
+        """Whether `v` left our control (`control_states`): nothing more goes to it."""
+        return self.control[v.uav].left
+
+    def _watch_control(self) -> None:
+        """Each linked vehicle's latest heartbeat through `control_states.step`."""
+        for v in self.vehicles:
+            if not v.linked or self.left(v):
+                continue
+            seq = self.sequences.get(v.uav)
+            flown = self.pass_.start_pose(v.uav) is not None
+            taken = (seq is not None and not seq.active and not seq.failed
+                     if self.config.arm_and_takeoff else flown)
+            excused = not flown or self.returning.engaged(v.uav) or any(
+                order.engaged(v.uav) and (not order.settled(v.uav) or order.reached(v))
+                for order in (self.holding.hold, self.holding.resume))
+            heard = Heard(self.autopilot.mode_text(v.custom_mode, v.mode),
+                          self.autopilot.flight.shown_by(v.custom_mode), v.armed, v.airborne,
+                          taken, excused)
+            self.control[v.uav], tells = control_step(self.control[v.uav], heard)
+            for tell in tells:
+                self._emit(v.uav, tell.level, f"sysid {v.sysid} {tell.text}")
+
     def order_due(self, v: WatchedVehicle, now: float) -> ModeOrder | None:
+        if self.left(v):
+            return None  # no order fights whoever took it
         if self.returning.engaged(v.uav):
             return self.returning if self.returning.due(v, now) else None
         return self.holding.order_due(v, now)
@@ -180,7 +217,8 @@ class FlightState:
         target = governed(self._catch_up, v.uav, self.pass_.target(v.uav, now), now)
         waits = self.autopilot.setpoints_in_flight_only and (
             self.running(v) is not None or not self.autopilot.flight.shown_by(v.custom_mode))
-        if target is None or waits or self.holding.stopped(v) or self.returning.engaged(v.uav):
+        if (target is None or waits or self.holding.stopped(v) or self.returning.engaged(v.uav)
+                or self.left(v)):
             return None
         return target
 
@@ -189,9 +227,10 @@ class FlightState:
                                 self.sequences.get(v.uav), self._separation[v.uav])
         held = ("landed" if v.uav in self._landed else "returning"
                 if self.returning.engaged(v.uav) else self.holding.phase(v))
-        return replace(status, phase=held or status.phase, pass_plan=self._start_label,
+        left = self.control[v.uav].phase()
+        return replace(status, phase=left or held or status.phase, pass_plan=self._start_label,
                        pass_start_s=None if self.pass_.sent is None else self.pass_.sent.start_s,
-                       behind=self.holding.behind.get(v.uav, ""))
+                       behind=self.holding.behind.get(v.uav, ""), out_of_control=left)
 
     def _rejoin(self, now: float, why: str, here: bool = False, late: bool = False) -> None:
         """Held vehicles near their targets rejoin (`holds.Holding.rejoin`); `here`: the clock

@@ -48,6 +48,11 @@ class ModeOrder:
     def engaged(self, uav: int) -> bool:
         return uav in self._sent
 
+    def settled(self, uav: int) -> bool:
+        """Whether engaged `uav` showed the mode since (the order is done: a mode after it is
+        a pilot's or the autopilot's, not ours; `control_states`)."""
+        return uav in self._done
+
     def engage(self, uavs: Iterable[int]) -> None:
         """Order `uavs` into the mode (again: fresh attempts)."""
         for uav in uavs:

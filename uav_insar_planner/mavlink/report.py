@@ -53,6 +53,8 @@ class VehicleStatus:
     # that this bridge flies the planner's latest start (ros/start_confirmations.py)
     pass_start_s: float | None = None
     behind: str = ""  # held and too far behind its target to rejoin: why ("" otherwise)
+    # left our control (control_states): `out of our control: <mode>` ("" otherwise)
+    out_of_control: str = ""
 
 
 def vehicle_status(v: WatchedVehicle, now: float, pass_: PassTrajectory, frame: TrackFrame,

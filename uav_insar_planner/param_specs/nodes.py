@@ -88,6 +88,11 @@ PLANNER_SPECS = (
               "once every flown UAV's bridge confirmed its start on /diagnostics, moved later "
               "meanwhile, and after this long without them (then left behind); 0: not waited "
               "for [s]", 0.0, 600.0),
+    ParamSpec("capture_timeout_s", float, 120.0, "the pass start waits this long [s] for every "
+              "flown UAV to be captured at its entry (counted from the first bridge seen "
+              "flying the plan); then the ones not captured are declared lost, one line naming "
+              "each and why, and the others fly without them once re-planned; 0: wait for ever",
+              0.0, 3600.0),
     ParamSpec("survey_file", str, "", "fly this survey (the survey.json of `uav-insar survey "
               "--out`) strip after strip, sortie after sortie (~/next_sortie); its speed must be "
               "speed_mps; empty: one pass"),

@@ -128,9 +128,14 @@ class ReplanTriggers:
 
     def bridge_lost(self, k: int, now: float, text: str) -> Lost | None:
         """The bridge reports UAV k lost; the new Lost, or None if it already was."""
+        return self.declared_lost(k, now, f"MAVLink bridge: {text}")
+
+    def declared_lost(self, k: int, now: float, why: str) -> Lost | None:
+        """UAV k lost for `why` (said whole: who found it and what); the new Lost, or None if
+        it already was."""
         if k in self.lost or not 0 <= k < len(self.uavs):
             return None
-        return self._declare(k, now, f"MAVLink bridge: {text}")
+        return self._declare(k, now, why)
 
     # --- what follows ----------------------------------------------------------------------
     def check(self, now: float, timeout_s: float) -> list[Lost]:

@@ -10,6 +10,11 @@ within `capture_radius_m` (planner parameter, as the bridge's) of its start poin
 starts its pass at that instant; the hosts' clocks must agree (GNSS time, chrony), as an
 offset dt puts a UAV v_y dt along track.
 
+A swarm never waits for ever: `capture_timeout_s` (planner parameter, 0: no deadline) after a
+bridge was first seen flying the plan, the UAVs not captured yet are declared lost
+(`declare_lost`), one line naming each and why (how far from its entry, or silent); the swarm
+watch re-plans without them, and the re-plan's start is captured as any other.
+
 A plan with the same y_start as the started one (a re-plan during the pass) gets the same
 instant again under its own identity, so the pass continues; one with another y_start (or the
 hold plan, nothing flown) waits for a new capture. Radius 0 starts at the first check.
@@ -82,7 +87,8 @@ SPEED_WINDOW_S = 1.0  # along-track speed from the poses of the last second
 
 class FormationStart:
     """See the module docstring. `lost()` is the set of UAVs the swarm watch declared lost;
-    `node` has the parameters capture_radius_m, start_delay_s and start_confirm_wait_s."""
+    `node` has the parameters capture_radius_m, start_delay_s, start_confirm_wait_s and
+    capture_timeout_s."""
 
     def __init__(self, node: Node, lost: Callable[[], set[int]],
                  declare_lost: Callable[[int, str], None]) -> None:
@@ -131,7 +137,8 @@ class FormationStart:
                 event = Observed(
                     dict(self._poses), self._speeds(now.mono), tuple(self._reports), lost,
                     float(param("capture_radius_m").value), float(param("start_delay_s").value),
-                    float(param("start_confirm_wait_s").value), self._bridged(starts))
+                    float(param("start_confirm_wait_s").value), self._bridged(starts),
+                    float(param("capture_timeout_s").value))
                 self._reports.clear()
             self._state, actions = step(self._state, event, now)
             if self._state.clock is None:
@@ -148,7 +155,7 @@ class FormationStart:
             elif isinstance(action, Log):
                 log.info(action.text)
             elif isinstance(action, DeclareLost):
-                self._declare_lost(action.k, action.why)
+                self._declare_lost(action.k, f"{action.by}: {action.why}")
 
     def _publish(self, msg: Header, start_s: float) -> None:
         """Send a start now, and again every REPEAT_PERIOD_S (module doc)."""

@@ -48,8 +48,11 @@ Publishes   uav{K}/mavlink/claim (std_msgs/String, latched) per UAV flown (ros/c
             I/O thread dead or sequence failed; WARN: not linked, or planned closer than
             min_separation_m to another UAV, or holding because the ground station fell
             silent (phase `holding (LOITER): ...`; value `gcs`: the ground link); else
-            OK. When the I/O thread dies the node publishes that ERROR once, logs why and
-            exits with code 1 (exit_codes.EXIT_CRASH).
+            OK. A vehicle that left our control (a failsafe, a pilot's mode change, a disarm,
+            mavlink/control_states.py): WARN, phase and value `out_of_control` `out of our
+            control: <mode>` (the planner's swarm watch re-plans without it), published at
+            once, not at the next second. When the I/O thread dies the node publishes that
+            ERROR once, logs why and exits with code 1 (exit_codes.EXIT_CRASH).
 """
 from __future__ import annotations
 
@@ -111,6 +114,7 @@ class MavlinkBridgeNode(Node):
             ns, topics.mavlink_pose(k)), topics.DEPTH) for k in uavs}
         self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, topics.DEPTH)
         self._last_pose_age: dict[int, float | None] = dict.fromkeys(uavs)
+        self._out_of_control: dict[int, str] = {}  # as last published
         self.gcs = GcsLink(self, self.bridge.gcs_heard, ns, lambda: self._gate.current)
         self._gate = PlanGate(self, self._on_plan, swarm_ns=ns,  # validated, one at a time
                               on_message=self.gcs.heard)
@@ -174,7 +178,11 @@ class MavlinkBridgeNode(Node):
     def _publish_poses(self) -> None:
         self._log_events()
         stamp = self.get_clock().now().to_msg()
-        for s in self.bridge.status():
+        statuses = self.bridge.status()
+        if {s.uav: s.out_of_control for s in statuses if s.out_of_control} != \
+                self._out_of_control:  # a vehicle taken from us is said at once
+            self._publish_diagnostics()
+        for s in statuses:
             age = s.position_age_s
             fresh = age is not None and (self._last_pose_age[s.uav] is None
                                          or age < self._last_pose_age[s.uav])
@@ -195,8 +203,9 @@ class MavlinkBridgeNode(Node):
         self._gcs_state = self.bridge.gcs_state()
         msg = DiagnosticArray()
         msg.header.stamp = self.get_clock().now().to_msg()
-        msg.status = [self._vehicle_status(s, stats[s.connection])
-                      for s in self.bridge.status()]
+        statuses = self.bridge.status()
+        msg.status = [self._vehicle_status(s, stats[s.connection]) for s in statuses]
+        self._out_of_control = {s.uav: s.out_of_control for s in statuses if s.out_of_control}
         self._diag_pub.publish(msg)
         if self.bridge.failure is not None:  # said ERROR once: now leave, never a zombie
             self._publish_poses()  # (drains the event that says why)
@@ -220,7 +229,7 @@ class MavlinkBridgeNode(Node):
             text += f"; planned too close: {s.separation}"
         if s.behind:
             text += f"; cannot keep the pass of {s.pass_plan or 'its plan'}"
-        if s.phase.startswith("holding") and level == DiagnosticStatus.OK:
+        if (s.phase.startswith("holding") or s.out_of_control) and level == DiagnosticStatus.OK:
             level = DiagnosticStatus.WARN
         error = (math.dist(s.position_track, s.target_track)
                  if s.position_track is not None and s.target_track is not None else None)
@@ -248,7 +257,8 @@ class MavlinkBridgeNode(Node):
                   ("bad_signature", link.bad_signature), ("spoofed", link.spoofed),
                   ("bad_value", link.bad_value), ("unsendable", link.unsendable),
                   ("pass_plan", s.pass_plan), ("pass_start", s.pass_start_s),
-                  ("behind", s.behind), ("speed_mps", self.bridge.config.speed_mps)]
+                  ("behind", s.behind), ("out_of_control", s.out_of_control),
+                  ("speed_mps", self.bridge.config.speed_mps)]
         return DiagnosticStatus(level=level, name=published.bridge_status_name(s.uav),
                                 message=text, hardware_id=f"mavlink sysid {s.sysid}",
                                 values=[KeyValue(key=k, value=fmt(v)) for k, v in values])

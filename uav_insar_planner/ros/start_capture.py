@@ -10,10 +10,12 @@ Poses are (monotonic time heard, (x, y, z) in the track frame) per UAV; a start 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
 from uav_insar_planner.plan import Vec3
 from uav_insar_planner.ros import topics
 from uav_insar_planner.track.capture import outside
+from uav_insar_planner.track.passes import run_in_m
 
 # Bridges publish a pose per LOCAL_POSITION_NED, ~10 Hz: older than this is a silent UAV.
 POSE_FRESH_S = 1.0
@@ -63,3 +65,21 @@ def all_captured(starts: dict[int, Vec3], poses: dict[int, tuple[float, Vec3]],
     """Whether every UAV of `starts` has a pose (monotonic time, position) fresher than
     POSE_FRESH_S at `now` within `radius_m` of its start; False with nothing to start."""
     return bool(starts) and not not_captured(starts, poses, now, radius_m)
+
+
+def why_not(entries: dict[int, Vec3], poses: dict[int, tuple[float, Vec3]], now: float,
+            radius_m: float, bridge_speeds: Mapping[int, float], speed_mps: float
+            ) -> dict[int, str]:
+    """`not_captured`, by UAV in order, each with its bridge's other v_y (`other_speed`)."""
+    why = not_captured(entries, poses, now, radius_m)
+    return {k: w + other_speed(bridge_speeds.get(k), speed_mps) for k, w in sorted(why.items())}
+
+
+def other_speed(theirs: float | None, ours: float) -> str:
+    """Why a UAV may never reach the entry the planner waits for: its bridge flies another
+    v_y (`theirs`, None: not said), so its entry (the run-in is the speed's) lies elsewhere
+    ("" when it does not)."""
+    if theirs is None or abs(theirs - ours) < 1e-6:
+        return ""
+    return (f"; its bridge flies speed_mps {theirs:g}, the plan {ours:g} m/s, so its entry is "
+            f"{abs(run_in_m(theirs) - run_in_m(ours)):.2f} m from the one awaited")

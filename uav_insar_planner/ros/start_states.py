@@ -5,7 +5,8 @@ it what it heard and executes what it returns, so every decision is testable wit
   phase               the data it holds           left for
   NO_PLAN             nothing                     AWAITING_CAPTURE: a plan (NewPlan)
   AWAITING_CAPTURE    the plan, its start points  STARTED: every flown UAV fresh and within
-                                                    capture_radius_m of its entry;
+                                                    capture_radius_m of its entry (after
+                                                    capture_timeout_s the rest are lost);
                                                   STARTED / RESUME_UNCONFIRMED: all on their
                                                     tracks past the start line (a planner
                                                     started again): resumed from the rearmost
@@ -19,9 +20,8 @@ it what it heard and executes what it returns, so every decision is testable wit
                                                     later, while one has not by the instant;
                                                   AWAITING_CAPTURE: as STARTED
 
-Why these four: a start exists or not (`clock`), and a resumed start from the hover is not
-safe until every bridge has it (`awaited`; ros/start_confirmations.py): the states are the
-combinations that can occur, and each step reads one of them, never a set of loose fields.
+Why these four: a start exists or not (`clock`), and a resumed start from the hover is not safe
+until every bridge has it (`awaited`, ros/start_confirmations.py): the combinations that occur.
 
 A plan with the same start line as the running pass (`same_line`, a re-plan during the pass)
 and the same survey strip (track/leg.py; every strip starts at y = 0 of its own frame) keeps
@@ -43,7 +43,7 @@ from typing import Protocol
 
 from uav_insar_planner.plan import Vec3
 from uav_insar_planner.ros import start_confirmations
-from uav_insar_planner.ros.start_capture import POSE_FRESH_S, all_captured, not_captured, on_track
+from uav_insar_planner.ros.start_capture import POSE_FRESH_S, all_captured, on_track, why_not
 from uav_insar_planner.ros.start_confirmations import (
     GIVE_UP,
     LATER,
@@ -115,6 +115,9 @@ class StartState:
     bridge_speeds: Mapping[int, float] = field(default_factory=dict)  # the v_y each flies
     started: frozenset[str] = frozenset()  # labels of the plans this planner started
     wait_told: float = 0.0  # when the wait for a capture was last said (monotonic)
+    # when the capture's deadline started (monotonic): the first check that saw a bridge fly
+    # one of the plan's UAVs after the plan (None: not yet)
+    capture_since: float | None = None
 
     def __post_init__(self) -> None:
         running = self.phase in (Phase.STARTED, Phase.RESUME_UNCONFIRMED)
@@ -170,6 +173,7 @@ class Observed:
     start_delay_s: float
     start_confirm_wait_s: float
     bridged: bool
+    capture_timeout_s: float = 0.0  # 0: the capture is waited for for ever
 
 
 @dataclass(frozen=True)
@@ -190,6 +194,7 @@ class Log:
 class DeclareLost:
     k: int
     why: str
+    by: str = "MAVLink bridge"  # who found it: its bridge (`behind`), or the pass start
 
 
 Action = Publish | Log | DeclareLost
@@ -221,7 +226,7 @@ def _on_plan(state: StartState, new: NewPlan, now: Now
     starts = {k: tuple(p) for k, p in enumerate(new.points) if all(map(math.isfinite, p))}
     y_start = next(iter(starts.values()))[1] if starts else None
     plan = dict(plan=new.plan, starts=starts, y_start=y_start, speed_mps=new.speed_mps,
-                length_m=new.length_m, leg=new.leg, wait_told=now.mono)
+                length_m=new.length_m, leg=new.leg, wait_told=now.mono, capture_since=None)
     if (state.clock is None or y_start is None or state.y_start is None
             or not same_line(y_start, state.y_start) or new.leg != state.leg):
         return replace(state, phase=Phase.AWAITING_CAPTURE, clock=None, awaited=None,
@@ -262,13 +267,16 @@ def _await_capture(state: StartState, seen: Observed, starts: dict[int, Vec3], n
                        "start line (this planner started again?)", now)
     radius, run_in = seen.capture_radius_m, run_in_m(state.speed_mps)
     entries = {k: (x, y - run_in, z) for k, (x, y, z) in starts.items()}
+    if state.capture_since is None and seen.bridged:
+        state = replace(state, capture_since=now.mono)
     if not all_captured(entries, seen.poses, now.mono, radius):
-        why = (not_captured(entries, seen.poses, now.mono, radius)
-               if now.mono - state.wait_told >= WAIT_LOG_PERIOD_S and seen.bridged else {})
-        if not why:
+        waited = now.mono - (now.mono if state.capture_since is None else state.capture_since)
+        if 0.0 < seen.capture_timeout_s < waited:
+            return _capture_overdue(state, seen, entries, now)
+        if now.mono - state.wait_told < WAIT_LOG_PERIOD_S or not seen.bridged:
             return state, ()
-        waiting = ", ".join(f"{uav_name(k)} ({w}{_other_speed(state, k)})"
-                            for k, w in sorted(why.items()))
+        waiting = ", ".join(f"{uav_name(k)} ({w})" for k, w in why_not(
+            entries, seen.poses, now.mono, radius, state.bridge_speeds, state.speed_mps).items())
         return replace(state, wait_told=now.mono), (
             Log("info", f"the pass start waits for {waiting}: capture_radius_m {radius:g} "
                         f"({state.plan})"),)
@@ -282,14 +290,17 @@ def _await_capture(state: StartState, seen: Observed, starts: dict[int, Vec3], n
         f"{clock.start_s:.3f} ({state.plan})")))
 
 
-def _other_speed(state: StartState, k: int) -> str:
-    """Why UAV k may never reach the entry the planner waits for: its bridge flies another
-    v_y, so its entry (the run-in is the speed's) lies elsewhere ("" when it does not)."""
-    theirs, ours = state.bridge_speeds.get(k), state.speed_mps
-    if theirs is None or abs(theirs - ours) < 1e-6:
-        return ""
-    return (f"; its bridge flies speed_mps {theirs:g}, the plan {ours:g} m/s, so its entry is "
-            f"{abs(run_in_m(theirs) - run_in_m(ours)):.2f} m from the one awaited")
+def _capture_overdue(state: StartState, seen: Observed, entries: dict[int, Vec3], now: Now
+                     ) -> tuple[StartState, tuple[Action, ...]]:
+    """capture_timeout_s passed: the UAVs not captured are lost, in one line (module doc)."""
+    late = [DeclareLost(k, f"not captured after capture_timeout_s {seen.capture_timeout_s:g} s: "
+                           f"{w}", "the pass start") for k, w in why_not(entries, seen.poses,
+            now.mono, seen.capture_radius_m, state.bridge_speeds, state.speed_mps).items()]
+    text = ", ".join(f"{uav_name(a.k)} ({a.why})" for a in late)
+    # (the deadline starts again: a re-plan that keeps one out is awaited afresh)
+    return replace(state, capture_since=now.mono, wait_told=now.mono), (Log("warning", (
+        f"the pass start leaves out {text}: declared lost, the others fly without it once "
+        f"re-planned ({state.plan})")), *late)
 
 
 def _confirm(state: StartState, starts: dict[int, Vec3], now: Now

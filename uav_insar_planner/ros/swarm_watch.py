@@ -6,7 +6,8 @@ Created by the planner node, which hands it two callbacks, `publish` (adopt and 
 re-plan with its status) and `report` (the status of a re-plan not published), and feeds it
 uavK/pose and uavK/achieved_rate (`on_pose`, `on_rate`) and every plan it publishes
 (`on_plan`); it subscribes uavK/offload and /diagnostics (the MAVLink bridge's
-`mavlink_bridge: uavK` statuses with link `lost`) itself, and checks the swarm every
+`mavlink_bridge: uavK` statuses with link `lost` or `out_of_control`, a vehicle a failsafe
+or a pilot took: `published.bridge_cannot_fly`) itself, and checks the swarm every
 CHECK_PERIOD_S against the planner parameter `uav_timeout_s`.
 
 - Lost slave, the plan flew it and at least one slave survives: the (N-1)-UAV problem of
@@ -123,17 +124,18 @@ class SwarmWatch:
             k = published.bridge_status_uav(s.name)
             if k is None:
                 continue
-            values = {kv.key: kv.value for kv in s.values}
-            if values.get("link") == "lost" and k < len(self.triggers.uavs):
+            why = published.bridge_cannot_fly({kv.key: kv.value for kv in s.values}, s.message)
+            if why and k < len(self.triggers.uavs):
                 with self._lock:
-                    lost = self.triggers.bridge_lost(k, time.monotonic(), s.message)
+                    lost = self.triggers.bridge_lost(k, time.monotonic(), why)
                 if lost is not None:
                     self._react(lost)
 
     def declare_lost(self, k: int, why: str) -> None:
-        """UAV k cannot go on with the swarm (its bridge says why): lost, as by silence."""
+        """UAV k cannot go on with the swarm (`why`: who says so, and why): lost, as by
+        silence."""
         with self._lock:
-            lost = self.triggers.bridge_lost(k, time.monotonic(), why)
+            lost = self.triggers.declared_lost(k, time.monotonic(), why)
         if lost is not None:
             self._react(lost)
 
