@@ -59,15 +59,18 @@ STARTED = re.compile(r"\[INFO\] \[([\w-]+)\]: process started with pid \[(\d+)\]
 
 @dataclass(frozen=True)
 class Ros2:
-    """The venv with the package and the ROS 2 command line, and the colcon-like prefix."""
+    """The venv with the package and the ROS 2 command line, the colcon-like prefix, and the
+    folder of launch's and the nodes' log files (not ~/.ros/log)."""
     bin: Path
     colcon: Path
+    logs: Path
 
     def env(self, domain: int, colcon: bool = False) -> dict[str, str]:
         env = {k: v for k, v in os.environ.items() if k not in NOT_INHERITED}
         prefixes = [self.colcon, self.bin.parent] if colcon else [self.bin.parent]
         env.update(ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
-                   AMENT_PREFIX_PATH=os.pathsep.join(map(str, prefixes)), PYTHONUNBUFFERED="1")
+                   AMENT_PREFIX_PATH=os.pathsep.join(map(str, prefixes)), PYTHONUNBUFFERED="1",
+                   ROS_LOG_DIR=str(self.logs))
         if colcon:
             env["PYTHONPATH"] = str(self.colcon / "lib" / f"python{sys.version_info.major}."
                                     f"{sys.version_info.minor}" / "site-packages")
@@ -93,7 +96,7 @@ def ros2(tmp_path_factory: pytest.TempPathFactory) -> Ros2:
          "--single-version-externally-managed"],
         cwd=src, capture_output=True, text=True, timeout=180)
     assert done.returncode == 0, (done.stdout + done.stderr)[-3000:]
-    return Ros2(bin_dir, root / "colcon")
+    return Ros2(bin_dir, root / "colcon", root / "log")
 
 
 class Launched:
@@ -171,7 +174,9 @@ def assert_stopped_cleanly(launched: Launched, code: int | None, labels: set[str
     started = launched.started()
     assert labels <= set(started), (started, out[-4000:])
     for label, pid in started.items():
-        assert f"[{label}]: process has finished cleanly [pid {pid}]" in out, (label, out[-4000:])
+        own = [line for line in launched.lines if f"[{label}]" in line]
+        assert f"[{label}]: process has finished cleanly [pid {pid}]" in out, \
+            [line.split(", cmd ")[0] for line in own[-8:]]
     assert "Traceback" not in out and "process has died" not in out, out[-4000:]
 
 
@@ -238,19 +243,24 @@ def test_the_swarm_launch_flies_and_answers_the_ros2_tools(ros2: Ros2, ros_domai
             assert pose["position"]["x"] == pytest.approx(got.position.x), out
             assert pose["position"]["z"] == pytest.approx(got.position.z), out
 
-        seen = len(watcher.formations)
+        def across() -> list[float]:
+            return [p.position.x for p in watcher.formations[-1].poses]
+
+        def stamp() -> tuple[int, int]:  # a plan's identity (a new plan, a new stamp)
+            latest = watcher.formations[-1].header.stamp
+            return latest.sec, latest.nanosec
+
+        first = across()
         code, out = cli(ros2, env, watcher, "param", "set", *DIRECT, "/planner", "h_amb_min_m",
                         "0.9")
         assert code == 0 and "Set parameter successful" in out, out
-        assert watcher.spin_until(lambda: len(watcher.formations) > seen, 20.0), out
-        new = watcher.formations[-1]
-        assert [p.position.x for p in new.poses] != [p.position.x for p in plan.poses]
+        assert watcher.spin_until(lambda: across() != first, 20.0), (first, across())
 
-        seen = len(watcher.formations)
+        before = stamp()
         code, out = cli(ros2, env, watcher, "service", "call", "/planner/replan",
                         "std_srvs/srv/Trigger", timeout=40.0)
         assert code == 0 and "success=True" in out, out
-        assert watcher.spin_until(lambda: len(watcher.formations) > seen, 20.0), out
+        assert watcher.spin_until(lambda: stamp() != before, 20.0), (before, stamp())
         # the bridge reads both vehicles, at base_port and base_port + 10
         assert watcher.spin_until(lambda: all(watcher.mavlink_poses[k] for k in (0, 1)), 20.0,
                                   [launched.proc]), launched.text[-3000:]
