@@ -41,6 +41,9 @@ setup(
         ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
         ("share/" + package_name, ["package.xml"]),
         ("share/" + package_name + "/config", glob("config/*.yaml")),
+        # `ros2 launch uav_insar_planner FILE` finds them here through the ament index (the
+        # marker above), on the colcon path and the pip path alike (docs/ros/launch.md)
+        ("share/" + package_name + "/launch", glob("launch/*.launch.py")),
         ("share/" + package_name + "/foxglove", [package_name + "/" + FOXGLOVE_LAYOUT]),
     ],
     package_data={package_name: [FOXGLOVE_LAYOUT]},

@@ -177,3 +177,28 @@ def test_solvers_md_tables_every_declared_back_end():
     multilook = [row.split("|")[1].strip() for row in rows if "`multilook`" in row]
     assert multilook == ["`global`"]
     assert [row.split("|")[3].strip() for row in rows] == ["yes", "no", "no"]
+
+
+def test_launch_md_tables_every_argument_of_every_launch_file():
+    """The arguments on ros/launch.md are generated (reference.INSERTS) from
+    ros.launch_files.LAUNCH_FILES, from which the launch files declare them (test_launch.py
+    compares that with `ros2 launch --show-args`): one section per file of launch/, a row per
+    argument with its default."""
+    from types import SimpleNamespace
+
+    from uav_insar_planner.ros.launch_files import LAUNCH_FILES
+
+    assert sorted(LAUNCH_FILES) == sorted(p.name for p in (REPO / "launch").glob("*.launch.py"))
+    source = (REPO / "docs" / "ros" / "launch.md").read_text()
+    ((marker, build),) = reference.INSERTS["ros/launch.md"].items()
+    assert source.count(marker) == 1
+    page = SimpleNamespace(file=SimpleNamespace(src_uri="ros/launch.md"))
+    text = build()
+    assert text.rstrip("\n") in reference.on_page_markdown(source, page, None, None)
+    sections = text.split("### ")[1:]
+    assert [s.split("`")[1] for s in sections] == list(LAUNCH_FILES)
+    for section, spec in zip(sections, LAUNCH_FILES.values(), strict=True):
+        rows = [line.split(" | ") for line in section.splitlines() if line.startswith("| `")]
+        assert [(r[0][2:].strip("`"), r[1]) for r in rows] == [
+            (a.name, "required" if a.default is None else f"`{a.default}`" if a.default
+             else "empty") for a in spec.args]

@@ -12,15 +12,14 @@ from __future__ import annotations
 
 import ast
 import os
-import shutil
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import process_group
 import pytest
 from conftest import REPO
+from venvs import new_venv, pip_install, tree_copy
 
 from uav_insar_planner.demo.processes import executable, start_process
 from uav_insar_planner.extras import INSTALL_PLANNER, PLANNER_MODULES, SOLVER_MODULES
@@ -34,9 +33,6 @@ VEHICLE_PORT = 31010
 K = 1  # the UAV whose computer this is
 NODE_MODULES = ("uav_insar_sim.agent_node", "uav_insar_planner.ros.mavlink_bridge")
 PIP_TIMEOUT_S = 180
-# What pip says when it cannot reach an index (no network, proxy or DNS down).
-UNREACHABLE = ("NewConnectionError", "Network is unreachable", "Temporary failure in name "
-               "resolution", "No matching distribution found", "ConnectTimeout", "ProxyError")
 
 
 def test_the_uav_nodes_import_no_planner_library():
@@ -65,41 +61,14 @@ def test_the_planner_extra_is_what_the_missing_line_names():
     assert sorted(names) == sorted(PLANNER_MODULES)
 
 
-def _unreachable(out: str) -> str | None:
-    lines = [line for line in out.splitlines() if any(s in line for s in UNREACHABLE)]
-    return lines[-1].strip() if lines else None
-
-
-def _tree_copy(dest: Path) -> Path:
-    """The files of this tree a clone would have (tracked and new, edits included)."""
-    listed = subprocess.run(["git", "ls-files", "-z", "-co", "--exclude-standard"], cwd=REPO,
-                            capture_output=True, check=True, timeout=60).stdout
-    for name in filter(None, listed.decode().split("\0")):
-        src = REPO / name
-        if src.is_file():
-            (dest / name).parent.mkdir(parents=True, exist_ok=True)
-            shutil.copy2(src, dest / name)
-    return dest
-
-
 @pytest.fixture(scope="module")
 def lean(tmp_path_factory) -> Path:
     """The bin/ folder of a fresh venv with `pip install '<tree>[uav]'`."""
-    if shutil.which("git") is None:
-        pytest.skip("git is needed to copy the tree as a clone has it")
     root = tmp_path_factory.mktemp("lean")
-    src = _tree_copy(root / "src")
-    start = time.monotonic()
-    process_group.run([sys.executable, "-m", "venv", str(root / "venv")], check=True,
-                      timeout=120)
-    pip = process_group.run([str(root / "venv" / "bin" / "python"), "-m", "pip", "install",
-                             "-q", f"{src}[uav]"], capture_output=True, text=True,
-                            timeout=PIP_TIMEOUT_S)
-    if pip.returncode != 0 and (line := _unreachable(pip.stdout + pip.stderr)):
-        pytest.skip(f"the package registry is unreachable: {line[:200]}")
-    assert pip.returncode == 0, (pip.stdout + pip.stderr)[-3000:]
-    print(f"lean venv built in {time.monotonic() - start:.1f} s")
-    return root / "venv" / "bin"
+    src = tree_copy(root / "src")
+    bin_dir = new_venv(root / "venv")
+    pip_install(bin_dir, [f"{src}[uav]"], PIP_TIMEOUT_S)
+    return bin_dir
 
 
 def test_the_lean_venv_has_the_nodes_and_none_of_the_planner_libraries(lean: Path):

@@ -393,3 +393,25 @@ def test_cli_starts_a_booting_vehicle_with_a_home():
         finally:
             kill_group(proc)
     assert main(["--sysid", "2", "--listen", "udpin:127.0.0.1:0", "--home", "95,0,0"]) == 2
+
+
+def test_cli_stops_with_0_on_a_burst_of_sigints():
+    """Ctrl-C under `ros2 launch` reaches the vehicle twice (the terminal's, then launch's);
+    a later one, even while the interpreter shuts down, must not end it by the signal (exit
+    -2, "process has died" in launch's log): SIGINT every 5 ms until it has ended."""
+    import signal
+    import subprocess
+    import sys
+    import time
+    proc = subprocess.Popen([sys.executable, "-m", "uav_insar_sim.vehicle", "--sysid", "5",
+                             "--listen", "udpin:127.0.0.1:0"], stdout=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    try:
+        assert proc.stdout.readline().startswith("vehicle sysid 5 ")  # its handlers are set
+        end = time.monotonic() + 10.0
+        while proc.poll() is None and time.monotonic() < end:
+            proc.send_signal(signal.SIGINT)
+            time.sleep(0.005)
+        assert proc.wait(1) == 0
+    finally:
+        kill_group(proc)

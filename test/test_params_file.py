@@ -18,7 +18,12 @@ from rcl_interfaces.srv import GetParameters, ListParameters
 from uav_insar_planner.param_specs.nodes import NODE_SPECS, RCLPY_PARAMETER_NAMES, nodes_taking
 from uav_insar_planner.param_specs.science import SPEC_BY_NAME
 from uav_insar_planner.params import ParamError, unknown_parameter
-from uav_insar_planner.params_file import load_params, read_params_file, section_matches
+from uav_insar_planner.params_file import (
+    load_params,
+    params_file_problems,
+    read_params_file,
+    section_matches,
+)
 from uav_insar_planner.swarm import MAX_UAVS, agent_name
 
 CLI = [sys.executable, "-m", "uav_insar_planner.cli"]
@@ -189,6 +194,20 @@ def test_accepted_file_gives_the_node_the_values_the_reader_returns(watcher, pro
 ])
 def test_sections_match_nodes_as_rclpy_does(name, fqn, matches):
     assert section_matches(name, fqn) is matches
+
+
+def test_a_file_launch_ros_writes_reads_as_rcl_reads_it(tmp_path):
+    """launch_ros writes a launch file's parameter dict with its lists as `!!python/tuple`
+    (test_launch.py starts the nodes so); rcl reads them as lists, and so does the reader.
+    Other Python tags stay refused: a params file holds no objects."""
+    path = tmp_path / "launch_params"
+    path.write_text("/**:\n  ros__parameters:\n    num_uavs: 2\n    rate_min_mbps: "
+                    "!!python/tuple\n    - 10.0\n    - 16.95\n    connections: !!python/tuple\n"
+                    "    - udpout:127.0.0.1:34100\n")
+    assert read_params_file(path, "/agent0") == {
+        "num_uavs": 2, "rate_min_mbps": [10.0, 16.95], "connections": ["udpout:127.0.0.1:34100"]}
+    path.write_text("/**:\n  ros__parameters:\n    num_uavs: !!python/object:os.stat_result {}\n")
+    assert params_file_problems(path) and "is not a params file" in params_file_problems(path)[0]
 
 
 def _started(watcher, proc: subprocess.Popen, node: str) -> set[str]:

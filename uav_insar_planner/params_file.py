@@ -86,6 +86,10 @@ _RosYamlLoader.add_constructor("tag:yaml.org,2002:int", _RosYamlLoader.construct
 for _tag in ("null", "timestamp"):
     _RosYamlLoader.add_constructor(f"tag:yaml.org,2002:{_tag}",
                                    yaml.SafeLoader.construct_scalar)
+# launch_ros writes the lists of a launch file's parameter dict as `!!python/tuple` (it holds
+# them as tuples); rcl's parser ignores the tag, and reads them as any sequence.
+_RosYamlLoader.add_constructor("tag:yaml.org,2002:python/tuple",
+                               yaml.SafeLoader.construct_yaml_seq)
 
 
 _RosYamlLoader.add_implicit_resolver(

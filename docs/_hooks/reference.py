@@ -12,6 +12,7 @@ from typing import Any
 
 from reference_commands import commands_page
 from reference_exit_codes import exit_codes_page
+from reference_launch import launch_files
 from reference_layout import folder_imports
 from reference_parameters import parameters_page
 from reference_solvers import backends_table
@@ -28,6 +29,7 @@ INSERTS: dict[str, dict[str, Callable[[], str]]] = {
     "recording.md": {"<!-- generated: recorded topics -->": recorded_topics},
     "layout.md": {"<!-- generated: folder imports -->": folder_imports},
     "science/solvers.md": {"<!-- generated: solver back ends -->": backends_table},
+    "ros/launch.md": {"<!-- generated: launch files -->": launch_files},
 }
 
 

@@ -21,7 +21,7 @@ from uav_insar_planner.demo.processes import (
     stop_nodes,
 )
 from uav_insar_planner.demo.recorder import recorder_ready, start_recorder, stop_recorder
-from uav_insar_planner.param_specs.nodes import FIRST_SYSID, PORT_STEP
+from uav_insar_planner.param_specs.nodes import FIRST_SYSID, PORT_STEP, vehicle_start_ned
 from uav_insar_planner.report.flown import MavlinkPass, mavlink_table, rate_table, summary
 from uav_insar_planner.swarm import MASTER, MAX_UAVS, agent_name, uav_name, uavs
 from uav_insar_planner.track.pass_clock import PassClock
@@ -35,9 +35,6 @@ if TYPE_CHECKING:
 CAPTURE_RADIUS_M = 0.2
 SETTLE_S = 3.0  # after the pass: the vehicles brake past its end and return; then the final error
 MAVLINK_TIMEOUT_S = 30.0  # for the approach (and the pass's end, after the agents are done)
-# Vehicle k starts airborne above agent k's home, (5 k, -30, 0) m in the track frame, so it
-# reaches the pass start (y = 0) from behind, moving forward: N = y, E = x, D = -z.
-VEHICLE_HOME_Y_M, VEHICLE_SPACING_M, VEHICLE_START_HEIGHT_M = -30.0, 5.0, 10.0
 AGENTS_UP_S = 20.0  # until the watcher (and the recorder) sees every agent
 PLAN_S = 40.0  # until the first plan, after the planner started
 TRANSIT_S = 60.0  # mission seconds beyond the slots: transit and run-up
@@ -84,7 +81,7 @@ def start_mavlink(ports: Sequence[int], pass_s: float, common: Sequence[str],
     for k, port in enumerate(ports):
         proc, found = start_vehicle(
             ["--sysid", str(FIRST_SYSID + k), "--airborne", "--start-ned",
-             str(VEHICLE_HOME_Y_M), str(VEHICLE_SPACING_M * k), str(-VEHICLE_START_HEIGHT_M)],
+             *(str(v) for v in vehicle_start_ned(k))],
             "127.0.0.1", port, env, f"[vehicle{FIRST_SYSID + k}]")
         procs.append(proc)
         bound.append(found)

@@ -23,6 +23,17 @@ FIRST_PORT, PORT_STEP = 14552, 10
 def vehicle_connection(k: int) -> str:
     """The bridge's default connection to vehicle k (`uav-insar-vehicle --listen` of it)."""
     return f"udpout:127.0.0.1:{FIRST_PORT + PORT_STEP * k}"
+
+
+# Simulated vehicle k starts airborne above agent k's home, (5 k, -30, 10) m in the track
+# frame, so it reaches the pass start (y = 0) from behind, moving forward (the demo's and
+# swarm.launch.py's vehicles).
+VEHICLE_HOME_Y_M, VEHICLE_SPACING_M, VEHICLE_START_HEIGHT_M = -30.0, 5.0, 10.0
+
+
+def vehicle_start_ned(k: int) -> tuple[float, float, float]:
+    """Simulated vehicle k's start in local NED (N = y, E = x, D = -z of the track frame)."""
+    return VEHICLE_HOME_Y_M, VEHICLE_SPACING_M * k, -VEHICLE_START_HEIGHT_M
 PASS_STARTS = ("auto", "capture", "planner")  # who starts the bridge's pass
 POSITION_SOURCES = ("agent", "autopilot")  # where an agent takes its UAV's position from
 

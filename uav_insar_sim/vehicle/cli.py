@@ -92,8 +92,17 @@ def main(argv: list[str] | None = None) -> int:
         _stderr(f"error: {exc}")
         return EXIT_BAD_INPUT
     stop = threading.Event()
+
+    def stop_once(*_: object) -> None:
+        # Ctrl-C under `ros2 launch` comes twice, the terminal's and launch's own: the next one
+        # is ignored, else it may meet the default handler the interpreter puts back as it
+        # shuts down, and end the process by the signal instead of EXIT_OK
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(sig, signal.SIG_IGN)
+        stop.set()
+
     for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda *_: stop.set())
+        signal.signal(sig, stop_once)
     # The port bound, for `udpin:HOST:0` (what the demo starts it with, then reads here).
     listen = (args.listen if vehicle.port is None else
               f"{args.listen.rsplit(':', 1)[0]}:{vehicle.port}")
