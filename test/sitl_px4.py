@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import socket
 import subprocess
 import threading
@@ -40,6 +41,17 @@ def vehicle_home(k: int) -> tuple[float, float, float]:
     n, e = TAKE_OFFS[k]
     lat, lon, alt = HOME
     return (lat + n / 111_320.0, lon + e / (111_320.0 * math.cos(math.radians(lat))), alt)
+
+
+#: What PX4 prints when its simulated sensors fail (one run in three under load, by the issue):
+#: the simulator broke, whatever the bridge did.
+SIMULATOR_FAULT = re.compile(r"No valid data from \w+ \d|[Ss]ensor \w+ (?:timeout|fault)|"
+                             r"(?:Baro|Compass|Accel|Gyro) #?\d+ (?:fault|timeout|missing)")
+
+
+def simulator_faults(log: str) -> list[str]:
+    """The lines of a px4.log that say its simulated sensors failed."""
+    return [line.strip() for line in log.splitlines() if SIMULATOR_FAULT.search(line)]
 
 
 def px4_links(folder: Path) -> Path:

@@ -104,6 +104,9 @@ class AutopilotProfile:
     mission_waits_for_utc: bool
     #: the main mode whose sub modes a ground station names AUTO.<sub> (PX4's AUTO), if any
     auto_main_mode: int | None = None
+    #: the setpoint moved this many times the across-track and height error against the
+    #: autopilot's estimate (`track.cross_track`); 0: the target as planned
+    cross_track_gain: float = 0.0
 
     def __post_init__(self) -> None:
         order = [ARMING_STEPS.index(step) for step in self.arming_steps]
@@ -141,7 +144,10 @@ PROFILES = {
         # PX4 wants > 1 s of setpoints before OFFBOARD; the margin is for jitter
         stream_before_flight_s=1.2, setpoints_in_flight_only=False,
         mav_autopilot=12, mission_waits_for_utc=False,  # MAV_AUTOPILOT_PX4
-        auto_main_mode=PX4_MAIN_MODE_AUTO),
+        auto_main_mode=PX4_MAIN_MODE_AUTO,
+        # PX4's soft position loops let the estimate wander 0.3-0.6 m on a pass: stiffen
+        # them twofold from the setpoint side (ArduCopter holds 0.2 m without)
+        cross_track_gain=1.0),
 }
 AUTOPILOTS = tuple(PROFILES)
 

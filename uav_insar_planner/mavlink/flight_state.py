@@ -51,6 +51,7 @@ from uav_insar_planner.mavlink.supervision import WatchedVehicle
 from uav_insar_planner.plan import Vec3
 from uav_insar_planner.swarm import uav_name
 from uav_insar_planner.track.catch_up import CATCH_UP_FROM_M, CatchUp, governed
+from uav_insar_planner.track.cross_track import CrossTrack
 from uav_insar_planner.track.formation import clean_formation, separation
 from uav_insar_planner.track.frame import TrackFrame
 from uav_insar_planner.track.leg import SurveyLeg
@@ -71,6 +72,7 @@ class FlightState:
         self.leg: SurveyLeg | None = None  # the survey strip flown
         self.autopilot = profile(config.autopilot)
         self.returning = ModeOrder(self.autopilot.home)
+        self._cross_track: dict[int, CrossTrack] = {}
         self._landed: set[int] = set()  # returned vehicles seen disarmed
         self._count, self._emit, self._send_command = count, emit, send_command
         self.pass_ = PassTrajectory(config.speed_mps, config.track_duration_s)
@@ -220,7 +222,12 @@ class FlightState:
         if (target is None or waits or self.holding.stopped(v) or self.returning.engaged(v.uav)
                 or self.left(v)):
             return None
-        return target
+        if v.position_ned is None or v.position_time is None:
+            return target
+        correction = self._cross_track.setdefault(
+            v.uav, CrossTrack(self.autopilot.cross_track_gain))
+        estimate = self.frame.from_ned(*v.position_ned)
+        return (correction.setpoint(target[0], estimate, now - v.position_time, now), target[1])
 
     def status(self, v: WatchedVehicle, now: float) -> VehicleStatus:
         status = vehicle_status(v, now, self.pass_, self.frame, self.config.capture_radius_m,

@@ -9,6 +9,7 @@
 - `formation`: a formation's poses cleaned, and the planned separations checked.
 - `capture`: whether a UAV is captured at its start point (the pass may start).
 - `catch_up`: the gentle catch-up of a UAV that rejoins a running pass.
+- `cross_track`: the setpoint moved against the autopilot's own across-track and height error.
 - `passes`: the ordered passes of a mission and the transits between them.
 
 `mavlink/` (the bridge), `ros/` (the planner's pass start), `mission_file/` and the agents in
