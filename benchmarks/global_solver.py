@@ -4,14 +4,16 @@ Prints: the default scenario's median solve time (exact objective, proposed sche
 global solver and, in the same run, for paper-ao, with their ratio; then both figure sweeps
 (Figure 3: 16 points of h_amb_min over 0.5..2.0 m with q0_fixed = (-54, 74) m and
 P_com^max = 10.1 dB; Figure 4: 21 points of rate_min_mbps[1] over 10..20 with
-q0_fixed = (-41, 61) m and P_com^max = 9 dB; four schemes each, exact objective) with total
+q0_fixed = (-41, 61) m and P_com^max = 9 dB; four schemes each, exact objective, both on the
+paper's problem (P), `default_params(paper=True)`: rate_margin 0) with total
 time, largest certified gap, the feasibility of each point (every plan re-checked by the
 independent evaluator) and the blocking constraints of the infeasible ones. The sweeps run
 through the project's sweep runner (study/sweep.py: each scheme's points in a chain, each
 solve warm-started from the one before) and, side by side, as independent cold solves; each
 is printed as the time per sweep point over the standalone default-scenario solve (and the
 runner's time over the cold solves': what the warm starts save), and the two must agree
-point for point within the certified gap.
+point for point within the certified gap. Last, once and outside the times, Figure 4 on the
+field problem (the default rate margin), where C10 binds sooner: its table beside the paper's.
 
 Side by side: a shared machine's speed drifts by tens of percent within a minute, so the
 measurements are interleaved over `--rounds` rounds (each: Table I `--repeats` times, paper-ao
@@ -104,6 +106,7 @@ def main() -> None:
     ap.add_argument("--no-ao", action="store_true", help="skip the paper-ao timing")
     args = ap.parse_args()
     p = default_params()
+    paper = default_params(paper=True)
     solve(p, solver="global")  # warm up imports
     glob, ao, runs = [], [], []  # runs: per round, per figure (runner s, cold s, result)
     plan = ao_plan = None
@@ -113,7 +116,7 @@ def main() -> None:
         if not args.no_ao:
             got, ao_plan = times(p, "paper-ao", max(3, args.repeats // 7 // args.rounds))
             ao.append(statistics.median(got))
-        runs.append([sweep(name, index, values, p.replace(**settings))
+        runs.append([sweep(name, index, values, paper.replace(**settings))
                      for name, index, values, settings in FIGURES.values()])
     t_glob = min(glob)
     print(f"default scenario, proposed, exact: global median {t_glob * 1e3:.1f} ms ({args.repeats}"
@@ -144,6 +147,18 @@ def main() -> None:
     print(f"  per sweep point / standalone Table I solve = {grand / count / t_glob:.2f} "
           f"(target <= 0.5); cold solves: {cold / count / t_glob:.2f}; the sweep runner over "
           f"the same points solved cold: {grand / cold:.2f}")
+    field_figure(p)
+
+
+def field_figure(field) -> None:
+    """Figure 4 on the field problem (`field`'s rate margin), once, its table beside the
+    paper's: the same points, C10 at (1 + rate_margin) R_min."""
+    title = "Figure 4 (rate_min_mbps[1])"
+    name, index, values, settings = FIGURES[title]
+    _, _, lines, _, _ = sweep(name, index, values, field.replace(**settings))
+    print(f"\n{title} on the field problem (rate_margin {field.rate_margin:g}, the default; "
+          f"not in the times above): sigma_h [cm] per scheme ({', '.join(SCHEMES)})")
+    print("\n".join(lines))
 
 
 if __name__ == "__main__":

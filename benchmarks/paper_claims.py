@@ -97,14 +97,14 @@ def feasibility_limit(make, scheme: str, lo: float, hi: float, tol: float = 0.01
 
 def main() -> None:
     start = time.perf_counter()
-    # the paper's C10 (R_min exactly): rate_margin 0
-    fig3 = default_params().replace(master_fixed_xz_m=[-54.0, 74.0], p_com_max_db=10.1,
-                                    rate_margin=0.0)
+    # the paper's problem (P): C10 at R_min exactly (rate_margin 0)
+    fig3 = default_params(paper=True).replace(master_fixed_xz_m=[-54.0, 74.0],
+                                              p_com_max_db=10.1)
     summary(sweep("h_amb_min", fig3, np.linspace(0.5, 2.0, 16),
                   lambda p, v: p.replace(h_amb_min_m=v)))
     print()
-    fig4 = default_params().replace(master_fixed_xz_m=[-41.0, 61.0], p_com_max_db=9.0,
-                                    rate_margin=0.0)
+    fig4 = default_params(paper=True).replace(master_fixed_xz_m=[-41.0, 61.0],
+                                              p_com_max_db=9.0)
     rates = list(default_params().raw["rate_min_mbps"])
     def fig4_rate(p: Params, v: float) -> Params:
         return p.replace(rate_min_mbps=[rates[0], v, rates[2]])

@@ -109,3 +109,34 @@ def test_solve_warns_when_the_plan_needs_better_than_gnss():
     assert "warning" not in run("solve", "--min-separation-m", "0").stderr
     bad = run("solve", "--min-separation-m", "nan")
     assert bad.returncode == 2 and "--min-separation-m" in bad.stderr
+
+
+PAPER_FIG4_EDGE = ("--set", "p_com_max_db=9", "--set", "rate_min_mbps=[10,18.3,1]")
+
+
+def test_paper_switch_solves_the_papers_problem():
+    """Issue 42: at Figure 4's 18.3 Mbit/s the paper's (P) is feasible; the field problem (the
+    default, 5 % rate margin) is not, and says so once; an explicit --set wins over --paper."""
+    paper = run("solve", "--paper", *PAPER_FIG4_EDGE, "--json")
+    assert paper.returncode == 0, paper.stderr
+    out = json.loads(paper.stdout)
+    assert out["feasible"] and round(out["sigma_h_m"], 5) == 0.07844
+    assert out["rate_margin"]["margin"] == 0.0
+    field = run("solve", *PAPER_FIG4_EDGE)
+    assert field.returncode == 3, field.stderr
+    assert field.stdout.count("includes a 5 % rate margin") == 1, field.stdout
+    assert "without it feasible at sigma_h 7.844 cm" in field.stdout
+    explicit = run("solve", "--paper", *PAPER_FIG4_EDGE, "--set", "rate_margin=0.05", "--json")
+    assert explicit.returncode == 3 and json.loads(explicit.stdout)["rate_margin"]["margin"] \
+        == 0.05
+    assert "wins over --paper" in json.loads(explicit.stdout)["rate_margin"]["text"]
+
+
+def test_sweep_says_its_rate_margin_once():
+    args = ("sweep", "rate_min_mbps[1]", "17.5", "18", "2", "--schemes", "proposed",
+            "--set", "p_com_max_db=9", "--no-progress", "--jobs", "1")
+    field, paper = run(*args), run(*args, "--paper")
+    assert field.returncode == paper.returncode == 0, field.stderr + paper.stderr
+    assert field.stdout.count("includes a 5 % rate margin") == 1, field.stdout
+    assert paper.stdout.count("rate margin 0: C10 holds R_min exactly") == 1, paper.stdout
+    assert "infeas." in field.stdout and "infeas." not in paper.stdout

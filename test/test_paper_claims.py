@@ -15,21 +15,22 @@ from uav_insar_planner.solver import solve
 from uav_insar_planner.study.sweep import gains, run_sweep
 
 SCHEMES = ["proposed", "single-baseline", "fixed-master", "static-power"]
-# the paper's C10, R_min exactly (rate_margin 0), as every claim below is the paper's
-FIG3 = {"master_fixed_xz_m": [-54.0, 74.0], "p_com_max_db": 10.1, "rate_margin": 0.0}
-FIG4 = {"master_fixed_xz_m": [-41.0, 61.0], "p_com_max_db": 9.0, "rate_margin": 0.0}
+# on the paper's problem (P), default_params(paper=True): C10 holds R_min exactly (rate_margin
+# 0), as every claim below is the paper's
+FIG3 = {"master_fixed_xz_m": [-54.0, 74.0], "p_com_max_db": 10.1}
+FIG4 = {"master_fixed_xz_m": [-41.0, 61.0], "p_com_max_db": 9.0}
 
 
 @pytest.fixture(scope="module")
 def fig3():
-    p = default_params().replace(**FIG3)
+    p = default_params(paper=True).replace(**FIG3)
     return {obj: run_sweep(p, "h_amb_min_m", np.linspace(0.5, 2.0, 16), SCHEMES, objective=obj)
             for obj in ("exact", "bound")}
 
 
 @pytest.fixture(scope="module")
 def fig4():
-    p = default_params().replace(**FIG4)
+    p = default_params(paper=True).replace(**FIG4)
     return run_sweep(p, "rate_min_mbps[1]", np.linspace(10, 20, 21), SCHEMES)
 
 
@@ -87,7 +88,7 @@ def test_fig4_static_power_loses_feasibility_first(fig4):
     assert not by[(17.5, "static-power")].feasible
     assert "C10" in by[(17.5, "static-power")].blocking.split()
     assert by[(17.5, "proposed")].feasible and by[(18.0, "proposed")].feasible
-    p = default_params().replace(**FIG4)
+    p = default_params(paper=True).replace(**FIG4)
     edge_lo = p.replace(rate_min_mbps=[10.0, 17.15, 1.0])
     edge_hi = p.replace(rate_min_mbps=[10.0, 17.22, 1.0])
     assert solve(edge_lo, scheme="static-power").feasible

@@ -7,7 +7,7 @@ from pathlib import Path
 import process_group
 import pytest
 
-from uav_insar_planner.params import PARAM_SPECS, ParamError, default_params
+from uav_insar_planner.params import PAPER_VALUES, PARAM_SPECS, ParamError, default_params
 from uav_insar_planner.params_file import load_params, read_params_file
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -20,6 +20,52 @@ def test_config_file_holds_table_one_defaults():
     for spec in PARAM_SPECS:
         assert values[spec.name] == spec.default, spec.name
     assert load_params(CONFIG) == default_params()
+
+
+# The paper's problem (P) at Table I, read off the paper (section V, Table I; C1-C11 as (P)
+# states them), for every scenario parameter that is part of the problem. Not here: `solver`
+# and `time_budget_s` (how it is solved, not what).
+PAPER_PROBLEM = {
+    "num_uavs": 3, "num_slots": 80, "slot_duration_s": 1.0, "z_min_m": 1.0, "z_max_m": 100.0,
+    "h_amb_min_m": 1.2, "h_amb_ratio": 1.0, "target_x_m": 20.0,
+    "ground_station_m": [70.0, 149.37, 25.0], "d_min_m": 1.5, "swath_min_m": 55.0,
+    "speed_mps": 4.3, "p_com_max_db": 10.1, "e_com_max_j": 594.0,
+    "rate_min_mbps": [10.0, 16.95, 1.0], "rate_margin": 0.0, "comm_bandwidth_hz": 1e9,
+    "ref_snr_db": 18.69, "coherence_rg_min": 0.8, "coherence_snr_min": 0.8,
+    "coherence_other": 0.6, "sigma0_db": -10.0, "radar_power_dbm": 26.02, "gain_tx_dbi": 5.0,
+    "gain_rx_dbi": 5.0, "wavelength_m": 0.12, "duty_cycle": 1e-4, "look_angle_deg": 45.0,
+    "system_temperature_k": 400.0, "radar_bandwidth_hz": 3e9, "noise_figure_db": 5.0,
+    "losses_db": 6.0, "center_frequency_hz": 2.5e9, "beamwidth_deg": 33.44,
+    "slave_look_angle_min_deg": 37.24, "slave_look_angle_max_deg": 48.7, "looks": 4,
+    "tolerance": 1e-2, "master_fixed_xz_m": [-54.0, 74.0], "nav_error_m": 0.0,
+    "scheme": "proposed", "objective": "exact"}
+
+
+def test_every_default_is_the_papers_but_the_declared_field_only_ones():
+    """A default that departs from the paper's problem says so (ParamSpec.paper), so that
+    `--paper` sets it back; rate_margin is the one today."""
+    assert set(PAPER_PROBLEM) == {s.name for s in PARAM_SPECS} - {"solver", "time_budget_s"}
+    def value(p, name):  # a list as the paper writes it (Params.raw holds tuples)
+        v = p.raw[name]
+        return list(v) if isinstance(v, tuple) else v
+
+    field_only = {n: v for n, v in PAPER_PROBLEM.items() if value(default_params(), n) != v}
+    assert field_only == PAPER_VALUES == {"rate_margin": 0.0}
+    paper = default_params(paper=True)
+    assert {n: value(paper, n) for n in PAPER_PROBLEM} == PAPER_PROBLEM
+
+
+def test_the_paper_switch_over_a_file_under_an_override(tmp_path):
+    """load_params(paper=True): the file's values, then the paper's for the field-only ones,
+    then the overrides (an explicit rate_margin wins)."""
+    assert load_params(paper=True) == default_params(paper=True)
+    assert load_params(CONFIG, paper=True) == default_params(paper=True)
+    assert load_params(CONFIG).rate_margin == 0.05  # the field problem stays the default
+    f = tmp_path / "p.yaml"
+    f.write_text('"/**":\n  ros__parameters:\n    rate_margin: 0.2\n    looks: 8\n')
+    p = load_params(f, paper=True)
+    assert (p.rate_margin, p.looks) == (0.0, 8)
+    assert load_params(f, {"rate_margin": 0.1}, paper=True).rate_margin == 0.1
 
 
 def test_si_conversion():

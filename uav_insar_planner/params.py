@@ -22,6 +22,7 @@ from uav_insar_planner.param_specs.science import (
     LENGTH_MAX_M,
     MULTILOOK_MAX_LOOKS,
     OBJECTIVES,
+    PAPER_VALUES,
     PARAM_SPECS,
     SCHEMES,
     SOLVERS,
@@ -30,8 +31,8 @@ from uav_insar_planner.param_specs.science import (
 from uav_insar_planner.swarm import MAX_UAVS, MIN_UAVS
 
 # Re-exported: callers import the table and its choices from here, with the values.
-__all__ = ["LENGTH_MAX_M", "MULTILOOK_MAX_LOOKS", "OBJECTIVES", "PARAM_SPECS", "SCHEMES",
-           "SOLVERS", "SPEC_BY_NAME", "ParamSpec"]
+__all__ = ["LENGTH_MAX_M", "MULTILOOK_MAX_LOOKS", "OBJECTIVES", "PAPER_VALUES", "PARAM_SPECS",
+           "SCHEMES", "SOLVERS", "SPEC_BY_NAME", "ParamSpec"]
 
 SPEED_OF_LIGHT = 299_792_458.0
 BOLTZMANN = 1.380649e-23
@@ -324,6 +325,8 @@ def params_from_mapping(values: Mapping[str, Any], known: Params | None = None,
         else spec.si_value(v[spec.name]) for spec in PARAM_SPECS})
 
 
-def default_params() -> Params:
-    """Table I defaults, straight from PARAM_SPECS (no file needed)."""
-    return params_from_mapping({})
+def default_params(paper: bool = False) -> Params:
+    """Table I defaults, straight from PARAM_SPECS (no file needed): the field problem, or with
+    `paper` the paper's problem (P), every field-only default at its paper value
+    (PAPER_VALUES: rate_margin 0)."""
+    return params_from_mapping(dict(PAPER_VALUES) if paper else {})

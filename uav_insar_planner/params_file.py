@@ -21,7 +21,7 @@ from typing import Any
 import yaml
 
 from uav_insar_planner.param_specs.nodes import SUITE_PARAMETER_NAMES, spec_named
-from uav_insar_planner.param_specs.science import SPEC_BY_NAME
+from uav_insar_planner.param_specs.science import PAPER_VALUES, SPEC_BY_NAME
 from uav_insar_planner.params import ParamError, Params, params_from_mapping, shown
 from uav_insar_planner.swarm import MASTER, MAX_UAVS, agent_name, uavs
 
@@ -290,14 +290,19 @@ def not_for_the_scenario(values: Mapping[Any, Any]) -> list[str]:
 
 
 def load_params(path: str | Path | None = None, overrides: Mapping[str, Any] | None = None,
-                node_name: str = "planner") -> Params:
+                node_name: str = "planner", paper: bool = False) -> Params:
     """Load a params file (none: Table I defaults, as in config/params.yaml), apply overrides,
     validate everything at once and convert to SI. Raises ParamError listing every problem.
+
+    `paper`: the paper's problem (P), every field-only default (PAPER_VALUES: rate_margin 0)
+    set back to the paper's value over the file's; an override of the same name still wins.
 
     The planner's verdict on names: another node's parameter (not_for_the_scenario), from the
     file or the overrides, is ignored, as `-p` and `/**` serve every node; a name no node
     takes is refused in `params.unknown_parameter`'s words."""
     values = read_params_file(path, node_name) if path is not None else {}
+    if paper:
+        values.update(PAPER_VALUES)
     if overrides:
         values.update(overrides)
     for name in not_for_the_scenario(values):

@@ -42,7 +42,9 @@ GROUPS = (
     Group("scenario", "Scenario (Table I)", PARAM_SPECS,
           "The scenario the planner solves (`PARAM_SPECS`), all settable at run time: a set "
           "is validated with the whole scenario and solved again. `config/params.yaml` holds "
-          "these values, Table I of the paper, in a `/**` section every node reads. The agents "
+          "these values, Table I of the paper, in a `/**` section every node reads; a default "
+          "marked field-only departs from the paper's problem (P) for flying, and `--paper` "
+          "(`load_params(paper=True)`) sets it back. The agents "
           "take the subset they fly by (`AGENT_SCENARIO_SPECS`: "
           + ", ".join(f"`{s.name}`" for s in AGENT_SCENARIO_SPECS) + ")."),
     Group("planner", "Planner only", PLANNER_SPECS,
@@ -125,6 +127,9 @@ def _row(group: Group, spec: ParamSpec, where: dict[int, str]) -> list[str]:
              if s.name == spec.name and s is not spec]
     also = (f". The same name in {', '.join(twins)}: a `/**` section sets each"
             if twins else "")
+    if spec.paper is not None:  # a field-only default (param_specs.science.PAPER_VALUES)
+        also += (f". Field-only default: the paper's problem has {yaml_value(spec.paper)}, "
+                 "which `--paper` sets")
     return [f"{md.anchor(where[id(spec)])}`{spec.name}`", ros_type(spec),
             md.code(yaml_value(spec.default)), md.text(unit), allowed, nodes,
             md.text(desc) + also]

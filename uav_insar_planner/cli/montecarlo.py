@@ -32,7 +32,7 @@ FORMATION_COUNTS = tuple(range(2 * MIN_UAVS, 2 * MAX_UAVS + 1, 2))
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    add_scenario_arguments(parser)
+    add_scenario_arguments(parser, paper=True)
     parser.add_argument("--scheme", choices=SCHEMES, help="as for solve (when planning)")
     parser.add_argument("--formation", metavar=FORMATION_HELP,
                         help="simulate this formation (metres) instead of planning one")

@@ -36,7 +36,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         parser.add_argument("stop" + k, type=finite_float, help="last value")
         parser.add_argument("count" + k, type=sweep_count,
                             help="number of evenly spaced values")
-    add_scenario_arguments(parser)
+    add_scenario_arguments(parser, paper=True)
     parser.add_argument("--schemes", nargs="+", choices=SCHEMES, default=list(SCHEMES),
                         help="schemes to solve in each cell (default: all four)")
     parser.add_argument("--csv", metavar="FILE", help="write one row per (value1, value2, "

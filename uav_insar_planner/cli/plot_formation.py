@@ -18,7 +18,7 @@ HELP = "draw the across-track plane"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    add_scenario_arguments(parser)
+    add_scenario_arguments(parser, paper=True)
     parser.add_argument("--scheme", choices=SCHEMES)
     parser.add_argument("--out", default="formation.png", metavar="FILE.png")
 

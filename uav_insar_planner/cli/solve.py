@@ -11,7 +11,7 @@ import json
 import math
 import sys
 
-from uav_insar_planner.cli.scenario import add_scenario_arguments, scenario_params
+from uav_insar_planner.cli.scenario import add_scenario_arguments, margin_line, scenario_params
 from uav_insar_planner.exit_codes import EXIT_INFEASIBLE, EXIT_OK
 from uav_insar_planner.params import SCHEMES, ParamError
 from uav_insar_planner.swarm import uav_name
@@ -20,7 +20,7 @@ HELP = "solve problem (P) and print the plan"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    add_scenario_arguments(parser)
+    add_scenario_arguments(parser, paper=True)
     parser.add_argument("--scheme", choices=SCHEMES, help="proposed or benchmark 1-3")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.add_argument("--min-separation-m", type=float, default=None, metavar="M",
@@ -39,7 +39,7 @@ def main(args: argparse.Namespace) -> int:
                           "finite number >= 0"])
     params = scenario_params(args)
     plan = solve(params)
-    price = margin_price(params, plan, solve)
+    price = margin_price(params, plan, solve, getattr(args, "paper", False))
     if args.json:
         print(json.dumps({**plan.to_dict(), "rate_margin": price}, indent=2))
     else:
@@ -55,7 +55,7 @@ def main(args: argparse.Namespace) -> int:
     return EXIT_OK if plan.feasible else EXIT_INFEASIBLE
 
 
-def margin_price(params, plan, solve) -> dict:
+def margin_price(params, plan, solve, paper: bool = False) -> dict:
     """What the rate margin costs in sigma_h: `plan` (solved with params.rate_margin) against
     the same scenario solved at margin 0; {"margin", "sigma_h_m", "sigma_h_without_m",
     "price" (relative), "text"}. No second solve when the margin is 0."""
@@ -63,11 +63,11 @@ def margin_price(params, plan, solve) -> dict:
     out = {"margin": mu, "sigma_h_m": plan.sigma_h_m if plan.feasible else None,
            "sigma_h_without_m": None, "price": None}
     if mu == 0.0:
-        return {**out, "text": "rate margin 0: C10 holds R_min exactly (the paper's)"}
+        return {**out, "text": margin_line(mu)}
     bare = solve(params.replace(rate_margin=0.0))
     if bare.feasible:
         out["sigma_h_without_m"] = bare.sigma_h_m
-    head = f"rate margin {mu:.3g} (C10 at {1 + mu:.3g} R_min): "
+    head = f"{margin_line(mu, paper)}: "
     if plan.feasible and bare.feasible:
         out["price"] = plan.sigma_h_m / bare.sigma_h_m - 1.0
         text = (f"{head}sigma_h {plan.sigma_h_m * 100:.4g} cm, {bare.sigma_h_m * 100:.4g} cm "

@@ -1,6 +1,7 @@
 """`uav-insar sweep NAME START STOP COUNT`: solve along one parameter for several schemes.
 
-Prints one row per (value, scheme); `--csv` and `--plot` (the paper's Figures 3/4) write them.
+Prints the rate margin every row holds, once (`--paper`: the paper's problem (P), margin 0),
+then one row per (value, scheme); `--csv` and `--plot` (the paper's Figures 3/4) write them.
 Every value, `--mc-samples`, both output paths and where to solve are checked before the first
 solve. Time: COUNT (at most checks.SWEEP_COUNT_MAX) times the schemes solves, each with a
 Monte-Carlo of at most cli/montecarlo.MAX_DRAWS draws per pair with `--montecarlo`, on `--jobs`
@@ -16,7 +17,7 @@ import argparse
 from uav_insar_planner.cli.checks import check_output_path, finite_float, sweep_count
 from uav_insar_planner.cli.execution import add_execution_arguments, solving
 from uav_insar_planner.cli.output import whole_file
-from uav_insar_planner.cli.scenario import add_scenario_arguments, scenario_params
+from uav_insar_planner.cli.scenario import add_scenario_arguments, margin_line, scenario_params
 from uav_insar_planner.exit_codes import EXIT_OK
 from uav_insar_planner.params import SCHEMES, ParamError
 
@@ -30,7 +31,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("stop", type=finite_float, help="last value")
     parser.add_argument("count", type=sweep_count,
                         help="number of evenly spaced values (1..10000)")
-    add_scenario_arguments(parser)
+    add_scenario_arguments(parser, paper=True)
     parser.add_argument("--schemes", nargs="+", choices=SCHEMES, default=list(SCHEMES),
                         help="schemes to solve at each value (default: all four)")
     parser.add_argument("--band", action="store_true",
@@ -73,7 +74,7 @@ def main(args: argparse.Namespace) -> int:
     with solving(args, len(values) * len(args.schemes)) as (run, bar):
         rows = run_sweep(params, args.name, values, args.schemes, band=args.band,
                          progress=bar.update, montecarlo=mc, run=run)
-    _print_rows(rows, args, mc)
+    _print_rows(rows, args, mc, params.rate_margin)
     if args.csv:
         with whole_file(args.csv) as tmp:
             write_csv(rows, tmp, args.name)
@@ -87,9 +88,11 @@ def main(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _print_rows(rows: list, args: argparse.Namespace, mc: int) -> None:
+def _print_rows(rows: list, args: argparse.Namespace, mc: int, margin: float) -> None:
     from uav_insar_planner.study.sweep import gains, has_worst
 
+    if args.name != "rate_margin":  # swept, it is the table's first column
+        print(margin_line(margin, args.paper))
     extra = f" {'bound_opt':>10} {'band_lo':>9} {'band_hi':>9}" if args.band else ""
     extra += f" {'mc_sigma_h':>10} {'mc_amb_%':>8}" if mc else ""
     worst = has_worst(rows)

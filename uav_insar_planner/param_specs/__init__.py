@@ -24,7 +24,11 @@ class ParamSpec:
     list of one number per UAV (num_uavs of them, checked against num_uavs by `params`).
 
     Its value in SI is `to_si` of the value as given (of each item of a list; None: the value
-    is SI as given), held in the attribute `attribute` (`si_name`, or the parameter's name)."""
+    is SI as given), held in the attribute `attribute` (`si_name`, or the parameter's name).
+
+    `paper`: the paper's value where `default` is a field-only one, a departure from the
+    paper's Table I and problem (P) made for flying (`--paper` and `load_params(paper=True)`
+    set it back); None where the default is the paper's or the paper has none."""
 
     name: str
     kind: type  # int, float or str
@@ -40,6 +44,7 @@ class ParamSpec:
     per_uav: bool = False
     si_name: str = ""
     to_si: Callable[[float], float] | None = None
+    paper: Any = None
 
     @property
     def attribute(self) -> str:

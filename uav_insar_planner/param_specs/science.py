@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 from uav_insar_planner.param_specs import ParamSpec
 from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, MAX_UAVS, MIN_UAVS
@@ -73,11 +74,11 @@ def mbps_to_bps(mbps: float) -> float:
 
 
 def _f(name, default, desc, lo=None, hi=None, lo_open=False, length=0, hi_open=False, why="",
-       per_uav=False, si_name="", to_si=None):
+       per_uav=False, si_name="", to_si=None, paper=None):
     """A float parameter; `why` (the reason for its range) is also appended to `desc`."""
     return ParamSpec(name, float, default, f"{desc}; {why}" if why else desc, lo, hi, lo_open,
                      length, hi_open=hi_open, why=why, per_uav=per_uav, si_name=si_name,
-                     to_si=to_si)
+                     to_si=to_si, paper=paper)
 
 
 # Lengths stop at 1000 km: beyond any UAV's reach, and their squares and the radar
@@ -125,7 +126,7 @@ PARAM_SPECS: tuple[ParamSpec, ...] = (
        "R_min,k (C10 as planned), so a UAV a few metres off its planned point, or a link a "
        "little weaker, still offloads R_min,k; 0 is the paper's C10. Costs power and energy, "
        "and sigma_h only where C9 or C11 then limit the formation", 0.0, 1.0,
-       why="at 1 the plan doubles every rate"),
+       why="at 1 the plan doubles every rate", paper=0.0),
     _f("comm_bandwidth_hz", 1.0e9, "B_c, FDMA bandwidth per UAV [Hz]", 0.0, None, True),
     _f("ref_snr_db", 18.69, "beta_c, channel gain at 1 m over noise power [dB]", -200.0, 200.0,
        si_name="beta_c", to_si=db_to_linear),
@@ -187,3 +188,7 @@ PARAM_SPECS: tuple[ParamSpec, ...] = (
               + f" or {BACKENDS[-1].name} ({BACKENDS[-1].summary})", choices=SOLVERS),
 )
 SPEC_BY_NAME: dict[str, ParamSpec] = {s.name: s for s in PARAM_SPECS}
+#: The paper's problem (P) at Table I: the value of each parameter whose default is field-only
+#: (`ParamSpec.paper`). `--paper` and `load_params(paper=True)` apply these over a params file;
+#: an explicit override (`--set`) still wins.
+PAPER_VALUES: dict[str, Any] = {s.name: s.paper for s in PARAM_SPECS if s.paper is not None}
