@@ -63,6 +63,7 @@ import numpy as np
 
 from uav_insar_planner import model
 from uav_insar_planner.params import Params
+from uav_insar_planner.solver import power, robust_bound, robust_search
 from uav_insar_planner.solver.problem import c7_sines, make_problem
 from uav_insar_planner.solver.result import SolverResult
 from uav_insar_planner.solver.worst_case import (
@@ -78,6 +79,8 @@ FLOOR_POINTS = 5
 FLOOR_SPAN = 3.0
 SEARCH_TOL = 1e-2  # worst-case bound's tolerance while searching; WORST_TOL at the end
 ALMOST_ONE = 1.0 - 1e-12
+# The lower bound's branch and bound stops once it is within this share of the plan's worst case.
+BOUND_TOL = 2e-3
 
 Backend = Callable[[Params, str, str], SolverResult]
 
@@ -226,11 +229,35 @@ def solve(p: Params, scheme: str, objective: str, run: Backend) -> RobustAnswer:
     done = {f: v for f, v in tried.items() if v is not None}
     _, res, _, held = done[min(done, key=lambda f: done[f][0])]
     worst = worst_sigma(p, res.formation, scheme)
+    built = _built(p, scheme, objective)
+    if built is not None and built[1].upper < worst.upper:
+        res, worst, held = built
     # the relaxations bound sigma_h only when sigma_h is what the back end minimised
     lower = math.nan
     if objective == "exact":
         lower = max(relax.lower_bound,
                     run(moved_relaxation(p, scheme, objective), scheme, objective).lower_bound)
+        lower = float(np.nanmax([lower, robust_bound.lower_bound(
+            p, scheme, worst.upper * (1.0 - BOUND_TOL))]))
     return RobustAnswer(res, worst, lower, (
         f"branch and bound over {worst.squares} squares of the master's error disk, each "
         "slave's disk by monotone bounds"), held)
+
+
+def _built(p: Params, scheme: str, objective: str
+           ) -> tuple[SolverResult, WorstCase, dict[str, ConstraintStatus]] | None:
+    """robust_search's formation for the exact objective, as a plan with its power schedules,
+    its slacks over the disks and its certified worst case; None if it fails them."""
+    if objective != "exact":
+        return None
+    q = robust_search.search(p, scheme)
+    if q is None:
+        return None
+    p_com = power.schedules(p, q, scheme)
+    held = robust_slacks(p, q, p_com, scheme)
+    if not all(c.ok for c in held.values()):
+        return None
+    worst = worst_sigma(p, q, scheme)
+    return SolverResult(True, q, p_com, 0, certificate=(
+        "built for its worst case (solver/robust_search.py): no certificate of the nominal "
+        "problem")), worst, held
