@@ -52,14 +52,14 @@ from uav_insar_planner.solver.problem import c7_sines
 from uav_insar_planner.swarm import MASTER
 
 # Master rim angles phi_m from its line of sight (0: away from the target, +-pi/2 along +-n).
-MASTER_ANGLES = np.linspace(-math.pi / 2, math.pi / 2, 13)
+MASTER_ANGLES = np.linspace(-math.pi / 2, math.pi / 2, 9)
 # Slave rim angles tried, about the direction towards the master's line of sight.
 SLAVE_OFFSETS = np.linspace(-math.pi / 6, math.pi / 6, 5)
-INNER_TOL = 1e-3
+INNER_TOL = 2e-3
 MIN_BOX_M = 0.02
-INNER_ROUNDS = 14
+INNER_ROUNDS = 10
 FIRST_INTERVALS = 8
-MAX_INTERVALS = 160
+MAX_INTERVALS = 40
 MAX_PATTERN_SLAVES = 9  # 2^9 side patterns
 
 

@@ -34,11 +34,11 @@ from uav_insar_planner.solver.robust_bound import MASTER_ANGLES, Frame, frame, t
 from uav_insar_planner.solver.worst_case import pair_sigma, slave_slacks
 from uav_insar_planner.swarm import MASTER
 
-RIM_POINTS = 24
-A_SPAN_M, A_STEP_M, A_FINE_M = 30.0, 0.5, 0.02
-CAP_SHARES = (1.0, 0.97, 0.93)
-R0_POINTS = 13
-R0_REFINE = 2
+RIM_POINTS = 12
+A_SPAN_M, A_STEP_M, A_FINE_M = 16.0, 1.0, 0.05
+CAP_SHARES = (1.0,)
+R0_POINTS = 7
+R0_REFINE = 3
 INSIDE = 1.0 - 1e-9  # the cap is met with this much to spare, against rounding
 
 
