@@ -48,9 +48,12 @@ lower bounds bound (P_e) from below; the larger is reported:
   r_0 <= R, the nominal master interval's top (or <= e <= (e / r_0,lo) r_0 when b_perp,k < e).
   So the nominal problem with C8 at c_k'' holds q'' and its optimum bounds the worst case.
 
-Both leave much of the error's effect out (the first all of it, the second the master's
-share and the slack between r_0 and R), so the gap is loose (measured in
-docs/science/robust.md). When the first is proven infeasible, so is (P_e), blocked by its
+Both leave much of the error's effect out, so a third bound is taken with them: the branch
+and bound over the master's range of solver/robust_bound.py (its docstring says why it holds).
+The upper side likewise gains a formation built for its worst case (solver/robust_search.py,
+slaves on either side of the master's line of sight), certified as the floor plans are; the
+smaller certified worst case is returned. Gaps and times in docs/science/robust.md.
+When the first is proven infeasible, so is (P_e), blocked by its
 blocking families; when only the tightening is, the plan is infeasible without a proof.
 """
 from __future__ import annotations
