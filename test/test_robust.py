@@ -95,7 +95,8 @@ def test_worst_case_bound_brackets_the_rim_search():
 
 
 def test_robust_slacks_run_once_per_plan_of_the_search(monkeypatch):
-    """robust_slacks checks each plan of the floor search once (robust.py) and the chosen
+    """robust_slacks checks each plan of the floor search and the built formation once
+    (robust.py) and the chosen
     plan's slacks are those, not computed again by solver.robust_plan."""
     import uav_insar_planner.solver as solver_package
     from uav_insar_planner.solver import worst_case
@@ -121,6 +122,15 @@ def test_robust_slacks_run_once_per_plan_of_the_search(monkeypatch):
         checked.append(args)
         return robust_slacks(*args, **kwargs)
 
+    real_search = robust.robust_search.search
+
+    def search(*args):
+        built = real_search(*args)
+        if built is not None:  # the formation built for its worst case is checked once too
+            plans.append(built)
+        return built
+
+    monkeypatch.setattr(robust.robust_search, "search", search)
     monkeypatch.setattr(robust, "tightened", tightened)
     monkeypatch.setattr(solver_package, "backend", counted_backend)
     for module in (robust, worst_case, solver_package):

@@ -29,7 +29,11 @@ Constraints (`robust_slacks`): each family's least slack over the disks, exact o
   slave Theta r^2 / z >= Theta (r_k - e)^2 / (z_k + e) >= S_min (conservative);
 - C6: gamma_SNR(r_0 + e, r_k + e) >= gamma_SNR^min (exact: it falls in both ranges);
 - C7: gamma_Rg at theta_k -+ asin(e / r_k) >= gamma_Rg^min (exact, unimodal);
-- C8: lambda (r_0 - e) sin(theta_0) / (b_perp,k + 2e) >= h_amb,k^min (conservative);
+- C8: h_amb over the disks is least with the slave e outwards along n (b_perp + e = B) and
+  the master on its rim at angle phi from its line of sight, b_perp B + e sin phi, r_0' =
+  |r_0 + e e^(i phi)| >= r_0 + e cos phi; so h_amb >= lambda sin(theta_0) min_phi (r_0 + e cos
+  phi) / (B + e sin phi), a ratio of linear forms whose least value t solves
+  (r_0 - t B)^2 = e^2 (1 + t^2) (`h_amb_worst`; conservative by at most e^2 / (2 r_0) in r_0);
 - C10: the rate of the plan's P_com,k[n] at distance sqrt((rho_k + e)^2 + (y[n] - g_y)^2)
   (exact: the farthest point of D_k from the station); C9 and C11 bind the schedule alone.
 """
@@ -45,6 +49,7 @@ from uav_insar_planner import model
 from uav_insar_planner.params import Params
 from uav_insar_planner.plan import ConstraintStatus
 from uav_insar_planner.schemes import active_uavs, planned_rate_bps, slave_uavs
+from uav_insar_planner.solver.power import station_radius_sq
 from uav_insar_planner.swarm import MASTER
 
 # The bound stops when it is within this fraction of a sigma_h attained in the disks.
@@ -68,18 +73,18 @@ class WorstCase:
     squares: int
 
 
-def _gamma_rg(p: Params, theta):
+def gamma_rg(p: Params, theta):
     bp = p.fractional_bandwidth
     return model.coherence_baseline(model.chi(p.theta0, theta), bp)
 
 
-def _look_spread(e: float, r):
+def look_spread(e: float, r):
     """asin(e / r): the most a look angle moves over a disk of radius e at range r (pi/2 when
     the disk reaches the target)."""
     return np.arcsin(np.minimum(e / np.maximum(np.asarray(r, dtype=float), 1e-300), 1.0))
 
 
-def _weight(p: Params, b, r0, gamma):
+def pair_weight(p: Params, b, r0, gamma):
     """w = (2 pi b / (lambda r_0 sin(theta_0) sigma_Phi(gamma)))^2; 0 where gamma <= 0."""
     g = np.clip(gamma, 1e-300, 1.0)
     sig = model.phase_error_crb(g, p.looks)
@@ -109,10 +114,10 @@ def _cell_upper(p: Params, q: np.ndarray, slaves, e: float, sq: np.ndarray):
         b_lo = np.where(lo > 0, lo, np.where(hi < 0, -hi, 0.0))
         rk = float(model.slant_range(q[k, 0], q[k, 1], p.x_t))
         th = float(model.look_angle(q[k, 0], q[k, 1], p.x_t))
-        spread = float(_look_spread(e, rk))
-        g_rg = min(float(_gamma_rg(p, th - spread)), float(_gamma_rg(p, th + spread)))
+        spread = float(look_spread(e, rk))
+        g_rg = min(float(gamma_rg(p, th - spread)), float(gamma_rg(p, th + spread)))
         g = g_rg * model.coherence_snr_at_ranges(r0_hi, rk + e, gm) * p.coherence_other
-        wsum = wsum + _weight(p, b_lo, r0_hi, g)
+        wsum = wsum + pair_weight(p, b_lo, r0_hi, g)
     return _sigma(wsum)
 
 
@@ -124,16 +129,16 @@ def _attained(p: Params, q: np.ndarray, slaves, e: float, masters: np.ndarray):
     x0, z0 = masters[:, :1], masters[:, 1:]
     for k in slaves:
         xk, zk = q[k, 0] + e * np.cos(phi), q[k, 1] + e * np.sin(phi)
-        pm = _pair_sigma(p, x0, z0, xk[None], zk[None])
+        pm = pair_sigma(p, x0, z0, xk[None], zk[None])
         wsum = wsum + (1.0 / pm**2).min(axis=1)
     return _sigma(wsum)
 
 
-def _pair_sigma(p: Params, x0, z0, xk, zk):
+def pair_sigma(p: Params, x0, z0, xk, zk):
     """sigma_h,k of the pair at these positions, as the checker computes it (evaluate.py)."""
     gm = model.gamma_m(p)
     r0 = model.slant_range(x0, z0, p.x_t)
-    g = model.coherence_total(_gamma_rg(p, model.look_angle(xk, zk, p.x_t)),
+    g = model.coherence_total(gamma_rg(p, model.look_angle(xk, zk, p.x_t)),
                               model.coherence_snr(model.snr_monostatic(r0, gm),
                                                   model.snr_bistatic(r0, model.slant_range(
                                                       xk, zk, p.x_t), gm)),
@@ -193,6 +198,50 @@ def _quarters(xa: float, xb: float, za: float, zb: float) -> list[list[float]]:
     return [[xa, xm, za, zm], [xm, xb, za, zm], [xa, xm, zm, zb], [xm, xb, zm, zb]]
 
 
+def h_amb_worst(p: Params, r0, b):
+    """A lower bound of h_amb over the disks for a pair with master range r_0 and b_perp b
+    (module docstring, C8): lambda sin(theta_0) (r_0^2 - e^2) / (r_0 B + e sqrt(r_0^2 + B^2 -
+    e^2)) with B = b + e, the least over the master's rim of (r_0 + e cos phi) / (B + e sin
+    phi); exact up to e^2 / (2 r_0) in r_0."""
+    e = p.nav_error_m
+    big = np.asarray(b, dtype=float) + e
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (r0**2 - e**2) / (r0 * big + e * np.sqrt(r0**2 + big**2 - e**2))
+    return p.wavelength * math.sin(p.theta0) * np.where(big > 0, t, np.inf)
+
+
+def _c1(p: Params, z):
+    """C1 over the disks: z_k - e >= z_min and z_k + e <= z_max (exact)."""
+    return np.minimum(z - p.nav_error_m - p.z_min, p.z_max - p.nav_error_m - z)
+
+
+def slave_slacks(p: Params, q0: np.ndarray, xk, zk, k: int, scheme: str
+                 ) -> dict[str, np.ndarray]:
+    """The least slack over the disks of slave k's own families (C3, C5-C8, its C1, its C4
+    with the master and its C10 station distance, this last as the station disk's radius
+    less rho_k + e), vectorised over slave positions (xk, zk) (module docstring)."""
+    e = p.nav_error_m
+    xk, zk = np.asarray(xk, dtype=float), np.asarray(zk, dtype=float)
+    r0 = float(model.slant_range(q0[0], q0[1], p.x_t))
+    rk = model.slant_range(xk, zk, p.x_t)
+    th, spread = model.look_angle(xk, zk, p.x_t), look_spread(e, rk)
+    b = model.perpendicular_baseline(q0[0], q0[1], xk, zk, p.theta0)
+    radius_sq = station_radius_sq(p, k, scheme)
+    rho = np.hypot(xk - p.ground_station[0], zk - p.ground_station[2])
+    return {
+        "C1": _c1(p, zk),
+        "C3": np.minimum(th - spread - p.theta_min, p.theta_max - th - spread),
+        "C4": np.hypot(xk - q0[0], zk - q0[1]) - 2 * e - p.d_min,
+        "C5": p.beamwidth * np.maximum(rk - e, 0.0) ** 2 / (zk + e) - p.swath_min,
+        "C6": model.coherence_snr_at_ranges(r0 + e, rk + e, model.gamma_m(p))
+        - p.coherence_snr_min,
+        "C7": np.minimum(gamma_rg(p, th - spread), gamma_rg(p, th + spread))
+        - p.coherence_rg_min,
+        "C8": h_amb_worst(p, r0, b) - model.h_amb_min_of(p, k),
+        "C10": (math.sqrt(radius_sq) if radius_sq > 0 else -math.inf) - rho,
+    }
+
+
 def robust_slacks(p: Params, formation: np.ndarray, p_com: np.ndarray, scheme: str
                   ) -> dict[str, ConstraintStatus]:
     """Each family's least slack over the disks (module docstring), in its SI unit; C2 (the
@@ -200,28 +249,18 @@ def robust_slacks(p: Params, formation: np.ndarray, p_com: np.ndarray, scheme: s
     q = np.asarray(formation, dtype=float)
     e = p.nav_error_m
     uavs, slaves = active_uavs(scheme, p.num_uavs), slave_uavs(scheme, p.num_uavs)
-    r = {k: float(model.slant_range(q[k, 0], q[k, 1], p.x_t)) for k in uavs}
-    th = {k: float(model.look_angle(q[k, 0], q[k, 1], p.x_t)) for k in slaves}
-    spread = {k: float(_look_spread(e, r[k])) for k in slaves}
-    gm = model.gamma_m(p)
+    r0 = float(model.slant_range(q[MASTER, 0], q[MASTER, 1], p.x_t))
+    own = {k: slave_slacks(p, q[MASTER], q[k, 0], q[k, 1], k, scheme) for k in slaves}
     slack: dict[str, dict[str, float]] = {
-        "C1": {f"z{k}": min(q[k, 1] - e - p.z_min, p.z_max - e - q[k, 1]) for k in uavs},
-        "C3": {f"theta{k}": min(th[k] - spread[k] - p.theta_min,
-                                p.theta_max - th[k] - spread[k]) for k in slaves},
+        "C1": {f"z{k}": float(_c1(p, q[k, 1])) for k in uavs},
+        "C3": {f"theta{k}": float(own[k]["C3"]) for k in slaves},
         "C4": {f"d{a}{b}": float(np.hypot(*(q[a] - q[b]))) - 2 * e - p.d_min
                for i, a in enumerate(uavs) for b in uavs[i + 1:]},
-        "C5": {f"S{k}": (p.beamwidth * (r[k] - e) / math.cos(p.theta0) if k == MASTER
-                         else p.beamwidth * max(r[k] - e, 0.0) ** 2 / (q[k, 1] + e))
-               - p.swath_min for k in uavs},
-        "C6": {f"gamma_snr{k}": float(model.coherence_snr_at_ranges(r[MASTER] + e, r[k] + e, gm))
-               - p.coherence_snr_min for k in slaves},
-        "C7": {f"gamma_rg{k}": min(float(_gamma_rg(p, th[k] - spread[k])),
-                                   float(_gamma_rg(p, th[k] + spread[k])))
-               - p.coherence_rg_min for k in slaves},
-        "C8": {f"h_amb{k}": float(model.height_of_ambiguity(
-            p.wavelength, r[MASTER] - e, p.theta0,
-            model.perpendicular_baseline(q[0, 0], q[0, 1], q[k, 0], q[k, 1], p.theta0) + 2 * e))
-            - model.h_amb_min_of(p, k) for k in slaves},
+        "C5": {f"S{MASTER}": p.beamwidth * (r0 - e) / math.cos(p.theta0) - p.swath_min}
+        | {f"S{k}": float(own[k]["C5"]) for k in slaves},
+        "C6": {f"gamma_snr{k}": float(own[k]["C6"]) for k in slaves},
+        "C7": {f"gamma_rg{k}": float(own[k]["C7"]) for k in slaves},
+        "C8": {f"h_amb{k}": float(own[k]["C8"]) for k in slaves},
         "C10": {},
     }
     for k in uavs:
