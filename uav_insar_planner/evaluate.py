@@ -18,6 +18,7 @@ from uav_insar_planner.params import Params
 from uav_insar_planner.plan import ConstraintStatus
 from uav_insar_planner.schemes import active_uavs, planned_rate_bps, slave_uavs, static_power_w
 from uav_insar_planner.swarm import uav_name
+from uav_insar_planner.tomography.plan_figures import plan_tomography
 
 # Relative feasibility tolerance: a constraint counts as met when its slack is at least
 # -FEAS_TOL times the constraint's own scale (numerical solvers stop at ~1e-8 accuracy).
@@ -161,6 +162,9 @@ def evaluate(p: Params, formation: np.ndarray, p_com: np.ndarray, scheme: str,
         "min_rate_mbps": {uav_name(k): float(rates[k].min() / 1e6) for k in uavs},
         "energy_j": {uav_name(k): float(power[k].sum() * p.slot_duration_s) for k in uavs},
     }
+    tomography = plan_tomography(p, q, uavs)
+    if tomography is not None:
+        metrics["tomography"] = tomography
     if objective == "multilook":
         from uav_insar_planner.multilook import plan_metrics  # scipy: not in a lean install
 

@@ -180,6 +180,17 @@ PARAM_SPECS: tuple[ParamSpec, ...] = (
        "returns the best feasible plan found with its proven gap and says the certificate is "
        "incomplete; 0: no limit but the search's node limit", 0.0, 3600.0,
        why="an hour at most: a plan is wanted before the flight"),
+    # tomography/: the array's figures of every plan and the tomographic objective
+    _f("tomo_height_span_m", 2.5, "S, height span of the tomographic figures [m]: the array "
+       "factor's sidelobes (PSLR, ISLR) are measured over |h| <= S, past the main lobe",
+       0.0, 1.0e4, True, why="10 km at most, beyond any scene's heights"),
+    _f("tomo_resolution_m", 1.0, "rho_req, Rayleigh elevation resolution the tomography "
+       "objective holds (lambda r_0 sin(theta_0) / span of b_perp) [m]", 0.0, 1.0e4, True,
+       why="10 km at most, beyond any scene's heights"),
+    _f("tomo_ambiguity_min_m", 2.5, "H_req, least nearest elevation ambiguity the tomography "
+       "objective allows (first h beyond the main lobe with AF >= 0.9) [m]; it takes the "
+       "place of C8's per-pair h_amb limit", 0.0, 1.0e4,
+       why="10 km at most, beyond any scene's heights"),
     ParamSpec("scheme", str, "proposed", "which scheme to solve", choices=SCHEMES),
     ParamSpec("objective", str, "exact", "exact: minimise sigma_h; bound: Proposition 1; "
               "multilook: sigma_h with the exact multilook phase std", choices=OBJECTIVES),
