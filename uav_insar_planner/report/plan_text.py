@@ -21,6 +21,9 @@ CONSTRAINT_TEXT = {
     "C11": "energy <= E_max",
 }
 
+TOMOGRAPHY_C8 = ("in its place (objective tomography): the array's nearest ambiguity >= "
+                 "tomo_ambiguity_min_m, resolution <= tomo_resolution_m")
+
 
 def format_plan(plan: Plan) -> str:
     """Multi-line summary: formation, schedules, accuracy, per-pair metrics, constraints."""
@@ -59,6 +62,9 @@ def format_plan(plan: Plan) -> str:
     if np.isfinite(plan.lower_bound_m):
         lines.append(f"certified lower bound           = {plan.lower_bound_m:.6f} m "
                      f"(gap {plan.optimality_gap:.2e}; {plan.certificate})")
+    if "tomography_objective" in m:
+        t = m["tomography_objective"]
+        lines.append(f"tomographic objective: ISLR {t['islr_db']:.3f} dB; {plan.certificate}")
     if plan.nav_error_m > 0:
         lines += robust_lines(plan)
     if "tomography" in m:
@@ -74,8 +80,10 @@ def format_plan(plan: Plan) -> str:
             f"{pm['sigma_h_m']:.6f}")
     lines += ["", "constraints (slack >= 0 when met; SI units):"]
     for name, c in plan.constraints.items():
+        text = TOMOGRAPHY_C8 if name == "C8" and "tomography_objective" in m else (
+            CONSTRAINT_TEXT[name])
         lines.append(f"  {name:<4} {'ok  ' if c.ok else 'FAIL'}  slack {c.slack:12.6g}  "
-                     f"[{c.detail}]  {CONSTRAINT_TEXT[name]}")
+                     f"[{c.detail}]  {text}")
     if plan.robust_constraints:
         lines += ["", f"worst case over the error disks (every UAV within {plan.nav_error_m:g} m; "
                   "least slack, exact or conservative):"]
