@@ -7,6 +7,7 @@ in every slot.
 """
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -18,6 +19,7 @@ from uav_insar_planner.params import Params
 from uav_insar_planner.plan import ConstraintStatus
 from uav_insar_planner.schemes import active_uavs, planned_rate_bps, slave_uavs, static_power_w
 from uav_insar_planner.swarm import uav_name
+from uav_insar_planner.tomography.plan_figures import plan_tomography
 
 # Relative feasibility tolerance: a constraint counts as met when its slack is at least
 # -FEAS_TOL times the constraint's own scale (numerical solvers stop at ~1e-8 accuracy).
@@ -161,11 +163,28 @@ def evaluate(p: Params, formation: np.ndarray, p_com: np.ndarray, scheme: str,
         "min_rate_mbps": {uav_name(k): float(rates[k].min() / 1e6) for k in uavs},
         "energy_j": {uav_name(k): float(power[k].sum() * p.slot_duration_s) for k in uavs},
     }
+    tomography = plan_tomography(p, q, uavs)
+    if tomography is not None:
+        metrics["tomography"] = tomography
+    if objective == "tomography":
+        c["C8"] = tomography_requirement(p, tomography)
     if objective == "multilook":
         from uav_insar_planner.multilook import plan_metrics  # scipy: not in a lean install
 
         metrics["multilook"] = plan_metrics(metrics["pairs"], p.looks)
     return Evaluation(sigma_h, bound, metrics, c)
+
+
+def tomography_requirement(p: Params, t: dict[str, Any] | None) -> ConstraintStatus:
+    """C8 under the tomography objective: the array's nearest ambiguity >= tomo_ambiguity_min_m
+    and its resolution at most tomo_resolution_m (the per-pair h_amb limit gives way to them);
+    the slack is the smaller of the two margins [m]."""
+    if not t or t.get("resolution_m") is None:
+        return ConstraintStatus(False, -math.inf, "no elevation aperture")
+    amb = t["ambiguity_height_m"] if t["ambiguity_height_m"] is not None else math.inf
+    slacks = {"ambiguity": amb - p.tomo_ambiguity_min_m,
+              "resolution": p.tomo_resolution_m - t["resolution_m"]}
+    return _status(slacks, max(p.tomo_resolution_m, 1.0))
 
 
 def rate_tolerance_bps(rate_min_bps: tuple[float, ...]) -> float:

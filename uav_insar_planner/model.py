@@ -53,6 +53,25 @@ def perpendicular_baseline(x0: ArrayLike, z0: ArrayLike, xk: ArrayLike, zk: Arra
     return np.hypot(dx, dz) * np.abs(np.cos(theta0 - alpha))
 
 
+def perpendicular_baseline_signed(x0: ArrayLike, z0: ArrayLike, xk: ArrayLike, zk: ArrayLike,
+                                  theta0: float) -> ArrayLike:
+    """b_perp,k with its sign: dx cos(theta_0) + dz sin(theta_0), whose magnitude is eq. 3's
+    `perpendicular_baseline`; positive for a receiver at a smaller look angle than the
+    master's (a UAV at look angle theta and range r has r sin(theta_0 - theta)). The
+    tomographic array factor needs the sign: receivers on both sides of the master's line of
+    sight sample the elevation spectrum on both sides of zero."""
+    return (np.subtract(xk, x0) * math.cos(theta0)
+            + np.subtract(zk, z0) * math.sin(theta0))
+
+
+def elevation_wavenumber(wavelength: float, r0: ArrayLike, theta0: float,
+                         b_perp: ArrayLike) -> ArrayLike:
+    """kappa_k = 1 / h_amb,k = b_perp,k / (lambda r_0 sin(theta_0)) [1/m], eq. 12 inverted
+    (0 at b_perp = 0, signed with b_perp): a point at height h has phase 2 pi kappa_k h in
+    receiver k, the tomographic array factor's wavenumber (tomography/array_factor.py)."""
+    return 1.0 / height_of_ambiguity(wavelength, r0, theta0, b_perp)
+
+
 def perpendicular_baseline_fixed_look(xk: ArrayLike, zk: ArrayLike, x_t: float,
                                       theta0: float) -> ArrayLike:
     """b_perp,k = |(x_t - x_k) - tan(theta_0) z_k| / sqrt(tan^2(theta_0) + 1)  (eq. 16),

@@ -99,6 +99,9 @@ class Params:
     master_fixed: tuple[float, float]
     nav_error_m: float  # e: each UAV anywhere within e of its planned point (solver/robust.py)
     time_budget_s: float  # the global search's budget; 0: none (optimum.solve_global)
+    tomo_height_span_m: float  # S: the tomographic figures' sidelobe span (tomography/)
+    tomo_resolution_m: float  # the tomography objective's resolution and ambiguity
+    tomo_ambiguity_min_m: float
     scheme: str
     objective: str
     solver: str

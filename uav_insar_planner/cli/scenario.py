@@ -21,8 +21,8 @@ def add_scenario_arguments(parser: argparse.ArgumentParser, paper: bool = False)
     parser.add_argument("--set", metavar="NAME=VALUE", action="append", default=[],
                         help="override a parameter (repeatable), e.g. --set h_amb_min_m=0.9")
     parser.add_argument("--objective", choices=OBJECTIVES,
-                        help="exact sigma_h, Prop. 1 bound, or sigma_h with the exact "
-                        "multilook phase std")
+                        help="exact sigma_h, Prop. 1 bound, sigma_h with the exact "
+                        "multilook phase std, or tomography (the array factor's ISLR)")
     parser.add_argument("--solver", choices=SOLVERS,
                         help="global (certified), paper-ao or evolution")
     if paper:

@@ -14,7 +14,7 @@ from uav_insar_planner.param_specs import ParamSpec
 from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, MAX_UAVS, MIN_UAVS
 
 SCHEMES = ("proposed", "single-baseline", "fixed-master", "static-power")
-OBJECTIVES = ("exact", "bound", "multilook")
+OBJECTIVES = ("exact", "bound", "multilook", "tomography")
 # n_L stops at 1000 looks, beyond any UAV SAR product: the multilook objective tabulates the
 # exact phase std per n_L (multilook.py, O(n_L): 4.4 s at 1000) and a Monte-Carlo pixel draws
 # 4 n_L normals (montecarlo.py; cli/montecarlo.py bounds samples x looks per pair).
@@ -45,15 +45,16 @@ class Backend:
 
 
 BACKENDS = (
-    Backend("global", "uav_insar_planner.solver.global_opt.optimum:solve_global", OBJECTIVES,
-            True, "certified",
+    Backend("global", "uav_insar_planner.solver.global_opt.optimum:solve_global",
+            ("exact", "bound", "multilook"), True, "certified",
+            "tomography is the evolution back end's (its relaxation carries the bound)",
             warm_start="uav_insar_planner.solver.global_opt.warm:WarmStart"),
     Backend("paper-ao", "uav_insar_planner.solver.ao.algorithm2:solve_ao", ("exact", "bound"),
             False, "Algorithm 2", "paper-ao minimises Proposition 1's bound",
             "paper-ao's convex sub-problems have no robust counterpart of the worst case"),
     Backend("evolution", "uav_insar_planner.solver.evolution.algorithm:solve_evolution",
-            ("exact", "bound"), False, "differential evolution, no certificate",
-            "its baseline searches the Cramer-Rao objectives",
+            ("exact", "bound", "tomography"), False, "differential evolution, no certificate",
+            "its baseline searches the Cramer-Rao objectives and the tomographic one",
             "its baseline has no certificate, so no certified worst case"),
 )
 SOLVERS = tuple(b.name for b in BACKENDS)
@@ -181,9 +182,22 @@ PARAM_SPECS: tuple[ParamSpec, ...] = (
        "returns the best feasible plan found with its proven gap and says the certificate is "
        "incomplete; 0: no limit but the search's node limit", 0.0, 3600.0,
        why="an hour at most: a plan is wanted before the flight"),
+    # tomography/: the array's figures of every plan and the tomographic objective
+    _f("tomo_height_span_m", 2.5, "S, height span of the tomographic figures [m]: the array "
+       "factor's sidelobes (PSLR, ISLR) are measured over |h| <= S, past the main lobe",
+       0.0, 1.0e4, True, why="10 km at most, beyond any scene's heights"),
+    _f("tomo_resolution_m", 1.0, "rho_req, Rayleigh elevation resolution the tomography "
+       "objective holds (lambda r_0 sin(theta_0) / span of b_perp) [m]", 0.0, 1.0e4, True,
+       why="10 km at most, beyond any scene's heights"),
+    _f("tomo_ambiguity_min_m", 2.5, "H_req, least nearest elevation ambiguity the tomography "
+       "objective allows (first h beyond the main lobe with AF >= 0.9) [m]; it takes the "
+       "place of C8's per-pair h_amb limit", 0.0, 1.0e4,
+       why="10 km at most, beyond any scene's heights"),
     ParamSpec("scheme", str, "proposed", "which scheme to solve", choices=SCHEMES),
     ParamSpec("objective", str, "exact", "exact: minimise sigma_h; bound: Proposition 1; "
-              "multilook: sigma_h with the exact multilook phase std", choices=OBJECTIVES),
+              "multilook: sigma_h with the exact multilook phase std; tomography: minimise "
+              "the elevation array factor's ISLR at tomo_resolution_m (solver evolution)",
+              choices=OBJECTIVES),
     ParamSpec("solver", str, "global", ", ".join(f"{b.name} ({b.summary})" for b in BACKENDS[:-1])
               + f" or {BACKENDS[-1].name} ({BACKENDS[-1].summary})", choices=SOLVERS),
 )

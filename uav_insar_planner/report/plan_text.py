@@ -21,6 +21,9 @@ CONSTRAINT_TEXT = {
     "C11": "energy <= E_max",
 }
 
+TOMOGRAPHY_C8 = ("in its place (objective tomography): the array's nearest ambiguity >= "
+                 "tomo_ambiguity_min_m, resolution <= tomo_resolution_m")
+
 
 def format_plan(plan: Plan) -> str:
     """Multi-line summary: formation, schedules, accuracy, per-pair metrics, constraints."""
@@ -59,8 +62,13 @@ def format_plan(plan: Plan) -> str:
     if np.isfinite(plan.lower_bound_m):
         lines.append(f"certified lower bound           = {plan.lower_bound_m:.6f} m "
                      f"(gap {plan.optimality_gap:.2e}; {plan.certificate})")
+    if "tomography_objective" in m:
+        t = m["tomography_objective"]
+        lines.append(f"tomographic objective: ISLR {t['islr_db']:.3f} dB; {plan.certificate}")
     if plan.nav_error_m > 0:
         lines += robust_lines(plan)
+    if "tomography" in m:
+        lines += tomography_lines(m["tomography"])
     lines += ["", "interferometric pairs:",
               "  pair       b_m  b_perp_m  h_amb_m  coh_Rg  coh_SNR  coh_tot  SNR_0  SNR_k  "
               "sigma_hk_m"]
@@ -72,8 +80,10 @@ def format_plan(plan: Plan) -> str:
             f"{pm['sigma_h_m']:.6f}")
     lines += ["", "constraints (slack >= 0 when met; SI units):"]
     for name, c in plan.constraints.items():
+        text = TOMOGRAPHY_C8 if name == "C8" and "tomography_objective" in m else (
+            CONSTRAINT_TEXT[name])
         lines.append(f"  {name:<4} {'ok  ' if c.ok else 'FAIL'}  slack {c.slack:12.6g}  "
-                     f"[{c.detail}]  {CONSTRAINT_TEXT[name]}")
+                     f"[{c.detail}]  {text}")
     if plan.robust_constraints:
         lines += ["", f"worst case over the error disks (every UAV within {plan.nav_error_m:g} m; "
                   "least slack, exact or conservative):"]
@@ -91,3 +101,21 @@ def robust_lines(plan: Plan) -> list[str]:
     return [f"worst case, nav error {plan.nav_error_m:g} m = {plan.sigma_h_worst_m:.6f} m "
             f"(certified upper bound of sigma_h with every UAV anywhere within "
             f"{plan.nav_error_m:g} m; {gap}; {plan.worst_certificate})"]
+
+
+def tomography_lines(t: dict) -> list[str]:
+    """The array's tomographic figures (metrics["tomography"], tomography/plan_figures.py)."""
+    def metres(v: float | None) -> str:
+        return "none" if v is None else f"{v:.4g} m"
+
+    b = ", ".join(f"{v:.3f}" for v in t["b_perp_signed_m"])
+    head = f"tomography (SIMO array, b_perp {b} m; sidelobes over |h| <= {t['height_span_m']:g} m):"
+    if "note" in t:
+        return ["", head, f"  {t['note']}"]
+    pslr = "no sidelobe in the span" if t["pslr_db"] is None else (
+        f"PSLR {t['pslr_db']:.2f} dB, ISLR {t['islr_db']:.2f} dB")
+    return ["", head,
+            f"  Rayleigh resolution {metres(t['resolution_m'])}, main lobe to "
+            f"{metres(t['main_lobe_m'])}, nearest ambiguity (AF >= 0.9) "
+            f"{metres(t['ambiguity_height_m'])} (searched to {t['ambiguity_search_m']:.4g} m)",
+            f"  {pslr}"]

@@ -109,7 +109,7 @@ def solve(params: Params, scheme: str | None = None, objective: str | None = Non
         iterations=result.iterations,
         solve_time_s=elapsed,
         constraints=ev.constraints if ev else {},
-        metrics=ev.metrics if ev else {},
+        metrics={**ev.metrics, **result.metrics} if ev else {},
         blocking_constraints=[] if feasible else blocking,
         lower_bound_m=result.lower_bound,
         optimality_gap=result.gap,

@@ -25,3 +25,6 @@ class SolverResult:
     gap: float = float("nan")
     certificate: str = ""
     message: str = ""
+    #: Figures only the back end knows (the tomographic objective's bound), merged into the
+    #: plan's metrics beside the checker's.
+    metrics: dict = field(default_factory=dict)

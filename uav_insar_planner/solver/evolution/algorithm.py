@@ -66,7 +66,12 @@ def _polish(problem: EvolutionProblem, x: np.ndarray) -> np.ndarray | None:
 
 def solve_evolution(p: Params, scheme: str, objective: str, seed: int = SEED) -> SolverResult:
     """The evolution back end: (P) for `scheme` and `objective` (exact or bound) by seeded
-    differential evolution; no certificate (lower_bound NaN). Deterministic for a seed."""
+    differential evolution; no certificate (lower_bound NaN). Deterministic for a seed. The
+    tomography objective: solver/evolution/tomography.py."""
+    if objective == "tomography":  # the relaxation and its bound, then the geometry
+        from uav_insar_planner.solver.evolution.tomography import solve_tomography
+
+        return solve_tomography(p, scheme)
     problem = EvolutionProblem(p, scheme, objective)
     if blocked := problem.empty:
         return to_solver_result(problem, None, seed, blocked)
