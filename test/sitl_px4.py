@@ -33,6 +33,7 @@ PX4 = PX4_DIR / "bin" / "px4"
 HOME = (47.397742, 8.545594, 489.4)  # the track origin (PX4's default SIH home)
 TAKE_OFFS = {0: (-15.0, 8.0), 1: (0.0, -12.0), 2: (-30.0, -25.0)}  # north, east of HOME [m]
 OFFBOARD_PORT, API_PORT, TRUTH_PORT = 14540, 14580, 19410
+SPEED = 4.3  # Table I's v_y, every node's default speed_mps
 N_SLOTS = 20  # the pass of the issue's field check: 86 m at Table I's 4.3 m/s
 
 

@@ -18,15 +18,21 @@ from __future__ import annotations
 
 import os
 import re
+import time
 
 import numpy as np
 import process_group
 import pytest
 import sitl_px4 as px4
+from control_watch import Heard, log_wall_time, pilot
 
 from uav_insar_planner import load_params, solve
+from uav_insar_planner.autopilots.profiles import profile
+from uav_insar_planner.mavlink.link import MAV
 from uav_insar_planner.published import formation_points
+from uav_insar_planner.ros.start_msgs import decode_start
 from uav_insar_planner.swarm import DEFAULT_NUM_UAVS, uavs
+from uav_insar_planner.track.passes import run_in_m
 
 UAVS = uavs(DEFAULT_NUM_UAVS)
 N_SLOTS = px4.N_SLOTS
@@ -122,3 +128,76 @@ def test_three_px4_vehicles_fly_every_slot_in_offboard_on_the_plan(watcher, tmp_
         print(f"uav{k}: truth on the pass: across {t_across:.3f} m, height {t_height:.3f} m")
         assert t_across <= TRUTH_M and t_height <= TRUTH_M, (t_across, t_height)
     assert all(a <= ESTIMATE_M and h <= ESTIMATE_M for a, h in estimates), estimates
+
+
+GCS_PORT = 18570  # PX4 SITL instance N's ground-station link listens on GCS_PORT + N
+UAV_TIMEOUT_S = 5.0  # the planner's default uav_timeout_s
+
+
+def test_a_pilot_takes_a_real_px4_mid_pass_and_the_others_are_replanned(watcher, tmp_path):
+    """Mid-pass a pilot's ground station (this test, real MAVLink on PX4's own GCS link: the
+    fault's only injection) switches uav1 to AUTO.LOITER. Its bridge says so within a second
+    of the first heartbeat that shows it, sends no setpoint after, and the planner re-plans
+    uav0 and uav2 without it within uav_timeout_s; they fly every slot."""
+    heard = Heard(watcher)
+    flight = px4.Px4Flight()
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    done = {k: re.compile(rf"uav{k}: mission complete: (\d+) slots flown") for k in (0, 2)}
+    gcs = pilot(GCS_PORT + 1)
+    shown_at: list[tuple[float, float]] = []
+
+    def text(name: str) -> str:
+        return flight.logs[name].read_text() if flight.logs[name].exists() else ""
+
+    def heartbeat_shows_it() -> bool:
+        gcs.mav.heartbeat_send(MAV.MAV_TYPE_GCS, MAV.MAV_AUTOPILOT_INVALID, 0, 0, 0)
+        while (hb := gcs.recv_match(type="HEARTBEAT", blocking=False)) is not None:
+            if hb.get_srcSystem() == 2 and hb.get_srcComponent() == 1 and \
+                    not profile("px4").flight.shown_by(hb.custom_mode):
+                shown_at.append((time.monotonic(), time.time()))
+        return bool(shown_at)
+
+    try:
+        px4.start(flight, tmp_path, env, UAVS)
+        procs = list(flight.procs.values())
+        assert watcher.spin_until(lambda: heard.starts, 150.0, procs), "no formation/start"
+        _, t0, _ = decode_start(heard.starts[0], time.time())
+        run_in_s = run_in_m(px4.SPEED) / px4.SPEED
+        assert watcher.spin_until(lambda: time.time() > t0 + run_in_s + 5.0, 60.0, procs)
+        params = profile("px4").hold.set_params
+        gcs.mav.command_long_send(2, 1, MAV.MAV_CMD_DO_SET_MODE, 0,
+                                  float(MAV.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED), *params,
+                                  *[0.0] * (6 - len(params)))
+        assert watcher.spin_until(heartbeat_shows_it, 5.0, procs), "uav1 never left OFFBOARD"
+        assert watcher.spin_until(lambda: any(v.get("out_of_control")
+                                              for _, v, _ in heard.status[1]), 5.0, procs)
+        said = next(t for t, v, _ in heard.status[1] if v.get("out_of_control"))
+        assert watcher.spin_until(lambda: heard.without(1) is not None, 2 * UAV_TIMEOUT_S,
+                                  procs), "no re-plan without uav1"
+        ok = watcher.spin_until(lambda: all(done[k].search(text(f"agent{k}")) for k in (0, 2)),
+                                90.0, procs)
+        sent_at_said = next(v for t, v, _ in heard.status[1] if t >= said)["setpoints_sent"]
+        final = heard.status[1][-1]
+    finally:
+        gcs.close()
+        for proc in flight.procs.values():
+            process_group.interrupt_group(proc)
+        for truth in flight.truth.values():
+            truth.stop()
+    logs = {name: text(name) for name in flight.logs}
+    broke = {k: px4.simulator_faults(logs[f"px4_{k}"]) for k in UAVS}
+    assert not any(broke.values()), f"the simulator broke, not the bridge: {broke}"
+    assert ok, "\n".join(f"== {n}\n{t[-2500:]}" for n, t in logs.items() if "px4" not in n)
+    shown_mono, shown_wall = shown_at[0]
+    replanned = heard.without(1)
+    print(f"px4: said {said - shown_mono:.3f} s, re-planned {replanned - shown_mono:.3f} s after"
+          " the first heartbeat in AUTO.LOITER")
+    assert said - shown_mono < 1.0, said - shown_mono
+    logged = log_wall_time(logs["bridge1"], "uav1: sysid 2 out of our control: AUTO.LOITER")
+    assert logged is not None and logged - shown_wall < 1.0, logs["bridge1"][-3000:]
+    _, values, _ = final
+    assert values["phase"] == "out of our control: AUTO.LOITER", values
+    assert values["setpoints_sent"] == sent_at_said  # not fought: no setpoint after
+    assert replanned - shown_mono < UAV_TIMEOUT_S, replanned - shown_mono
+    for k in (0, 2):
+        assert int(done[k].search(logs[f"agent{k}"])[1]) == N_SLOTS
