@@ -43,7 +43,7 @@ CLIMB_TIMEOUT_EXTRA_S = 20.0
 _RETRIED = (MAV.MAV_RESULT_FAILED, MAV.MAV_RESULT_TEMPORARILY_REJECTED)
 
 SendCommand = Callable[[int, Sequence[float], int], None]  # (command, params, confirmation)
-Emit = Callable[[str, str], None]  # (level, text)
+Tell = Callable[[str, str], None]  # (level, text): one vehicle's sequence says it
 
 
 def result_name(result: int) -> str:
@@ -81,7 +81,7 @@ class ArmingSequence:
     read when the takeoff is sent. Not thread-safe (the bridge holds its lock)."""
 
     def __init__(self, autopilot: AutopilotProfile, vehicle: WatchedVehicle, send: SendCommand,
-                 emit: Emit, start_down: Callable[[], float], readiness_timeout_s: float = 120.0):
+                 emit: Tell, start_down: Callable[[], float], readiness_timeout_s: float = 120.0):
         self.autopilot = autopilot
         self.vehicle = vehicle
         self.steps = arming_steps(autopilot)
