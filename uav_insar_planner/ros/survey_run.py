@@ -33,10 +33,10 @@ from uav_insar_planner.ros.survey_states import (
     Begin,
     Fly,
     Interrupted,
+    Log,
     NextSortie,
     Phase,
     Reply,
-    Say,
     Started,
     SurveyFlight,
     SurveyState,
@@ -128,9 +128,9 @@ class SurveyRun:
             if isinstance(action, Fly):
                 self._fly = action
                 self._formation = None  # a new strip: its formation is the plan's
-            elif isinstance(action, Say) and action.level == "warning":
+            elif isinstance(action, Log) and action.level == "warning":
                 log.warning(action.text)  # (rclpy: one severity per call site)
-            elif isinstance(action, Say):
+            elif isinstance(action, Log):
                 log.info(action.text)
         return [a for a in actions if isinstance(a, Reply)]
 

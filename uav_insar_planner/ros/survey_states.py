@@ -27,6 +27,7 @@ import enum
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 
+from uav_insar_planner.ros.start_states import Log
 from uav_insar_planner.track.leg import over_at
 from uav_insar_planner.track.pass_clock import PassClock
 
@@ -111,12 +112,6 @@ class Fly:
 
 
 @dataclass(frozen=True)
-class Say:
-    level: str  # "info" or "warning"
-    text: str
-
-
-@dataclass(frozen=True)
 class Reply:
     """The answer to NextSortie: accepted or not, and why."""
 
@@ -125,7 +120,7 @@ class Reply:
 
 
 Event = Begin | Started | Tick | Interrupted | NextSortie
-Action = Fly | Say | Reply
+Action = Fly | Log | Reply
 
 
 def step(state: SurveyState, event: Event, survey: SurveyFlight
@@ -144,7 +139,7 @@ def step(state: SurveyState, event: Event, survey: SurveyFlight
         return state, ()
     if isinstance(event, Interrupted):
         if state.phase is Phase.STRIP and not state.interrupted:
-            return replace(state, interrupted=event.why), (Say("warning", (
+            return replace(state, interrupted=event.why), (Log("warning", (
                 f"survey: strip {state.current} interrupted ({event.why}): it will be flown "
                 "again, not counted as flown")),)
         return state, ()
@@ -165,7 +160,7 @@ def _fly(state: SurveyState, phase: Phase, queue: Sequence[int]) -> tuple[Survey
 def _fly_sortie(state: SurveyState, sortie: int, queue: Sequence[int], survey: SurveyFlight
                 ) -> tuple[SurveyState, tuple[Action, ...]]:
     new, fly = _fly(replace(state, sortie=sortie), Phase.TRANSIT, queue)
-    return new, (fly, Say("info", (
+    return new, (fly, Log("info", (
         f"survey: sortie {sortie + 1}: strips {', '.join(map(str, queue))}; flying to strip "
         f"{queue[0]}'s entries")))
 
@@ -181,22 +176,22 @@ def _strip_over(state: SurveyState, survey: SurveyFlight
             rest = (strip,) + rest
         else:  # the bridges return after a last strip: it goes first in the next sortie
             left = ((strip,) + left[0],) + left[1:] if left else ((strip,),)
-            said = (Say("warning", f"survey: strip {strip} goes first in the next sortie"),)
+            said = (Log("warning", f"survey: strip {strip} goes first in the next sortie"),)
     else:
         flown = flown + (strip,)
-        said = (Say("info", f"survey: strip {strip} flown ({len(flown)} of "
+        said = (Log("info", f"survey: strip {strip} flown ({len(flown)} of "
                             f"{len(survey.lengths_m)})"),)
     state = replace(state, flown=flown, sorties_left=left)
     if rest:
         new, fly = _fly(state, Phase.TURN, rest)
-        return new, said + (fly, Say("info", f"survey: turning to strip {rest[0]}"))
+        return new, said + (fly, Log("info", f"survey: turning to strip {rest[0]}"))
     done = not left
     new = replace(state, phase=Phase.DONE if done else Phase.RETURN, queue=(), clock=None,
                   interrupted="")
     text = (f"survey complete: {len(flown)} strips flown; the UAVs return and land" if done
             else f"survey: sortie {state.sortie + 1} over: the UAVs return and land; call "
                  "~/next_sortie when the batteries are changed")
-    return new, said + (Say("info", text),)
+    return new, said + (Log("info", text),)
 
 
 def _next_sortie(state: SurveyState, survey: SurveyFlight
