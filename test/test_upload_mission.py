@@ -118,7 +118,7 @@ def test_three_px4_files_are_uploaded_and_checked_back(plans, vehicles, capsys):
     out = capsys.readouterr().out.splitlines()
     assert len(out) == 3 and all("6 items uploaded and checked back" in line for line in out)
     for k, vehicle in enumerate(fleet):
-        assert f"sysid {vehicle.sysid}, PX4" in out[k]
+        assert f"sysid {vehicle.sysid}, px4" in out[k]
         expected = mission_item_ints(json.loads((px4 / f"uav{k}.plan").read_text()))[1:]
         assert same(rows(vehicle), expected)  # PX4: no home item
 
@@ -196,7 +196,7 @@ def test_refusals_silence_and_differences_are_one_line_each(plans, vehicles, qui
     assert all(line.startswith("uav-insar upload-mission: error: ") for line in errors)
     assert f"uav0.plan -> {link(full)}" in errors[0] and "MAV_MISSION_NO_SPACE" in errors[0]
     assert f"uav1.plan -> {link(silent)}" in errors[1] and "no autopilot HEARTBEAT" in errors[1]
-    assert "a PX4 plan" in errors[2] and "sysid 4 is ArduPilot" in errors[2]
+    assert "a px4 plan" in errors[2] and "sysid 4 is ardupilot" in errors[2]
     assert "check-back: item 3 param2: sent 4.3, the vehicle holds 5" in errors[3], errors[3]
     assert "uploaded and checked back" in out.out and f"sysid {good.sysid}" in out.out
     assert not full.mission.items and not other.mission.items

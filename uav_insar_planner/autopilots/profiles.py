@@ -104,6 +104,9 @@ class AutopilotProfile:
     mission_waits_for_utc: bool
     #: the main mode whose sub modes a ground station names AUTO.<sub> (PX4's AUTO), if any
     auto_main_mode: int | None = None
+    #: a mission's seq 0 is the home, which the autopilot replaces with its own (ArduPilot);
+    #: else the first item is seq 0 (PX4)
+    mission_home_item: bool = False
 
     def __post_init__(self) -> None:
         order = [ARMING_STEPS.index(step) for step in self.arming_steps]
@@ -133,7 +136,8 @@ PROFILES = {
         home=copter_mode("RTL"),
         arming_steps=("wait for position", "mode", "arm", "takeoff", "climb"),
         stream_before_flight_s=0.0, setpoints_in_flight_only=True,
-        mav_autopilot=3, mission_waits_for_utc=True),  # MAV_AUTOPILOT_ARDUPILOTMEGA
+        mav_autopilot=3, mission_waits_for_utc=True,  # MAV_AUTOPILOT_ARDUPILOTMEGA
+        mission_home_item=True),
     "px4": AutopilotProfile(
         "px4", flight=px4_mode("OFFBOARD", "OFFBOARD", PX4_MAIN_MODE_MASK),
         hold=px4_mode("HOLD", "AUTO.LOITER"), home=px4_mode("RTL", "AUTO.RTL"),
@@ -152,3 +156,10 @@ def profile(name: str) -> AutopilotProfile:
         raise ValueError(f"autopilot: {name!r:.40} is not allowed; expected one of "
                          f"{', '.join(AUTOPILOTS)}")
     return PROFILES[name]
+
+
+def by_mav_autopilot(number: object) -> AutopilotProfile | None:
+    """The profile whose MAV_AUTOPILOT is `number` (a HEARTBEAT's, a `.plan`'s
+    firmwareType), or None."""
+    return next((p for p in PROFILES.values() if p.mav_autopilot == number
+                 and not isinstance(number, bool)), None)

@@ -29,9 +29,10 @@ from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from uav_insar_planner.autopilots.profiles import by_mav_autopilot
 from uav_insar_planner.mavlink.link import MAV, Link
 from uav_insar_planner.mavlink.mission_start import autopilot_heartbeat
-from uav_insar_planner.mission_file.plan_items import FIRMWARES, MissionItem, PlanMission
+from uav_insar_planner.mission_file.plan_items import MissionItem, PlanMission
 
 HEARTBEAT_PERIOD_S = 1.0
 HEARD_WITHIN_S = 5.0  # the vehicle's first HEARTBEAT must come within this of the start
@@ -263,7 +264,8 @@ def upload_and_check(peer: Peer, mission: PlanMission) -> Uploaded:
     if not peer.heard(HEARD_WITHIN_S):
         raise TransferFailed(f"no autopilot HEARTBEAT within {HEARD_WITHIN_S:g} s")
     if peer.autopilot != mission.firmware:
-        name = FIRMWARES.get(peer.autopilot, f"MAV_AUTOPILOT {peer.autopilot}")
+        flavour = by_mav_autopilot(peer.autopilot)
+        name = flavour.name if flavour else f"MAV_AUTOPILOT {peer.autopilot}"
         raise TransferFailed(f"a {mission.autopilot} plan (firmwareType {mission.firmware}), "
                              f"but sysid {peer.sysid} is {name}: its items would be numbered "
                              "otherwise")

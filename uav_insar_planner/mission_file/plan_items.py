@@ -2,20 +2,22 @@
 upload-mission` (cli/upload_mission.py) uploads, checked where it enters (no MAVLink link).
 
 `read_plan(path, name)` returns a `PlanMission`, or raises ParamError with one line naming the
-file, the field, its value and what is allowed. Accepted: `fileType` "Plan", `mission.
-firmwareType` 12 (PX4) or 3 (ArduPilot), `mission.plannedHomePosition` [lat, lon, alt],
-1..MAX_ITEMS `mission.items`, each a `SimpleItem` (QGroundControl's complex items, surveys and
-corridor scans, are refused: `uav-insar export-mission` and `survey` write simple items only)
-with `command` 0..65535, `frame` one of FRAMES, `autoContinue` true or false and seven
-`params`, numbers or null. A position item (a global frame) needs a finite latitude within
-+-90 deg, longitude within +-180 deg and altitude within +-ALT_MAX_M. The items are as
-`qgc_plan` writes them and as MAVSDK's `import_qgroundcontrol_mission` reads them:
+file, the field, its value and what is allowed. Accepted: `fileType` "Plan",
+`mission.firmwareType` a flavour's MAV_AUTOPILOT (autopilots/profiles.py: 12 PX4, 3
+ArduPilot), `mission.plannedHomePosition` [lat, lon, alt], 1..MAX_ITEMS `mission.items`,
+each a `SimpleItem` (QGroundControl's complex items, surveys and corridor scans, are refused:
+`uav-insar export-mission` and `survey` write simple items only) with `command` 0..65535,
+`frame` one of FRAMES, `autoContinue` true or false and seven `params`, numbers or null. A
+position item (a global frame) needs a finite latitude within +-90 deg, longitude within +-180
+deg and altitude within +-ALT_MAX_M. The items are as `qgc_plan` writes them and as MAVSDK's
+`import_qgroundcontrol_mission` reads them:
 - a null param is NaN (p1..p4) or 0 (x, y, z);
 - a position item's latitude and longitude become MISSION_ITEM_INT's x, y in 1e-7 degrees,
   a MAV_FRAME_MISSION item's x, y are its params 5 and 6 as integers;
-- ArduPilot's mission begins with the home (seq 0, which the vehicle overwrites with its own):
-  `plannedHomePosition` as a MAV_CMD_NAV_WAYPOINT in MAV_FRAME_GLOBAL; PX4's has no home item,
-  so the file's first item is seq 0 (`qgc_plan.PX4_PASS_SEQ`).
+- where the flavour's missions begin with the home (`mission_home_item`: ArduPilot, which
+  overwrites seq 0 with its own), `plannedHomePosition` is sent first as a
+  MAV_CMD_NAV_WAYPOINT in MAV_FRAME_GLOBAL; PX4's have no home item, so the file's first item
+  is seq 0 (`qgc_plan.PX4_PASS_SEQ`).
 """
 from __future__ import annotations
 
@@ -24,10 +26,9 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
+from uav_insar_planner.autopilots.profiles import PROFILES, by_mav_autopilot
 from uav_insar_planner.params import ParamError, shown
 
-FIRMWARE_PX4, FIRMWARE_ARDUPILOT = 12, 3  # MAV_AUTOPILOT_PX4, MAV_AUTOPILOT_ARDUPILOTMEGA
-FIRMWARES = {FIRMWARE_PX4: "PX4", FIRMWARE_ARDUPILOT: "ArduPilot"}
 #: MAV_FRAME values an item may have: GLOBAL, MISSION, GLOBAL_RELATIVE_ALT, GLOBAL_INT,
 #: GLOBAL_RELATIVE_ALT_INT, GLOBAL_TERRAIN_ALT, GLOBAL_TERRAIN_ALT_INT
 FRAMES = (0, 2, 3, 5, 6, 10, 11)
@@ -63,7 +64,8 @@ class PlanMission:
 
     @property
     def autopilot(self) -> str:
-        return FIRMWARES[self.firmware]
+        """The flavour's name (autopilots/profiles.py)."""
+        return by_mav_autopilot(self.firmware).name
 
 
 def _bad(where: str, value: object, expected: str) -> ParamError:
@@ -133,9 +135,10 @@ def read_plan(path: Path, name: str) -> PlanMission:
     """The mission of the `.plan` at `path` (`name` says which argument it is in errors)."""
     mission = _load(path, name)
     firmware = mission.get("firmwareType")
-    if firmware not in FIRMWARES or isinstance(firmware, bool):
-        raise _bad(f"{name} mission.firmwareType", firmware,
-                   f"{FIRMWARE_PX4} (PX4) or {FIRMWARE_ARDUPILOT} (ArduPilot)")
+    flavour = by_mav_autopilot(firmware)
+    if flavour is None:
+        raise _bad(f"{name} mission.firmwareType", firmware, " or ".join(
+            f"{p.mav_autopilot} ({p.name})" for p in PROFILES.values()))
     items = mission.get("items")
     if not isinstance(items, list) or not 1 <= len(items) <= MAX_ITEMS:
         raise _bad(f"{name} mission.items", items if not isinstance(items, list)
@@ -145,9 +148,8 @@ def read_plan(path: Path, name: str) -> PlanMission:
         raise _bad(f"{name} mission.plannedHomePosition", home, "[latitude, longitude, "
                    "altitude AMSL]")
     home_xyz = _position(f"{name} mission.plannedHomePosition", *home)
-    ardupilot = firmware == FIRMWARE_ARDUPILOT
     out = [MissionItem(0, 0, CMD_WAYPOINT, (0.0, 0.0, 0.0, 0.0), *home_xyz, 1)] \
-        if ardupilot else []
+        if flavour.mission_home_item else []
     for i, raw in enumerate(items):
         out.append(_item(f"{name} mission.items[{i}]", len(out), raw))
-    return PlanMission(firmware, tuple(out), ardupilot)
+    return PlanMission(firmware, tuple(out), flavour.mission_home_item)
