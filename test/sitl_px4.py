@@ -68,21 +68,24 @@ def px4_links(folder: Path) -> Path:
     return folder / "px4"
 
 
-def start_px4(k: int, workdir: Path) -> subprocess.Popen:
-    """PX4 SITL instance k in `workdir` (its own session, output to px4.log)."""
+def start_px4(k: int, workdir: Path, instance: int | None = None) -> subprocess.Popen:
+    """UAV k's PX4 SITL (its home: vehicle_home(k)) in `workdir` (its own session, output to
+    px4.log), as instance `instance` (default k: sysid instance + 1, its ports moved by it)."""
+    instance = k if instance is None else instance
     px4 = px4_links(workdir.parent / "px4_bin")
     lat, lon, alt = vehicle_home(k)
     env = dict(os.environ, PX4_SIMULATOR="sihsim", PX4_SIM_MODEL="sihsim_quadx",
                PX4_HOME_LAT=f"{lat:.7f}", PX4_HOME_LON=f"{lon:.7f}", PX4_HOME_ALT=f"{alt:g}")
     log = open(workdir / "px4.log", "w")  # noqa: SIM115 - closed with the process
-    return subprocess.Popen([str(px4), "-d", "-i", str(k), str(PX4_DIR / "etc")], cwd=workdir,
+    return subprocess.Popen([str(px4), "-d", "-i", str(instance), str(PX4_DIR / "etc")],
+                            cwd=workdir,
                             env=env, stdout=log, stderr=subprocess.STDOUT,
                             stdin=subprocess.DEVNULL, start_new_session=True)
 
 
 class Truth(threading.Thread):
-    """SIH's HIL_STATE_QUATERNION of vehicle k: rows (wall time, north, east, up) about the
-    track origin HOME [m]."""
+    """SIH's HIL_STATE_QUATERNION of PX4 instance k: rows (wall time, north, east, up) about
+    the track origin HOME [m]."""
 
     def __init__(self, k: int) -> None:
         super().__init__(daemon=True)

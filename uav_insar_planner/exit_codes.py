@@ -20,8 +20,9 @@ EXIT_CODE_TABLE: tuple[tuple[str, int, str], ...] = (
      "for `uav-insar echo`, as for `ros2 topic echo`, nothing to echo: no publisher or "
      "message within --timeout, a type it cannot import; for `uav-insar start-missions`, a "
      "vehicle not heard by the instant, when nothing is sent, or one that did not ACCEPT "
-     "MISSION_START); or an install without the `planner` extra the command needs (one line "
-     "naming what is missing and the pip command)"),
+     "MISSION_START; for `uav-insar upload-mission`, a vehicle whose mission was not uploaded "
+     "and checked back, one stderr line each); or an install without the `planner` extra "
+     "the command needs (one line naming what is missing and the pip command)"),
     ("EXIT_BAD_INPUT", EXIT_BAD_INPUT,
      "bad input: one line per problem, on stderr, before any work and with nothing written"),
     ("EXIT_INFEASIBLE", EXIT_INFEASIBLE,

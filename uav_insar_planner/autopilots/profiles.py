@@ -107,6 +107,9 @@ class AutopilotProfile:
     #: the setpoint moved this many times the across-track and height error against the
     #: autopilot's estimate (`track.cross_track`); 0: the target as planned
     cross_track_gain: float = 0.0
+    #: a mission's seq 0 is the home, which the autopilot replaces with its own (ArduPilot);
+    #: else the first item is seq 0 (PX4)
+    mission_home_item: bool = False
 
     def __post_init__(self) -> None:
         order = [ARMING_STEPS.index(step) for step in self.arming_steps]
@@ -136,7 +139,8 @@ PROFILES = {
         home=copter_mode("RTL"),
         arming_steps=("wait for position", "mode", "arm", "takeoff", "climb"),
         stream_before_flight_s=0.0, setpoints_in_flight_only=True,
-        mav_autopilot=3, mission_waits_for_utc=True),  # MAV_AUTOPILOT_ARDUPILOTMEGA
+        mav_autopilot=3, mission_waits_for_utc=True,  # MAV_AUTOPILOT_ARDUPILOTMEGA
+        mission_home_item=True),
     "px4": AutopilotProfile(
         "px4", flight=px4_mode("OFFBOARD", "OFFBOARD", PX4_MAIN_MODE_MASK),
         hold=px4_mode("HOLD", "AUTO.LOITER"), home=px4_mode("RTL", "AUTO.RTL"),
@@ -145,8 +149,8 @@ PROFILES = {
         stream_before_flight_s=1.2, setpoints_in_flight_only=False,
         mav_autopilot=12, mission_waits_for_utc=False,  # MAV_AUTOPILOT_PX4
         auto_main_mode=PX4_MAIN_MODE_AUTO,
-        # PX4's soft position loops let the estimate wander 0.3-0.6 m on a pass: stiffen
-        # them twofold from the setpoint side (ArduCopter holds 0.2 m without)
+        # PX4's soft position loops let the estimate wander 0.3-0.6 m on a pass: the
+        # setpoint side's PI correction holds it to ~0.3 m (ArduCopter holds 0.2 m without)
         cross_track_gain=1.0),
 }
 AUTOPILOTS = tuple(PROFILES)
@@ -158,3 +162,10 @@ def profile(name: str) -> AutopilotProfile:
         raise ValueError(f"autopilot: {name!r:.40} is not allowed; expected one of "
                          f"{', '.join(AUTOPILOTS)}")
     return PROFILES[name]
+
+
+def by_mav_autopilot(number: object) -> AutopilotProfile | None:
+    """The profile whose MAV_AUTOPILOT is `number` (a HEARTBEAT's, a `.plan`'s
+    firmwareType), or None."""
+    return next((p for p in PROFILES.values() if p.mav_autopilot == number
+                 and not isinstance(number, bool)), None)

@@ -49,12 +49,13 @@ def verbs() -> dict[str, ModuleType]:
         start_missions,
         survey,
         sweep,
+        upload_mission,
     )
 
     return {"solve": solve, "sweep": sweep, "map": param_map, "plot-formation": plot_formation,
             "montecarlo": montecarlo, "export-mission": export_mission, "echo": echo,
             "record": record, "report": report, "start-missions": start_missions,
-            "survey": survey}
+            "survey": survey, "upload-mission": upload_mission}
 
 
 def build_parser(table: dict[str, ModuleType]) -> tuple[argparse.ArgumentParser,

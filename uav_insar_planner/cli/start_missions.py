@@ -44,7 +44,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="our own MAVLink system id, 1..255 (default 255, a ground station)")
 
 
-def _integer(option: str, text: str, lo: int, hi: int) -> int:
+def integer_option(option: str, text: str, lo: int, hi: int) -> int:
+    """`text` as an integer in lo..hi, else one ParamError line naming `option`."""
     stripped = text.strip()
     if not (stripped.lstrip("+-").isdigit() and len(stripped) <= 12
             and lo <= int(stripped) <= hi):
@@ -53,8 +54,9 @@ def _integer(option: str, text: str, lo: int, hi: int) -> int:
     return int(stripped)
 
 
-def _open(addresses: list[str], source_sysid: int) -> list[Link]:
-    """Every link, or ParamError naming the first bad one (the ones opened are closed)."""
+def open_connections(addresses: list[str], source_sysid: int) -> list[Link]:
+    """Every link (as a ground station of `source_sysid`), or ParamError naming the first bad
+    one, `CONNECTION i` (the ones opened are closed)."""
     for i, address in enumerate(addresses, 1):
         try:
             parse_address(address)
@@ -78,11 +80,11 @@ def _open(addresses: list[str], source_sysid: int) -> list[Link]:
 def main(args: argparse.Namespace) -> int:
     now = datetime.now(timezone.utc)
     instant = utc_instant("--at", args.at, now)
-    item = _integer("--item", args.item, 0, ITEM_MAX)
-    sysid = _integer("--source-sysid", args.source_sysid, 1, SYSID_MAX)
+    item = integer_option("--item", args.item, 0, ITEM_MAX)
+    sysid = integer_option("--source-sysid", args.source_sysid, 1, SYSID_MAX)
     if len(set(args.connections)) != len(args.connections):
         raise ParamError(["CONNECTION: a link is given twice; expected one per vehicle"])
-    links = _open(args.connections, sysid)
+    links = open_connections(args.connections, sysid)
     t0 = instant.timestamp()
     print(f"starting {len(links)} vehicle(s) at {instant:%Y-%m-%dT%H:%M:%SZ} from item {item}",
           flush=True)

@@ -65,7 +65,8 @@ class Outcome:
         return f"{who}: {sent}, {name} {self.acked_at - instant:+.3f} s"
 
 
-def _autopilot_heartbeat(msg) -> bool:
+def autopilot_heartbeat(msg) -> bool:
+    """Whether `msg` is an autopilot's HEARTBEAT (not a ground station's)."""
     return (msg.get_type() == "HEARTBEAT" and msg.type != MAV.MAV_TYPE_GCS
             and msg.autopilot != MAV.MAV_AUTOPILOT_INVALID)
 
@@ -99,7 +100,7 @@ class _Session:
 
     def _read(self, msg, out: Outcome, now: float) -> None:
         src = msg.get_srcSystem()
-        if _autopilot_heartbeat(msg) and out.sysid in (None, src):
+        if autopilot_heartbeat(msg) and out.sysid in (None, src):
             out.sysid, out.compid, out.heard_at = src, msg.get_srcComponent(), now
         elif (msg.get_type() == "COMMAND_ACK" and msg.command == MAV.MAV_CMD_MISSION_START
               and src == out.sysid and out.sent_at and out.result is None

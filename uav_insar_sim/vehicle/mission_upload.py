@@ -7,7 +7,9 @@ MISSION_CLEAR_ALL empties the store (ACK ACCEPTED). Download (MISSION_REQUEST_LI
 MISSION_REQUEST_INT) returns what is stored. Only MAV_MISSION_TYPE_MISSION is kept; fences
 and rally points are ACKed MAV_MISSION_UNSUPPORTED. The vehicle does not fly the mission
 (there is no AUTO mode here); `items` is what a test checks. No retransmission timers: a GCS
-that loses a message retries itself (MAVSDK and QGroundControl do).
+that loses a message retries itself (MAVSDK and QGroundControl do). With `request_int` False
+the vehicle asks for items with the older MISSION_REQUEST instead (as some autopilots do); it
+takes MISSION_ITEM_INT answers either way.
 """
 from __future__ import annotations
 
@@ -24,6 +26,8 @@ class MissionStore:
         self._pending: list | None = None  # the items of an upload in progress
         self._count = 0
         self._peer = (0, 0)
+        #: ask for items with MISSION_REQUEST_INT (True) or the older MISSION_REQUEST
+        self.request_int = True
 
     def handle(self, mav, msg) -> list:
         """The replies (encoded messages) to one mission message from the GCS."""
@@ -64,7 +68,8 @@ class MissionStore:
         return [self._ack(mav, peer, MAV.MAV_MISSION_ACCEPTED)]
 
     def _request(self, mav, seq: int):
-        return mav.mission_request_int_encode(*self._peer, seq, MAV.MAV_MISSION_TYPE_MISSION)
+        encode = mav.mission_request_int_encode if self.request_int else mav.mission_request_encode
+        return encode(*self._peer, seq, MAV.MAV_MISSION_TYPE_MISSION)
 
     @staticmethod
     def _ack(mav, peer, result: int, mission_type: int = MAV.MAV_MISSION_TYPE_MISSION):
