@@ -55,7 +55,9 @@ HOLD_M = 1.0  # at the hold: truth within this of the hold point, horizontally a
 SETTLED_S = 3.0  # ... for this long
 LEAD_S = 6.0  # from the last vehicle at its hold to T: the command's start-up fits in it
 START_TOLERANCE_S = 0.25
-ACROSS_TOLERANCE_M = 2.0
+# PX4's own navigator on SIH's GNSS without RTK: up to 1.78 m across track in six runs (the
+# bridge's OFFBOARD pass holds 0.5 m); this bound keeps a run from failing on that noise alone
+ACROSS_TOLERANCE_M = 2.5
 HEIGHT_TOLERANCE_M = 1.5
 ALONG_SPREAD_M = 5.0
 ARM_WITHIN_S = 120.0
