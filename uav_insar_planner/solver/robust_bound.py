@@ -31,9 +31,14 @@ Why every robust-feasible formation q with r_0 in [r_1, r_2] has a worst case >=
    min)^(-1/2); no robust-feasible slave on one side leaves that side's patterns out.
 
 A box is split while its bound may exceed the largest w found at box centres (`INNER_TOL`) and
-it is wider than `MIN_BOX_M`; the master's interval with the least LB is split in two until it
-meets the target (the plan's certified worst case less the tolerance) or `MAX_INTERVALS`. The
-answer is the least LB over the intervals left: no robust-feasible formation does better.
+it is wider than `MIN_BOX_M` (a choice of effort only: every box's bound holds). Every master
+interval whose LB is below the target (the plan's certified worst case less the tolerance) is
+split in two, all in one batch (the least first, within `MAX_INTERVALS`), and a half's LB is
+the larger of its own and its parent's (it bounds a subset). A half starts from its parent's
+boxes: they cover every slave the half allows, and their bounds hold over the half too, so a
+box far below the largest keeps its parent's bound (`CARRY`). All intervals of a batch are
+bounded together as one array of boxes. The answer is the least LB over the intervals left,
+which cover the master's range: no robust-feasible formation does better.
 """
 from __future__ import annotations
 
@@ -52,15 +57,16 @@ from uav_insar_planner.swarm import MASTER
 
 # Master rim angles phi_m from its line of sight (0: away from the target, +-pi/2 along +-n).
 MASTER_ANGLES = np.linspace(-math.pi / 2, math.pi / 2, 9)
-# Slave rim angles tried, about the direction towards the master's line of sight.
-SLAVE_OFFSETS = np.linspace(-math.pi / 6, math.pi / 6, 5)
-INNER_TOL = 2e-3
+# Slave rim angles tried, offsets from the direction towards the master's line of sight (any
+# rim point is sound; at Table I five offsets in -+pi/6 gave the same bounds as this one).
+SLAVE_OFFSETS = np.zeros(1)
+INNER_TOL = 1e-2
 MIN_BOX_M = 0.02
 # An inherited box this far below its interval's largest bound is carried, not bounded again.
 CARRY = 0.03
 INNER_ROUNDS = 10
 FIRST_INTERVALS = 8
-MAX_INTERVALS = 40
+MAX_INTERVALS = 80
 MAX_PATTERN_SLAVES = 9  # 2^9 side patterns
 
 
@@ -198,7 +204,11 @@ def _cap_ratio(top, d2, slope, width):
 def _group_max(out: np.ndarray, owner: np.ndarray, values: np.ndarray) -> None:
     """out[j] = max(out[j], every row of `values` whose owner is j), in place."""
     if len(owner):
-        np.maximum.at(out, owner, values)
+        order = np.argsort(owner, kind="stable")
+        o = owner[order]
+        starts = np.flatnonzero(np.r_[True, o[1:] != o[:-1]])
+        j = o[starts]
+        out[j] = np.maximum(out[j], np.maximum.reduceat(values[order], starts, axis=0))
 
 
 def _first_boxes(fr: Frame, k: int, side: int, r1: np.ndarray, r2: np.ndarray
@@ -238,7 +248,8 @@ def _slave_max(fr: Frame, k: int, side: int, r1: np.ndarray, r2: np.ndarray,
         boxes, owner, prior = start
     live = ((cap >= 0) & (reach > 0))[owner]
     boxes, owner, prior = boxes[live], owner[live], prior[live]
-    best, g, top = (np.full((n, size), -np.inf) for _ in range(3))
+    best, g, top = np.full((n, size), -np.inf), np.full((n, size), -np.inf), np.full(
+        (n, size), -np.inf)
     _group_max(top, owner, prior)
     carry = (prior < (1.0 - CARRY) * top[owner]).all(axis=1)
     _group_max(g, owner[carry], prior[carry])
