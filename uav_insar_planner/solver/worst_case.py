@@ -9,14 +9,20 @@ Worst-case sigma_h (`worst_sigma`). sigma_h^-2 = sum_k w_k with
 w_k = (2 pi b_perp,k / (lambda r_0 sin(theta_0) sigma_Phi,k))^2 (eqs. 13-15): for a fixed master
 position the slaves separate, and the worst case is max over q_0' in D_0 of
 (sum_k min over q_k' in D_k of w_k)^(-1/2). A branch and bound over squares S covering D_0
-bounds each w_k from below over S x D_k, every factor at its least favourable value:
-b_perp >= the distance of the interval n . q_k +- e - n . S from 0, r_0 <= the farthest corner
-of S (and <= r_0 + e), r_k <= r_k + e (gamma_SNR, eq. 7, falls in both ranges), gamma_Rg >= its
-value at the ends of theta_k +- asin(e / r_k) (the look angles over D_k; gamma_Rg is unimodal
-with its peak at theta_0, eq. 10), and sigma_Phi (eq. 14) falls in gamma. That gives an upper
-bound U(S) on sigma_h over S; the square with the largest U is split in four until U is within
-`WORST_TOL` of the largest sigma_h found at actual positions (square centres in D_0, each slave
-at the worst of `RIM_POINTS` points of its rim). `upper` is then a certified upper bound of the
+bounds each w_k from below over S x D_k: D_k is cut across n into `STRIPS` strips (thin
+where D_k is, at its ends along n; `_strips`) and on each strip every factor is at its least
+favourable value: b_perp >= the distance of the interval n . q_k + [t_1, t_2] - n . S from 0,
+r_0 <= the farthest corner of S (and <= r_0 + e), r_k <= the strip's farthest point (and
+<= r_k + e; gamma_SNR, eq. 7, falls in both ranges), gamma_Rg >= its value at the ends of the
+strip's look angles (within theta_k +- asin(e / r_k); gamma_Rg is unimodal with its peak at
+theta_0, eq. 10), and sigma_Phi (eq. 14) falls in gamma; the least over the strips bounds
+min over D_k of w_k. One bound for the whole disk would pair b_perp's least (the slave e along
+n) with r_k's largest and gamma_Rg's least, which no one point has; the strips keep them
+apart, and the thin strips at the disk's ends along n, where b_perp is least, vary little in
+r_k and the look angle. That gives an upper bound U(S) on sigma_h over S; the square with the
+largest U is split in four until U is within `WORST_TOL` of the largest sigma_h found at
+actual positions (square centres in D_0, each slave at the worst of `RIM_POINTS` points of its
+rim). `upper` is then a certified upper bound of the
 worst case, `achieved` a value some positions in the disks attain.
 
 Constraints (`robust_slacks`): each family's least slack over the disks, exact or conservative
