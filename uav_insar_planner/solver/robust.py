@@ -83,7 +83,7 @@ FLOOR_SPAN = 3.0
 SEARCH_TOL = 1e-2  # worst-case bound's tolerance while searching; WORST_TOL at the end
 ALMOST_ONE = 1.0 - 1e-12
 # The lower bound's branch and bound stops once it is within this share of the plan's worst case.
-BOUND_TOL = 8e-3
+BOUND_TOL = 5e-3
 
 Backend = Callable[[Params, str, str], SolverResult]
 
