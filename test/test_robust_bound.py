@@ -44,10 +44,7 @@ def test_no_sampled_robust_formation_beats_the_lower_bound(e):
     assert held_count >= 10
 
 
-@pytest.mark.parametrize("e, target", [(0.25, 0.01), (1.0, 0.05),
-                                       pytest.param(0.5, 0.01, marks=pytest.mark.xfail(
-                                           reason="not reached within 2 s (issue 42)",
-                                           strict=False))])
+@pytest.mark.parametrize("e, target", [(0.25, 0.01), (0.5, 0.01), (1.0, 0.05)])
 def test_worst_gap_meets_the_issue_targets(e, target):
     plan = solve(default_params().replace(nav_error_m=e))
     assert plan.feasible

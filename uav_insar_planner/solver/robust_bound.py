@@ -31,13 +31,17 @@ Why every robust-feasible formation q with r_0 in [r_1, r_2] has a worst case >=
    min)^(-1/2); no robust-feasible slave on one side leaves that side's patterns out.
 
 A box is split while its bound may exceed the largest w found at box centres (`INNER_TOL`) and
-it is wider than `MIN_BOX_M`; the master's interval with the least LB is split in two until it
-meets the target (the plan's certified worst case less the tolerance) or `MAX_INTERVALS`. The
-answer is the least LB over the intervals left: no robust-feasible formation does better.
+it is wider than `MIN_BOX_M` (a choice of effort only: every box's bound holds). Every master
+interval whose LB is below the target (the plan's certified worst case less the tolerance) is
+split in two, all in one batch (the least first, within `MAX_INTERVALS`), and a half's LB is
+the larger of its own and its parent's (it bounds a subset). A half starts from its parent's
+boxes: they cover every slave the half allows, and their bounds hold over the half too, so a
+box far below the largest keeps its parent's bound (`CARRY`). All intervals of a batch are
+bounded together as one array of boxes. The answer is the least LB over the intervals left,
+which cover the master's range: no robust-feasible formation does better.
 """
 from __future__ import annotations
 
-import heapq
 import itertools
 import math
 from dataclasses import dataclass
@@ -53,13 +57,16 @@ from uav_insar_planner.swarm import MASTER
 
 # Master rim angles phi_m from its line of sight (0: away from the target, +-pi/2 along +-n).
 MASTER_ANGLES = np.linspace(-math.pi / 2, math.pi / 2, 9)
-# Slave rim angles tried, about the direction towards the master's line of sight.
-SLAVE_OFFSETS = np.linspace(-math.pi / 6, math.pi / 6, 5)
-INNER_TOL = 2e-3
+# Slave rim angles tried, offsets from the direction towards the master's line of sight (any
+# rim point is sound; at Table I five offsets in -+pi/6 gave the same bounds as this one).
+SLAVE_OFFSETS = np.zeros(1)
+INNER_TOL = 1e-2
 MIN_BOX_M = 0.02
+# An inherited box this far below its interval's largest bound is carried, not bounded again.
+CARRY = 0.03
 INNER_ROUNDS = 10
 FIRST_INTERVALS = 8
-MAX_INTERVALS = 40
+MAX_INTERVALS = 100
 MAX_PATTERN_SLAVES = 9  # 2^9 side patterns
 
 
@@ -158,15 +165,17 @@ def _possible(fr: Frame, k: int, box: np.ndarray, r1, r2) -> np.ndarray:
 
 def _upper(fr: Frame, k: int, box: np.ndarray, r1, r2, side: int) -> np.ndarray:
     """(m, len(MASTER_ANGLES)): an upper bound of min over the slave rim angles tried of w_k,
-    the master moved at each phi_m, over the boxes (on `side`) and r_0 in [r1, r2] (step 2)."""
+    the master moved at each phi_m, over the boxes (on `side`) and r_0 in [r1, r2] (step 2);
+    r1, r2 scalars or one per box."""
     from uav_insar_planner.solver.worst_case import gamma_rg, pair_weight
 
     p, e = fr.p, fr.p.nav_error_m
+    r1, r2 = (np.broadcast_to(np.asarray(r, dtype=float), (len(box),)) for r in (r1, r2))
     cap, s = _cap(fr, k, r2), fr.slope[k]
     phi = MASTER_ANGLES[None, :, None]
     off = SLAVE_OFFSETS[None, None, :]
     psi = -side * math.pi / 2 + off
-    d1, d2 = (np.hypot(r + e * np.cos(phi), e * np.sin(phi)) for r in (r1, r2))
+    d1, d2 = (np.hypot(r[:, None, None] + e * np.cos(phi), e * np.sin(phi)) for r in (r1, r2))
     a1, a2 = (box[:, i, None, None] + e * np.cos(psi) for i in (0, 1))
     c1, c2 = (np.clip(box[:, i], -cap, cap)[:, None, None] + e * np.sin(psi) for i in (2, 3))
     # b_perp / r_0 with the side's c = side c_k >= 0: the box's near edge, else its far edge
@@ -174,7 +183,8 @@ def _upper(fr: Frame, k: int, box: np.ndarray, r1, r2, side: int) -> np.ndarray:
     near_c, far_c = (np.minimum(side * box[:, 2], side * box[:, 3]).clip(0.0, cap),
                      np.maximum(side * box[:, 2], side * box[:, 3]).clip(0.0, cap))
     shift = -e * np.cos(off) - side * e * np.sin(phi)
-    cap_rate = _cap_ratio(cap + shift, d2, s * (1.0 - e * e / (2.0 * (r1 - e) ** 2)), r2 - r1)
+    slope = (s * (1.0 - e * e / (2.0 * (r1 - e) ** 2)))[:, None, None]
+    cap_rate = _cap_ratio(cap[:, None, None] + shift, d2, slope, (r2 - r1)[:, None, None])
     ratio = np.maximum(np.abs(near_c[:, None, None] + shift) / d1,
                        np.minimum((far_c[:, None, None] + shift) / d1, cap_rate))
     off_lo, off_hi, r_lo, _, _ = _corners(a1, a2, c1, c2)
@@ -184,87 +194,153 @@ def _upper(fr: Frame, k: int, box: np.ndarray, r1, r2, side: int) -> np.ndarray:
     return pair_weight(p, np.maximum(ratio, 0.0), 1.0, g).min(axis=2)
 
 
-def _cap_ratio(top, d2, slope: float, width: float):
+def _cap_ratio(top, d2, slope, width):
     """sup over r_0 in [r2 - width, r2] of N(r_0) / D(r_0) with N(r2) = top, N' >= slope and
     D(r2) = d2, D' <= 1: N / D <= (top - slope t) / (d2 - t), t = r2 - r_0, a ratio of linear
     forms in t, so at most its larger end value (0 when both are negative)."""
     return np.maximum(np.maximum(top / d2, (top - slope * width) / (d2 - width)), 0.0)
 
 
-def _slave_max(fr: Frame, k: int, side: int, r1: float, r2: float,
-               boxes: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """(G_k(phi_m, side), the boxes left): the largest w_k bound over slave k's boxes on that
-    side (step 3), -inf for every phi_m when none is left; `boxes`: a wider interval's (its
-    boxes cover every slave this interval allows)."""
-    p, e = fr.p, fr.p.nav_error_m
-    cap = float(_cap(fr, k, r2))
-    reach = float(model.slave_range_max(p, r1 + e)) - e
-    none = np.full(len(MASTER_ANGLES), -np.inf)
-    if cap < 0 or reach <= 0:
-        return none, np.zeros((0, 4))
-    if boxes is None:
-        edges = np.linspace(0.0, reach, 9)
-        c_span = sorted((0.0, side * cap))
-        boxes = np.array([[lo, hi, *c_span] for lo, hi in itertools.pairwise(edges)])
-    best = none.copy()
-    kept, kept_up = [], []
+def _group_max(out: np.ndarray, owner: np.ndarray, values: np.ndarray) -> None:
+    """out[j] = max(out[j], every row of `values` whose owner is j), in place."""
+    if len(owner):
+        order = np.argsort(owner, kind="stable")
+        o = owner[order]
+        starts = np.flatnonzero(np.r_[True, o[1:] != o[:-1]])
+        j = o[starts]
+        out[j] = np.maximum(out[j], np.maximum.reduceat(values[order], starts, axis=0))
+
+
+def _first_boxes(fr: Frame, k: int, side: int, r1: np.ndarray, r2: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Slave k's starting boxes on `side` for each interval (with their owners): a along the
+    line of sight up to the farthest C6 allows, c between 0 and the C8 cap (step 1)."""
+    e = fr.p.nav_error_m
+    cap = _cap(fr, k, r2)
+    reach = np.asarray(model.slave_range_max(fr.p, r1 + e), dtype=float) - e
+    live = np.flatnonzero((cap >= 0) & (reach > 0))
+    t = np.linspace(0.0, 1.0, 9)
+    a_lo, a_hi = reach[live, None] * t[None, :-1], reach[live, None] * t[None, 1:]
+    c_lo, c_hi = np.minimum(0.0, side * cap[live]), np.maximum(0.0, side * cap[live])
+    boxes = np.stack([a_lo.ravel(), a_hi.ravel(), np.repeat(c_lo, 8), np.repeat(c_hi, 8)],
+                     axis=1)
+    return boxes, np.repeat(live, 8)
+
+
+def _slave_max(fr: Frame, k: int, side: int, r1: np.ndarray, r2: np.ndarray,
+               start: tuple[np.ndarray, ...] | None = None
+               ) -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
+    """(G_k(phi_m, side) for each interval [r1[j], r2[j]], the boxes left): the largest w_k
+    bound over slave k's boxes on that side (step 3), -inf for every phi_m where none is left.
+    Boxes come as (boxes (m, 4) = (a1, a2, c1, c2), the interval owning each, a bound of w_k
+    over each for its owner (m, len(MASTER_ANGLES))). `start`: a wider interval's boxes left,
+    owners re-indexed: they cover every slave the narrower interval allows, and their bounds
+    hold for it too (a subset of r_0), so a box whose bound is below (1 - CARRY) of its
+    interval's largest at every phi_m is carried with it, not bounded again. All intervals are
+    bounded together, one array of boxes, so the cost is arithmetic, not calls."""
+    n, size = len(r1), len(MASTER_ANGLES)
+    cap = _cap(fr, k, r2)
+    reach = np.asarray(model.slave_range_max(fr.p, r1 + fr.p.nav_error_m)) - fr.p.nav_error_m
+    if start is None:
+        boxes, owner = _first_boxes(fr, k, side, r1, r2)
+        prior = np.full((len(boxes), size), np.inf)
+    else:
+        boxes, owner, prior = start
+    live = ((cap >= 0) & (reach > 0))[owner]
+    boxes, owner, prior = boxes[live], owner[live], prior[live]
+    best, g, top = np.full((n, size), -np.inf), np.full((n, size), -np.inf), np.full(
+        (n, size), -np.inf)
+    _group_max(top, owner, prior)
+    carry = (prior < (1.0 - CARRY) * top[owner]).all(axis=1)
+    _group_max(g, owner[carry], prior[carry])
+    kept = [(boxes[carry], owner[carry], prior[carry])]
+    boxes, owner = boxes[~carry], owner[~carry]
     for _ in range(INNER_ROUNDS):
-        boxes = boxes[_possible(fr, k, boxes, r1, r2)]
+        ok = _possible(fr, k, boxes, r1[owner], r2[owner])
+        boxes, owner = boxes[ok], owner[ok]
         if not len(boxes):
             break
-        up = _upper(fr, k, boxes, r1, r2, side)
+        up = _upper(fr, k, boxes, r1[owner], r2[owner], side)
         centre = np.repeat(0.5 * (boxes[:, ::2] + boxes[:, 1::2]), 2, axis=1)
-        fine = _possible(fr, k, centre, r1, r2)
-        if fine.any():
-            best = np.maximum(best, _upper(fr, k, centre[fine], r1, r2, side).max(axis=0))
+        fine = np.flatnonzero(_possible(fr, k, centre, r1[owner], r2[owner]))
+        _group_max(best, owner[fine], _upper(fr, k, centre[fine], r1[owner[fine]],
+                                             r2[owner[fine]], side))
         small = (boxes[:, 1] - boxes[:, 0] < MIN_BOX_M) & (boxes[:, 3] - boxes[:, 2] < MIN_BOX_M)
-        done = ~(up > best * (1 + INNER_TOL)).any(axis=1) | small
-        kept.append(boxes[done])
-        kept_up.append(up[done])
-        boxes = _split(boxes[~done])
+        done = ~(up > best[owner] * (1 + INNER_TOL)).any(axis=1) | small
+        _group_max(g, owner[done], up[done])
+        kept.append((boxes[done], owner[done], up[done]))
+        boxes, owner = _split(boxes[~done]), np.repeat(owner[~done], 2)
     if len(boxes):
-        kept.append(boxes)
-        kept_up.append(_upper(fr, k, boxes, r1, r2, side))
-    left = np.concatenate(kept) if kept else np.zeros((0, 4))
-    if not len(left):
-        return none, left
-    return np.maximum(np.concatenate(kept_up).max(axis=0), best), left
+        up = _upper(fr, k, boxes, r1[owner], r2[owner], side)
+        _group_max(g, owner, up)
+        kept.append((boxes, owner, up))
+    left = tuple(np.concatenate(part) for part in zip(*kept, strict=True))
+    return np.where(np.isfinite(g), np.maximum(g, best), -np.inf), left
 
 
 def _split(boxes: np.ndarray) -> np.ndarray:
-    """Each box halved along its longer side."""
+    """Each box halved along its longer side, the halves in order."""
     wide = (boxes[:, 1] - boxes[:, 0]) >= (boxes[:, 3] - boxes[:, 2])
-    out = []
-    for b, w in zip(boxes, wide, strict=True):
-        i = 0 if w else 2
-        m = 0.5 * (b[i] + b[i + 1])
-        lo, hi = b.copy(), b.copy()
-        lo[i + 1], hi[i] = m, m
-        out += [lo, hi]
-    return np.array(out).reshape(-1, 4)
+    lo, hi = boxes.copy(), boxes.copy()
+    mid_a, mid_c = 0.5 * (boxes[:, 0] + boxes[:, 1]), 0.5 * (boxes[:, 2] + boxes[:, 3])
+    lo[wide, 1], hi[wide, 0] = mid_a[wide], mid_a[wide]
+    lo[~wide, 3], hi[~wide, 2] = mid_c[~wide], mid_c[~wide]
+    return np.stack([lo, hi], axis=1).reshape(-1, 4)
 
 
-def interval_bound(fr: Frame, r1: float, r2: float, boxes: dict | None = None
-                   ) -> tuple[float, dict]:
-    """LB(r1, r2) (step 3), +inf when no robust-feasible formation has r_0 in [r1, r2], and
-    each (slave, side)'s boxes left (`boxes`: a wider interval's, to start from)."""
+def interval_bounds(fr: Frame, r1: np.ndarray, r2: np.ndarray, boxes: dict | None = None
+                    ) -> tuple[np.ndarray, dict]:
+    """LB(r1[j], r2[j]) for each interval (step 3), +inf where no robust-feasible formation
+    has r_0 in it, and each (slave, side)'s boxes left with their owners (`boxes`: wider
+    intervals' left boxes, owners re-indexed to these intervals, to start from)."""
     g, left = {}, {}
     for key in ((k, s) for k in fr.slaves for s in (-1, 1)):
         g[key], left[key] = _slave_max(fr, *key, r1, r2, None if boxes is None else boxes[key])
-    most = 0.0 if fr.slaves else -np.inf
-    found = False
+    n = len(r1)
+    most = np.zeros(n) if fr.slaves else np.full(n, -np.inf)
+    found = np.zeros(n, dtype=bool)
     for sides in itertools.product((-1, 1), repeat=len(fr.slaves)):
-        total = sum(g[k, s] for k, s in zip(fr.slaves, sides, strict=True))
-        if np.isfinite(total).all():
-            most, found = max(most, float(total.min())), True
-    if not found:
-        return math.inf, left
-    return (1.0 / math.sqrt(most) if most > 0 else math.inf), left
+        total = np.zeros((n, len(MASTER_ANGLES))) + sum(
+            g[k, s] for k, s in zip(fr.slaves, sides, strict=True))
+        fin = np.isfinite(total).all(axis=1)
+        most = np.where(fin, np.maximum(most, np.where(fin, total.min(axis=1), 0.0)), most)
+        found |= fin
+    with np.errstate(divide="ignore"):
+        lb = np.where(found & (most > 0), 1.0 / np.sqrt(np.maximum(most, 1e-300)), np.inf)
+    return lb, left
+
+
+def _children(left: dict, want: np.ndarray, count: int) -> dict:
+    """The split intervals' left boxes, given to both halves: owner j of want[j] -> j and
+    j + len(want) (the halves' order in `lower_bound`)."""
+    pos = np.full(count, -1)
+    pos[want] = np.arange(len(want))
+    out = {}
+    for key, (b, o, u) in left.items():
+        sel = pos[o] >= 0
+        bb, oo, uu = b[sel], pos[o[sel]], u[sel]
+        out[key] = (np.concatenate([bb, bb]), np.concatenate([oo, oo + len(want)]),
+                    np.concatenate([uu, uu]))
+    return out
+
+
+def _merge(left: dict, keep: np.ndarray, new: dict, offset: int) -> dict:
+    """The kept intervals' boxes (owners renumbered in order) and the new ones' (after them)."""
+    pos = np.cumsum(keep) - 1
+    out = {}
+    for key, (b, o, u) in left.items():
+        sel = keep[o]
+        nb, no, nu = new[key]
+        out[key] = (np.concatenate([b[sel], nb]), np.concatenate([pos[o[sel]], no + offset]),
+                    np.concatenate([u[sel], nu]))
+    return out
 
 
 def lower_bound(p: Params, scheme: str, target: float) -> float:
     """The certified lower bound of (P_e) (module docstring); NaN where the frame does not
-    apply (fixed master off its line, too many slaves for the side patterns)."""
+    apply (fixed master off its line, too many slaves for the side patterns). Every interval
+    whose bound is below `target` is split in one batch (the least first, within
+    MAX_INTERVALS): each must be, for the least bound to reach the target."""
     fr = frame(p, scheme)
     if fr is None or len(fr.slaves) > MAX_PATTERN_SLAVES:
         return math.nan
@@ -272,17 +348,22 @@ def lower_bound(p: Params, scheme: str, target: float) -> float:
     if lo > hi:
         return math.inf
     edges = np.linspace(lo, hi, FIRST_INTERVALS + 1) if hi > lo else np.array([lo, hi])
-    heap = []
-    for n, (a, b) in enumerate(itertools.pairwise(edges)):
-        bound, left = interval_bound(fr, a, b)
-        heap.append((bound, n, a, b, left))
-    heapq.heapify(heap)
-    count = len(heap)
-    while count < MAX_INTERVALS and heap[0][0] < target and heap[0][3] - heap[0][2] > 1e-6:
-        bound, _, a, b, boxes = heapq.heappop(heap)
-        m = 0.5 * (a + b)
-        for lo_, hi_ in ((a, m), (m, b)):
-            child, left = interval_bound(fr, lo_, hi_, boxes)
-            count += 1
-            heapq.heappush(heap, (max(bound, child), count, lo_, hi_, left))
-    return heap[0][0]
+    r1, r2 = edges[:-1].copy(), edges[1:].copy()
+    bounds, left = interval_bounds(fr, r1, r2)
+    count = len(r1)
+    while count < MAX_INTERVALS:
+        want = np.flatnonzero((bounds < target) & (r2 - r1 > 1e-6))
+        if not len(want):
+            break
+        want = want[np.argsort(bounds[want], kind="stable")][:max((MAX_INTERVALS - count) // 2, 1)]
+        mid = 0.5 * (r1[want] + r2[want])
+        c1, c2 = np.concatenate([r1[want], mid]), np.concatenate([mid, r2[want]])
+        child, new = interval_bounds(fr, c1, c2, _children(left, want, len(r1)))
+        child = np.maximum(child, np.tile(bounds[want], 2))
+        keep = np.ones(len(r1), dtype=bool)
+        keep[want] = False
+        left = _merge(left, keep, new, int(keep.sum()))
+        r1, r2 = np.concatenate([r1[keep], c1]), np.concatenate([r2[keep], c2])
+        bounds = np.concatenate([bounds[keep], child])
+        count += len(c1)
+    return float(bounds.min())

@@ -9,14 +9,20 @@ Worst-case sigma_h (`worst_sigma`). sigma_h^-2 = sum_k w_k with
 w_k = (2 pi b_perp,k / (lambda r_0 sin(theta_0) sigma_Phi,k))^2 (eqs. 13-15): for a fixed master
 position the slaves separate, and the worst case is max over q_0' in D_0 of
 (sum_k min over q_k' in D_k of w_k)^(-1/2). A branch and bound over squares S covering D_0
-bounds each w_k from below over S x D_k, every factor at its least favourable value:
-b_perp >= the distance of the interval n . q_k +- e - n . S from 0, r_0 <= the farthest corner
-of S (and <= r_0 + e), r_k <= r_k + e (gamma_SNR, eq. 7, falls in both ranges), gamma_Rg >= its
-value at the ends of theta_k +- asin(e / r_k) (the look angles over D_k; gamma_Rg is unimodal
-with its peak at theta_0, eq. 10), and sigma_Phi (eq. 14) falls in gamma. That gives an upper
-bound U(S) on sigma_h over S; the square with the largest U is split in four until U is within
-`WORST_TOL` of the largest sigma_h found at actual positions (square centres in D_0, each slave
-at the worst of `RIM_POINTS` points of its rim). `upper` is then a certified upper bound of the
+bounds each w_k from below over S x D_k: D_k is cut across n into `STRIPS` strips (thin
+where D_k is, at its ends along n; `_strips`) and on each strip every factor is at its least
+favourable value: b_perp >= the distance of the interval n . q_k + [t_1, t_2] - n . S from 0,
+r_0 <= the farthest corner of S (and <= r_0 + e), r_k <= the strip's farthest point (and
+<= r_k + e; gamma_SNR, eq. 7, falls in both ranges), gamma_Rg >= its value at the ends of the
+strip's look angles (within theta_k +- asin(e / r_k); gamma_Rg is unimodal with its peak at
+theta_0, eq. 10), and sigma_Phi (eq. 14) falls in gamma; the least over the strips bounds
+min over D_k of w_k. One bound for the whole disk would pair b_perp's least (the slave e along
+n) with r_k's largest and gamma_Rg's least, which no one point has; the strips keep them
+apart, and the thin strips at the disk's ends along n, where b_perp is least, vary little in
+r_k and the look angle. That gives an upper bound U(S) on sigma_h over S; the square with the
+largest U is split in four until U is within `WORST_TOL` of the largest sigma_h found at
+actual positions (square centres in D_0, each slave at the worst of `RIM_POINTS` points of its
+rim). `upper` is then a certified upper bound of the
 worst case, `achieved` a value some positions in the disks attain.
 
 Constraints (`robust_slacks`): each family's least slack over the disks, exact or conservative
@@ -61,6 +67,8 @@ MAX_SQUARES = 20000
 # what is left of the gap there is the slaves' bounds' (r_k + e, the look-angle ends).
 BATCH = 32
 MIN_SIDE = 1.0 / 64.0
+# Strips across n each slave's disk is cut into (`_strips`).
+STRIPS = 48
 
 
 @dataclass(frozen=True)
@@ -98,26 +106,53 @@ def _sigma(wsum):
         return np.where(wsum > 0, 1.0 / np.sqrt(np.maximum(wsum, 1e-300)), np.inf)
 
 
-def _cell_upper(p: Params, q: np.ndarray, slaves, e: float, sq: np.ndarray):
+def _strips(p: Params, qk: np.ndarray, e: float) -> tuple[np.ndarray, ...]:
+    """Slave disk D_k cut across n into STRIPS strips t = n . (q' - q_k) in [-e cos a_1,
+    -e cos a_2] (a uniform in [0, pi]: thin where D_k is thin, near its points nearest and
+    farthest along n). A strip's part of D_k lies in the rectangle of those t and of offsets
+    v along the line of sight |v| <= h, h the largest half-chord sqrt(e^2 - t^2) over the strip:
+    its corners bound the range (r_k at most the farthest corner, distance being convex, and at
+    most r_k + e) and the look angles (the polar angle from p_t over a convex set without p_t
+    spans its corners' angles; within theta_k -+ asin(e / r_k) too), and gamma_Rg is least at
+    one end of that interval (unimodal, peak at theta_0). Returns (t1, t2, r_k max, gamma_Rg
+    min) per strip."""
+    n = np.array([math.cos(p.theta0), math.sin(p.theta0)])
+    u = np.array([-n[1], n[0]])
+    a = np.linspace(0.0, math.pi, STRIPS + 1)
+    t1, t2 = -e * np.cos(a[:-1]), -e * np.cos(a[1:])
+    h = e * np.where((a[:-1] < math.pi / 2) & (a[1:] > math.pi / 2), 1.0,
+                     np.maximum(np.sin(a[:-1]), np.sin(a[1:])))
+    xs, zs = [], []
+    for t in (t1, t2):
+        for v in (-h, h):
+            xs.append(qk[0] + t * n[0] + v * u[0])
+            zs.append(qk[1] + t * n[1] + v * u[1])
+    x, z = np.stack(xs), np.stack(zs)
+    rk = float(model.slant_range(qk[0], qk[1], p.x_t))
+    r_hi = np.minimum(model.slant_range(x, z, p.x_t).max(axis=0), rk + e)
+    th, spread = float(model.look_angle(qk[0], qk[1], p.x_t)), float(look_spread(e, rk))
+    ang = model.look_angle(x, z, p.x_t)
+    lo, hi = np.maximum(ang.min(axis=0), th - spread), np.minimum(ang.max(axis=0), th + spread)
+    return t1, t2, r_hi, np.minimum(gamma_rg(p, lo), gamma_rg(p, hi))
+
+
+def _cell_upper(p: Params, q: np.ndarray, strips: dict, e: float, sq: np.ndarray):
     """U(S) for squares sq (m, 4) = (x_a, x_b, z_a, z_b) of master positions (module
-    docstring)."""
+    docstring): each slave's w_k bounded below on each strip of its disk (`_strips`), the
+    least over its strips taken."""
     n = np.array([math.cos(p.theta0), math.sin(p.theta0)])
     corners = [(sq[:, i], sq[:, j]) for i in (0, 1) for j in (2, 3)]
     proj = np.stack([n[0] * x + n[1] * z for x, z in corners])
     r0c = np.stack([np.hypot(x - p.x_t, z) for x, z in corners])
-    r0_hi = np.minimum(r0c.max(axis=0), float(np.hypot(q[0, 0] - p.x_t, q[0, 1])) + e)
+    r0_hi = np.minimum(r0c.max(axis=0), float(np.hypot(q[0, 0] - p.x_t, q[0, 1])) + e)[:, None]
     gm = model.gamma_m(p)
     wsum = np.zeros(len(sq))
-    for k in slaves:
-        lo = n @ q[k] - e - proj.max(axis=0)
-        hi = n @ q[k] + e - proj.min(axis=0)
+    for k, (t1, t2, r_hi, g_rg) in strips.items():
+        lo = n @ q[k] + t1[None, :] - proj.max(axis=0)[:, None]
+        hi = n @ q[k] + t2[None, :] - proj.min(axis=0)[:, None]
         b_lo = np.where(lo > 0, lo, np.where(hi < 0, -hi, 0.0))
-        rk = float(model.slant_range(q[k, 0], q[k, 1], p.x_t))
-        th = float(model.look_angle(q[k, 0], q[k, 1], p.x_t))
-        spread = float(look_spread(e, rk))
-        g_rg = min(float(gamma_rg(p, th - spread)), float(gamma_rg(p, th + spread)))
-        g = g_rg * model.coherence_snr_at_ranges(r0_hi, rk + e, gm) * p.coherence_other
-        wsum = wsum + pair_weight(p, b_lo, r0_hi, g)
+        g = g_rg[None, :] * model.coherence_snr_at_ranges(r0_hi, r_hi[None, :], gm)
+        wsum = wsum + pair_weight(p, b_lo, r0_hi, g * p.coherence_other).min(axis=1)
     return _sigma(wsum)
 
 
@@ -158,6 +193,7 @@ def worst_sigma(p: Params, formation: np.ndarray, scheme: str,
         s = float(_attained(p, q, slaves, 0.0, q[:1])[0])
         return WorstCase(s, s, 1)
     x0, z0 = q[MASTER]
+    strips = {k: _strips(p, q[k], e) for k in slaves}
 
     def bound(squares: np.ndarray):
         centre = np.stack([(squares[:, 0] + squares[:, 1]) / 2,
@@ -165,7 +201,7 @@ def worst_sigma(p: Params, formation: np.ndarray, scheme: str,
         off = centre - q[MASTER]
         dist = np.hypot(off[:, 0], off[:, 1])
         inside = np.where((dist > e)[:, None], off * (e / np.maximum(dist, 1e-300))[:, None], off)
-        return _cell_upper(p, q, slaves, e, squares), _attained(p, q, slaves, e,
+        return _cell_upper(p, q, strips, e, squares), _attained(p, q, slaves, e,
                                                                 q[MASTER] + inside)
 
     first = np.array([[x0 - e, x0 + e, z0 - e, z0 + e]])
