@@ -211,7 +211,8 @@ REAL_TIME_MODULES = frozenset({
     "test_field_starts.py", "test_gcs_processes.py", "test_leaving_control.py", "test_num_uavs.py",
     "test_per_uav_stacks.py", "test_replanning_processes.py", "test_sitl.py",
     "test_sitl_across_hosts.py", "test_sitl_control.py", "test_sitl_px4.py",
-    "test_sitl_px4_missions.py", "test_sitl_signing.py", "test_sitl_survey.py",
+    "test_sitl_px4_hosts.py", "test_sitl_px4_missions.py", "test_sitl_signing.py",
+    "test_sitl_survey.py",
     "test_sitl_wind.py",
     "test_swarm_across_hosts.py",
     "test_ten_uavs.py"})

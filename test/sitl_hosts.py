@@ -24,6 +24,7 @@ mean (x, z) of each UAV on the pass, evaluated with the plan's power).
 from __future__ import annotations
 
 import math
+import re
 import subprocess
 import sys
 import time
@@ -32,6 +33,7 @@ from pathlib import Path
 
 import numpy as np
 import sitl_autopilot as sitl
+import sitl_px4 as px4
 import yaml
 from netlab_swarm import (
     FAST_DDS_HEARTBEAT_S,
@@ -159,6 +161,89 @@ def fly(lab: NetLab, domain: int, workdir: Path, timeout_s: float = 170.0) -> Fl
         stop_recorder(out)
         flight.times["bag_closed_s"] = time.monotonic() - t0
     finally:  # every node's output beside the bag, for whoever reads a failure
+        for name, o in out.items():
+            (workdir / f"{name}.log").write_text(o.text() + "\n")
+    return flight
+
+
+# -- the same hosts with real PX4 SITL (test_sitl_px4_hosts.py) ---------------------------------
+# Each UAV's namespace has a loopback of its own, but PX4 SITL's client/server sockets and lock
+# files are /tmp/px4-sock-N and /tmp/px4_lock-N, shared by every namespace: instances 7, 8, 9
+# keep clear of a localhost PX4 flight's 0, 1, 2 (their sysids are 8, 9, 10; ports move by N).
+PX4_INSTANCE0 = 7
+PX4_TRUTH_HELPER = Path(__file__).resolve().parent / "px4_truth_recorder.py"
+
+
+@dataclass
+class Px4Flight(Flight):
+    """A Flight of PX4 vehicles: each one's process and px4.log; `complete` when every agent
+    completed its slots, `broke` when a simulator's sensors failed first."""
+
+    px4: dict[int, subprocess.Popen] = field(default_factory=dict)
+    px4_logs: dict[int, Path] = field(default_factory=dict)
+    complete: bool = False
+    broke: bool = False
+
+
+def start_px4_hosts(lab: NetLab, domain: int, workdir: Path) -> Px4Flight:
+    """In uavK's namespace: px4_truth_recorder.py (SIH's truth on its loopback), PX4 SITL
+    instance PX4_INSTANCE0 + k from its own home (sitl_px4.vehicle_home), its bridge and agent
+    (sitl_px4.bridge_command, agent_command); on the ground the planner and the recorder. All
+    of the localhost flight's parameters (sitl_px4.N_SLOTS slots, velocity feed-forward)."""
+    env = dds_env("subnet", [], {**base_env(), "ROS_DOMAIN_ID": str(domain)})
+    flight = Px4Flight({}, workdir / "bag", {})
+
+    def start(host: str, name: str, cmd: list[str]) -> None:
+        proc = lab.start(host, cmd, env=env, stderr=subprocess.STDOUT)
+        flight.out[name] = Output(proc, name)
+
+    for k in UAVS:
+        host, instance = uav_name(k), PX4_INSTANCE0 + k
+        folder = workdir / f"px4_{k}"
+        folder.mkdir()
+        flight.truth[k], flight.px4_logs[k] = folder / "truth.csv", folder / "px4.log"
+        with open(folder / "truth.log", "w") as log:
+            lab.start(host, [sys.executable, str(PX4_TRUTH_HELPER), str(instance),
+                             str(flight.truth[k])], stdout=log, stderr=subprocess.STDOUT)
+        cmd, px4_env = px4.px4_launch(k, folder, instance)
+        with open(flight.px4_logs[k], "w") as log:
+            flight.px4[k] = lab.start(host, cmd, env=px4_env, cwd=folder, stdout=log,
+                                      stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)
+        start(host, f"bridge{k}", px4.bridge_command(k, instance))
+        start(host, f"agent{k}", px4.agent_command(k))
+    start("ground", "planner", [*executable("planner"), "--ros-args",
+                                "-p", f"num_slots:={px4.N_SLOTS}"])
+    start("ground", "recorder", [*executable("uav-insar"), "record", str(flight.bag)])
+    return flight
+
+
+PX4_DONE = re.compile(r"uav(\d+): mission complete: (\d+) slots flown, (\d+) at the planned "
+                      r"speed.*rate met in (\d+)")
+
+
+def fly_px4(lab: NetLab, domain: int, workdir: Path, timeout_s: float = 150.0) -> Px4Flight:
+    """Start the PX4 hosts and wait until every agent completed its slots (then close the bag
+    as `fly` does), a simulator's sensors failed (sitl_px4.simulator_faults), a process ended
+    or `timeout_s` passed; the test judges which."""
+    t0 = time.monotonic()
+    flight = start_px4_hosts(lab, domain, workdir)
+    out = flight.out
+    procs = [o.proc for o in out.values()] + list(flight.px4.values())
+
+    def ended() -> bool:
+        flight.broke = any(px4.simulator_faults(log.read_text())
+                           for log in flight.px4_logs.values())
+        flight.complete = all(PX4_DONE.search(out[f"agent{k}"].text()) for k in UAVS)
+        return flight.broke or flight.complete
+
+    try:
+        wait_for(ended, timeout_s, procs)
+        if flight.complete:
+            flight.times["missions_complete_s"] = time.monotonic() - t0
+            time.sleep(3 * FAST_DDS_HEARTBEAT_S + 1.0)
+            stop_recorder(out)
+            flight.times["bag_closed_s"] = time.monotonic() - t0
+    finally:
         for name, o in out.items():
             (workdir / f"{name}.log").write_text(o.text() + "\n")
     return flight

@@ -219,3 +219,38 @@ def test_demo_refuses_an_existing_bag(tmp_path):
     proc = process_group.run([sys.executable, "-m", "uav_insar_planner.demo", "--bag",
                            str(tmp_path)], capture_output=True, text=True, timeout=30, cwd=REPO)
     assert proc.returncode == 2 and "--bag" in proc.stderr and "exists" in proc.stderr
+
+
+
+def test_a_stop_signal_amid_a_write_leaves_every_message_readable(tmp_path, monkeypatch):
+    """SIGINT while the recorder's writer is half-way through a message record (between the
+    record's start and its length): its handler once raised KeyboardInterrupt right there, and
+    the bag closed with that record begun and never finished, its last chunk unreadable (seen
+    in test_sitl_px4_hosts.py's busy recording). Now the handler only asks the loop to stop."""
+    import os
+    import signal
+
+    from mcap.data_stream import RecordBuilder
+    from mcap.reader import make_reader
+
+    from uav_insar_planner.bag.writer import McapBagWriter
+    from uav_insar_planner.ros.tools import bag_recorder
+
+    finish = RecordBuilder.finish_record
+
+    def signalled(self: RecordBuilder) -> None:
+        os.kill(os.getpid(), signal.SIGINT)  # delivered here, in the main thread
+        finish(self)
+
+    bag = McapBagWriter(tmp_path / "bag")
+    bag.add_topic("/t", "std_msgs/msg/String")
+    previous = signal.signal(signal.SIGINT, bag_recorder._stop)
+    try:
+        monkeypatch.setattr(RecordBuilder, "finish_record", signalled)
+        bag.write("/t", 1, bytes(12))
+    finally:
+        monkeypatch.undo()
+        signal.signal(signal.SIGINT, previous)
+    bag.close()
+    with bag.mcap_path.open("rb") as f:
+        assert sum(1 for _ in make_reader(f).iter_messages()) == 1

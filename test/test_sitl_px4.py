@@ -57,16 +57,6 @@ def mode_of(watcher, k: int) -> list[tuple[float, str]]:
     return out
 
 
-def on_the_pass(rows: np.ndarray, y0: float, y1: float) -> np.ndarray:
-    """The rows (stamp, x, y, z) of the pass: the last run from behind slot 0's line (y0) to
-    the end of the last slot (y1). A take-off or transit that crosses [y0, y1] elsewhere
-    (a vehicle climbing at y = 0) is not the pass."""
-    ys = rows[:, 2]
-    end = int(np.argmax(ys > y1)) if (ys > y1).any() else len(ys)
-    behind = np.flatnonzero(ys[:end] < y0)
-    return rows[(behind[-1] + 1 if len(behind) else 0):end]
-
-
 def test_three_px4_vehicles_fly_every_slot_in_offboard_on_the_plan(watcher, tmp_path):
     plan = formation_points(solve(load_params().replace(num_slots=N_SLOTS)))  # the planner's
     flight = px4.Px4Flight()
@@ -107,7 +97,7 @@ def test_three_px4_vehicles_fly_every_slot_in_offboard_on_the_plan(watcher, tmp_
         rows = np.array([(m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec,
                           m.pose.position.x, m.pose.position.y, m.pose.position.z)
                          for m in watcher.mavlink_poses[k]]).reshape(-1, 4)
-        on = on_the_pass(rows, y0, y1)
+        on = px4.on_the_pass(rows, y0, y1)
         assert len(on) > 50, len(on)
         across, height = np.abs(on[:, 1] - x).max(), np.abs(on[:, 3] - z).max()
         worst = int(np.argmax(np.abs(on[:, 1] - x)))

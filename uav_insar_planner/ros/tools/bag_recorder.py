@@ -118,8 +118,15 @@ class BagRecorder(Node):
         self._log(f"not recording {topic}: {why}")
 
 
+# Set by SIGINT / SIGTERM; the spin loop ends at its next turn (within 0.1 s). Not an exception
+# raised from the handler: that lands wherever the main thread is, also inside a message's
+# write, and left the last chunk with a message record begun and never finished (a bag whose
+# last chunk no reader could read: seen in test_sitl_px4_hosts.py's busy recording).
+_STOPPING = threading.Event()
+
+
 def _stop(signum: int, frame: Any) -> None:
-    raise KeyboardInterrupt
+    _STOPPING.set()
 
 
 def record(args: argparse.Namespace) -> int:
@@ -138,6 +145,7 @@ def record(args: argparse.Namespace) -> int:
     if problems:
         raise _bad(problems[0])
     previous = {}
+    _STOPPING.clear()
     if threading.current_thread() is threading.main_thread():
         previous = {s: signal.signal(s, _stop) for s in (signal.SIGINT, signal.SIGTERM)}
     context = rclpy.Context()
@@ -152,7 +160,7 @@ def record(args: argparse.Namespace) -> int:
         executor = SingleThreadedExecutor(context=context)
         executor.add_node(node)
         end = float("inf") if args.duration is None else time.monotonic() + args.duration
-        while time.monotonic() < end:
+        while time.monotonic() < end and not _STOPPING.is_set():
             executor.spin_once(timeout_sec=min(0.1, max(0.0, end - time.monotonic())))
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
