@@ -532,7 +532,8 @@ def upload(copters: list[Copter], rows: dict[int, list[tuple]], bearing: float) 
             while c.requests:
                 msg = c.requests.pop(0)
                 if msg.get_type() == "MISSION_ACK":
-                    acked[c.k] = msg.type
+                    if msg.type != mav.MAV_MISSION_INVALID_SEQUENCE:  # (a late item: it
+                        acked[c.k] = msg.type  # goes on asking; seen under load)
                 else:
                     f, cmd, p1, p2, p3, p4, x, y, z = rows[c.k][msg.seq]
                     c.m.mav.mission_item_int_send(c.sysid, 1, msg.seq, f, cmd, 0, 1, p1, p2,

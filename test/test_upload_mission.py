@@ -165,6 +165,34 @@ def test_a_lost_item_and_a_lost_ack_are_retried(plans, vehicles, quick, capsys):
     assert len(vehicle.mission.items) == 6
 
 
+def test_an_invalid_sequence_ack_mid_transfer_is_not_a_refusal(plans, vehicles, capsys):
+    """ArduPilot answers an item that came late or twice with MISSION_ACK INVALID_SEQUENCE and
+    goes on asking (seen under load with the real ArduCopter): here the relay (the fault's
+    injection) puts one such ACK before the vehicle's request for item 3."""
+    vehicle = vehicles("ardupilot", 3)
+    encoder = MAV.MAVLink(None, srcSystem=vehicle.sysid, srcComponent=1)
+    injected = []
+
+    def stale_ack_first(msg):
+        if msg.get_type() == "MISSION_REQUEST_INT" and msg.seq == 3 and not injected:
+            injected.append(msg.seq)
+            ack = encoder.mission_ack_encode(msg.target_system, msg.target_component,
+                                             MAV.MAV_MISSION_INVALID_SEQUENCE, 0)
+            return ack.pack(encoder) + msg.get_msgbuf()
+        return None
+
+    relay = Relay(vehicle, stale_ack_first)
+    relay.start()
+    try:
+        code = cli(["upload-mission", str(plans[1] / "uav0.plan"),
+                    f"udpout:127.0.0.1:{relay.port}"])
+    finally:
+        relay.stop()
+    out = capsys.readouterr()
+    assert injected and code == EXIT_OK, out
+    assert "7 items uploaded and checked back" in out.out
+
+
 def test_refusals_silence_and_differences_are_one_line_each(plans, vehicles, quick,
                                                            monkeypatch, capsys):
     px4, ardupilot = plans

@@ -11,7 +11,9 @@ downloaded again to check it (`uav-insar upload-mission`, cli/upload_mission.py)
    request's kind only says how the vehicle numbers things, and the INT item keeps 1e-7
    degrees), until its MISSION_ACK. A vehicle silent for ITEM_TIMEOUT_S gets our last
    message again (the count, or the item it asked for last), at most TRIES times in all; a
-   MISSION_ACK other than MAV_MISSION_ACCEPTED ends the transfer with its name. When only the
+   MISSION_ACK other than MAV_MISSION_ACCEPTED ends the transfer with its name, but for
+   INVALID_SEQUENCE before the last item (an item of ours that came late or twice: ArduPilot
+   says so and goes on asking, as it did under load in the suite). When only the
    final ACK is lost (or a vehicle answers our repeated last item with an error because it
    has already finished), the check-back decides;
 3. check-back: MISSION_REQUEST_LIST, MISSION_REQUEST_INT for each item (MISSION_ITEM answers
@@ -148,17 +150,26 @@ def upload(peer: Peer, items: tuple[MissionItem, ...]) -> str:
     last = peer.link.mav.mission_count_encode(peer.sysid, peer.compid, count, MISSION)
     what, sends, asked, final_repeated = "MISSION_COUNT", 0, -1, False
     kinds = ("MISSION_REQUEST_INT", "MISSION_REQUEST", "MISSION_ACK")
+    resend = True
     while True:
         if sends >= TRIES:
             if asked == count - 1:
                 return f"no MISSION_ACK after the last item, sent {TRIES} times"
             raise TransferFailed(f"no answer to {what} after {TRIES} tries "
                                  f"{ITEM_TIMEOUT_S:g} s apart")
-        final_repeated = final_repeated or (sends > 0 and asked == count - 1)
-        peer.send(last)
-        sends += 1
+        if resend:
+            final_repeated = final_repeated or (sends > 0 and asked == count - 1)
+            peer.send(last)
+            sends += 1
+        resend = True
         msg = peer.next(kinds, ITEM_TIMEOUT_S)
         if msg is None:
+            continue
+        if msg.get_type() == "MISSION_ACK" and msg.type == MAV.MAV_MISSION_INVALID_SEQUENCE \
+                and asked < count - 1:
+            # an item of ours that came late or twice (a retry crossed the next request):
+            # ArduPilot says so and goes on asking, so we wait for its request, sending nothing
+            resend = False
             continue
         if msg.get_type() == "MISSION_ACK":
             if msg.type == MAV.MAV_MISSION_ACCEPTED and asked == count - 1:
