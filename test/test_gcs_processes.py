@@ -53,7 +53,8 @@ def test_a_frozen_planner_holds_the_vehicle_then_resumes_the_pass_where_it_holds
             status, values = bridge_status(w)
             return (status is not None and status.level == DiagnosticStatus.OK
                     and values["gcs"].startswith("heard ") and vehicle.mode == "GUIDED"
-                    and vehicle.setpoints_accepted > 20)
+                    and vehicle.setpoints_accepted > 20
+                    and vehicle.velocity_ned[0] > 0.5)  # on the pass: past its run-in's hover
 
         assert w.spin_until(flying, 40.0, everyone), (bridge_status(w), vehicle.mode)
         os.killpg(planner.pid, signal.SIGSTOP)
