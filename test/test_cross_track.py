@@ -18,10 +18,21 @@ def test_the_error_is_added_g_times_across_track_and_in_height_never_along_track
     assert s[0] > -26.8 and s[2] < 46.9 and s[1] == 10.0  # the integral grows with the error
 
 
+@pytest.mark.parametrize("age", [FRESH_S + 0.01, -0.5])
+def test_a_late_estimate_adds_nothing_but_keeps_the_integral(age):
+    ct = CrossTrack(gain=1.0)
+    ct.setpoint(TARGET, (-27.3, 10.0, 47.0), 0.0, now=0.0)
+    ct.setpoint(TARGET, (-27.3, 10.0, 47.0), 0.0, now=0.4)
+    learnt = ct.integral
+    assert learnt != (0.0, 0.0)
+    s = ct.setpoint(TARGET, (-29.0, 10.0, 47.0), age, now=0.5)
+    assert s == pytest.approx((TARGET[0] + learnt[0], TARGET[1], TARGET[2] + learnt[1]))
+    assert ct.integral == learnt
+
+
 @pytest.mark.parametrize("estimate, age", [
-    (None, 0.0), ((-27.2, 10.0, 47.0), FRESH_S + 0.01), ((-27.2, 10.0, 47.0), -0.5),
-    ((-27.0 + TRUSTED_M + 0.1, 10.0, 47.0), 0.0)])
-def test_off_for_a_stale_missing_or_untrusted_estimate_and_the_integral_forgotten(estimate, age):
+    (None, 0.0), ((-27.0 + TRUSTED_M + 0.1, 10.0, 47.0), 0.0)])
+def test_off_for_a_missing_or_untrusted_estimate_and_the_integral_forgotten(estimate, age):
     ct = CrossTrack(gain=1.0)
     ct.setpoint(TARGET, (-27.3, 10.0, 47.0), 0.0, now=0.0)
     ct.setpoint(TARGET, (-27.3, 10.0, 47.0), 0.0, now=0.4)

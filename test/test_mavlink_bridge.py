@@ -34,7 +34,7 @@ def make_bridge(peers, **kw):
 def test_setpoints_content_and_rate(peers, rate):
     origin = (100.0, -50.0, 2.0)
     with make_bridge(peers, setpoint_rate_hz=rate, track_bearing_deg=90.0,
-                     origin_ned_m=origin) as bridge:
+                     origin_ned_m=origin, velocity_feedforward=False) as bridge:
         bridge.set_formation(FORMATION)
         t0 = time.monotonic()
         time.sleep(3.2)

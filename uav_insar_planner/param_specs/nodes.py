@@ -152,8 +152,9 @@ BRIDGE_SPECS = (
               -ORIGIN_LIMIT_M, ORIGIN_LIMIT_M, length=AXES),
     ParamSpec("setpoint_rate_hz", float, 10.0, "SET_POSITION_TARGET_LOCAL_NED rate per UAV "
               "[Hz]", 2.0, 50.0),
-    ParamSpec("velocity_feedforward", bool, False, "send the along-track velocity too "
-              "(type_mask 3520)"),
+    ParamSpec("velocity_feedforward", bool, True, "send the target's velocity too (type_mask "
+              "3520); false: position only (3576), which a moving target outruns (PX4 lags "
+              "v_y / MPC_XY_P, 4.5 m)"),
     ParamSpec("arm_and_takeoff", bool, False, "set GUIDED/OFFBOARD, arm and take off "
               "(default: you do)"),
     ParamSpec("autopilot", str, "ardupilot", "mode numbers and arming sequence",

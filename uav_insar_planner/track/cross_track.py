@@ -11,10 +11,12 @@ target p, the setpoint sent is
 
 so the autopilot's own loop sees (1 + g) e plus the integral, which a slow disturbance cannot
 outlast. The along-track position is the pass clock's (the bridge's start gate and catch-up
-keep it), so y is never corrected. Bounds: the correction is off, and its integral forgotten,
-when the estimate is older than FRESH_S (the loop would act on a past error) or farther than
-TRUSTED_M from the target (a transit or a vehicle out of reach is not a tracking error); the
-integral is held within LIMIT_M and the whole correction too.
+keep it), so y is never corrected. Bounds: an estimate older than FRESH_S adds nothing (the
+loop would act on a past error) but keeps the integral learnt so far, as a loaded companion
+computer or a lossy link delivers some late; without an estimate, or farther than TRUSTED_M
+from the target (a transit or a vehicle out of reach is not a tracking error), the
+correction is off and its integral forgotten; the integral is held within LIMIT_M and the
+whole correction too.
 """
 from __future__ import annotations
 
@@ -41,8 +43,11 @@ class CrossTrack:
     def setpoint(self, target: Vec3, estimate: Vec3 | None, age_s: float, now: float) -> Vec3:
         """The setpoint for track-frame `target` at `now`, given the autopilot's track-frame
         `estimate` (`age_s` old); `target` itself while the correction is off."""
-        if self.gain <= 0.0 or estimate is None or not 0.0 <= age_s <= FRESH_S:
+        if self.gain <= 0.0 or estimate is None:
             return self._off(target, now)
+        if not 0.0 <= age_s <= FRESH_S:  # a late estimate: hold what was learnt, add nothing
+            self.last_s = now
+            return (target[0] + self.integral[0], target[1], target[2] + self.integral[1])
         ex, ez = target[0] - estimate[0], target[2] - estimate[2]
         if math.hypot(ex, ez) > TRUSTED_M:
             return self._off(target, now)
