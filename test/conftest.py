@@ -87,6 +87,25 @@ def children(ros_domain: int):
 
 
 @pytest.fixture
+def vehicles():
+    """make(autopilot, sysid): a simulated vehicle on a free UDP port, started, stopped after
+    the test (test_start_missions.py, test_upload_mission.py)."""
+    from uav_insar_sim.vehicle.simulator import SimVehicle
+
+    made: list[SimVehicle] = []
+
+    def make(autopilot: str, sysid: int) -> SimVehicle:
+        vehicle = SimVehicle(sysid, "udpin:127.0.0.1:0", autopilot)
+        vehicle.start()
+        made.append(vehicle)
+        return vehicle
+
+    yield make
+    for vehicle in made:
+        vehicle.stop()
+
+
+@pytest.fixture
 def repo() -> Path:
     """The repository root (the child processes' working directory)."""
     return REPO

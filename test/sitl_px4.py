@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import TextIO
 
 import numpy as np
+import process_group
 from pymavlink.dialects.v20 import common as mavlink2
 
 from uav_insar_planner.demo.processes import executable
@@ -55,6 +56,14 @@ SIMULATOR_FAULT = re.compile(r"No valid data from \w+ \d|[Ss]ensor \w+ (?:timeou
 def simulator_faults(log: str) -> list[str]:
     """The lines of a px4.log that say its simulated sensors failed."""
     return [line.strip() for line in log.splitlines() if SIMULATOR_FAULT.search(line)]
+
+
+def assert_simulators_sound(logs: dict[str, str], uavs) -> None:
+    """Fail first, naming the instance, when a PX4 log says its simulated sensors failed: the
+    simulator broke, whatever the bridge did."""
+    broke = {k: simulator_faults(logs[f"px4_{k}"]) for k in uavs}
+    assert not any(broke.values()), "the simulator broke, not the bridge: " + "; ".join(
+        f"px4 instance {k}: {' | '.join(lines[:3])}" for k, lines in broke.items() if lines)
 
 
 def px4_links(folder: Path) -> Path:
@@ -191,3 +200,12 @@ def on_the_pass(rows: np.ndarray, y0: float, y1: float) -> np.ndarray:
     end = int(np.argmax(ys > y1)) if (ys > y1).any() else len(ys)
     behind = np.flatnonzero(ys[:end] < y0)
     return rows[(behind[-1] + 1 if len(behind) else 0):end]
+
+
+def stop(flight: Px4Flight) -> None:
+    """Ctrl-C every process group of the flight (SIGKILL after a grace), then the truth
+    threads."""
+    for proc in flight.procs.values():
+        process_group.interrupt_group(proc)
+    for truth in flight.truth.values():
+        truth.stop()

@@ -21,7 +21,6 @@ import re
 import time
 
 import numpy as np
-import process_group
 import pytest
 import sitl_px4 as px4
 from control_watch import Heard, log_wall_time, pilot
@@ -73,15 +72,9 @@ def test_three_px4_vehicles_fly_every_slot_in_offboard_on_the_plan(watcher, tmp_
         ok = watcher.spin_until(lambda: all(done[k].search(text(f"agent{k}")) for k in UAVS),
                                 240.0, procs)
     finally:
-        for proc in flight.procs.values():
-            process_group.interrupt_group(proc)
-        for truth in flight.truth.values():
-            truth.stop()
+        px4.stop(flight)
     logs = {name: text(name) for name in flight.logs}
-    broke = {k: px4.simulator_faults(logs[f"px4_{k}"]) for k in UAVS}
-    assert not any(broke.values()), (
-        "the simulator broke, not the bridge: " + "; ".join(
-            f"px4 instance {k}: {' | '.join(lines[:3])}" for k, lines in broke.items() if lines))
+    px4.assert_simulators_sound(logs, UAVS)
     assert ok, "\n".join(f"== {n}\n{t[-2500:]}" for n, t in logs.items())
     estimates = []
     for k in UAVS:
@@ -170,13 +163,9 @@ def test_a_pilot_takes_a_real_px4_mid_pass_and_the_others_are_replanned(watcher,
         final = heard.status[1][-1]
     finally:
         gcs.close()
-        for proc in flight.procs.values():
-            process_group.interrupt_group(proc)
-        for truth in flight.truth.values():
-            truth.stop()
+        px4.stop(flight)
     logs = {name: text(name) for name in flight.logs}
-    broke = {k: px4.simulator_faults(logs[f"px4_{k}"]) for k in UAVS}
-    assert not any(broke.values()), f"the simulator broke, not the bridge: {broke}"
+    px4.assert_simulators_sound(logs, UAVS)
     assert ok, "\n".join(f"== {n}\n{t[-2500:]}" for n, t in logs.items() if "px4" not in n)
     shown_mono, shown_wall = shown_at[0]
     replanned = heard.without(1)

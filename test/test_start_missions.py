@@ -27,7 +27,6 @@ from uav_insar_planner.cli import main as cli
 from uav_insar_planner.exit_codes import EXIT_BAD_INPUT, EXIT_CRASH, EXIT_OK
 from uav_insar_planner.mavlink.link import MAV
 from uav_insar_planner.mission_file.qgc_plan import PX4_PASS_SEQ
-from uav_insar_sim.vehicle.simulator import SimVehicle
 
 CLI = [sys.executable, "-m", "uav_insar_planner.cli"]
 TOLERANCE_S = 0.05  # arrival against the instant, on one machine's clock
@@ -65,21 +64,6 @@ def upload(port: int, sysid: int, rows: list[tuple]) -> None:
 def px4_rows(plan: Path) -> list[tuple]:
     """A PX4 file's items as MAVSDK uploads them to PX4: no home item first."""
     return mission_item_ints(json.loads(plan.read_text()))[1:]
-
-
-@pytest.fixture
-def vehicles():
-    made: list[SimVehicle] = []
-
-    def make(autopilot: str, sysid: int) -> SimVehicle:
-        vehicle = SimVehicle(sysid, "udpin:127.0.0.1:0", autopilot)
-        vehicle.start()
-        made.append(vehicle)
-        return vehicle
-
-    yield make
-    for vehicle in made:
-        vehicle.stop()
 
 
 @pytest.mark.timeout(60)

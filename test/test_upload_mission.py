@@ -27,21 +27,6 @@ from uav_insar_sim.vehicle.simulator import SimVehicle
 
 
 @pytest.fixture
-def vehicles():
-    made: list[SimVehicle] = []
-
-    def make(autopilot: str, sysid: int) -> SimVehicle:
-        vehicle = SimVehicle(sysid, "udpin:127.0.0.1:0", autopilot)
-        vehicle.start()
-        made.append(vehicle)
-        return vehicle
-
-    yield make
-    for vehicle in made:
-        vehicle.stop()
-
-
-@pytest.fixture
 def plans(tmp_path):
     """Three PX4 files and three ArduPilot files: (folder of px4, folder of ardupilot)."""
     assert export(tmp_path / "px4", "--autopilot", "px4") == EXIT_OK
